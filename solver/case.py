@@ -1,0 +1,283 @@
+"""The impact case: what a user asks the solver to compute (the names of the contract).
+
+Every model forbids unknown fields and non-finite numbers, so a typo or a NaN is refused with its
+field path instead of being silently ignored. `parse_case` turns pydantic's errors into
+`CaseError`, a list of (field path, reason) in words an engineer reads.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Annotated, Any, Literal, Union
+
+from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic_core import InitErrorDetails, PydanticCustomError
+
+Positive = Annotated[float, Field(gt=0)]
+NonNegative = Annotated[float, Field(ge=0)]
+
+
+class _Model(BaseModel):
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+
+def _field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationError:
+    """A validation error attached to `loc` below the model being validated."""
+    detail = InitErrorDetails(
+        type=PydanticCustomError("value_error", message), loc=loc, input=value
+    )
+    return ValidationError.from_exception_data(model, [detail])
+
+
+class Striker(_Model):
+    """The lumped striker: mass `m1` (kg) and pre-impact velocity `W1` (m/s, + toward the tool)."""
+
+    mass: Positive
+    velocity: float
+
+
+class Profile(_Model):
+    """Piecewise-linear cross-section `S(x)`: stations `x` (m, from the struck end) and areas (m²)."""
+
+    x: list[float] = Field(min_length=2)
+    area: list[Positive] = Field(min_length=2)
+
+    @field_validator("x")
+    @classmethod
+    def _increasing(cls, x: list[float]) -> list[float]:
+        if x[0] != 0.0:
+            raise PydanticCustomError("value_error", "x[0] must be 0 (the struck end)")
+        for i in range(1, len(x)):
+            if x[i] <= x[i - 1]:
+                raise PydanticCustomError(
+                    "value_error",
+                    "must be strictly increasing: x[{i}] = {b} is not greater than x[{j}] = {a}",
+                    {"i": i, "j": i - 1, "a": x[i - 1], "b": x[i]},
+                )
+        return x
+
+    @model_validator(mode="after")
+    def _same_length(self) -> "Profile":
+        if len(self.area) != len(self.x):
+            raise _field_error(
+                "Profile", ("area",),
+                f"must have one area per station: {len(self.area)} areas for {len(self.x)} stations",
+                self.area,
+            )
+        return self
+
+
+class Tool(_Model):
+    """The tool: an elastic rod of length `L`, modulus `E`, density `ρ`, area `S(x)`.
+
+    Give either a uniform `area` or a piecewise-linear `profile`.
+    """
+
+    length: Positive
+    youngs_modulus: Positive
+    density: Positive
+    area: Positive | None = None
+    profile: Profile | None = None
+
+    @model_validator(mode="after")
+    def _one_shape(self) -> "Tool":
+        if (self.area is None) == (self.profile is None):
+            raise _field_error(
+                "Tool", ("area",), "give exactly one of tool.area (uniform) or tool.profile", self.area
+            )
+        if self.profile is not None:
+            last = self.profile.x[-1]
+            if abs(last - self.length) > 1e-9 * self.length:
+                raise _field_error(
+                    "Tool", ("profile", "x", len(self.profile.x) - 1),
+                    f"the last station must equal tool.length = {self.length} m", last,
+                )
+        return self
+
+
+class Contact(_Model):
+    """Striker–tool contact (7): `G(δ) = c1·δ^α` for δ ≥ 0, `c0` for δ < 0; damper `b1`.
+
+    The contact force on the tool is `G(δ)·δ + b1·δ'`; α = 0.5 is Hertz-like (c1 in N/m^1.5).
+    """
+
+    stiffness: Positive
+    exponent: float = Field(ge=0.0, le=0.5)
+    tension_stiffness: NonNegative = 0.0
+    damping: NonNegative = 0.0
+
+
+class Medium(_Model):
+    """Working medium at x = L (4): spring `c2` (N/m) and damper `b2` (N·s/m)."""
+
+    stiffness: NonNegative
+    damping: NonNegative = 0.0
+
+
+class SineForce(_Model):
+    """External force on the striker `R(t) = P·sin(ωt)`."""
+
+    kind: Literal["sine"]
+    amplitude: float
+    omega: Positive
+
+
+class AbsSineForce(_Model):
+    """External force on the striker `R(t) = P·|sin(ωt)|`."""
+
+    kind: Literal["abs_sine"]
+    amplitude: float
+    omega: Positive
+
+
+class PulseForce(_Model):
+    """External force on the striker `R(t) = P` for `t1 ≤ t ≤ t1 + Δt`, else 0."""
+
+    kind: Literal["pulse"]
+    amplitude: float
+    start: NonNegative = 0.0
+    duration: Positive
+
+
+Force = Annotated[Union[SineForce, AbsSineForce, PulseForce], Field(discriminator="kind")]
+
+
+class Numerics(_Model):
+    """Time span and grid. `time_step` (τ) and `cells` (N = L/h) default from the case itself."""
+
+    duration: Positive
+    time_step: Positive | None = None
+    cells: int | None = Field(default=None, ge=1)
+    gamma: float = Field(
+        default=0.5, le=1.0,
+        description="weight γ of the new time layer in scheme (8); 0.5 ≤ γ ≤ 1",
+    )
+    model: Literal["rod", "lumped"] = Field(
+        default="rod",
+        description="'rod': the tool as an elastic rod (8)–(13); 'lumped': the two-mass model problem (21)–(25)",
+    )
+
+    @field_validator("gamma")
+    @classmethod
+    def _implicit_enough(cls, gamma: float) -> float:
+        if gamma < 0.5:
+            raise PydanticCustomError(
+                "value_error",
+                "must be ≥ 0.5: the weighted scheme is only stable for every time step when "
+                "γ ≥ 1/2, and no explicit-capable scheme is available for γ < 1/2",
+            )
+        return gamma
+
+
+class Outputs(_Model):
+    """What to keep beyond the summary: probe stations, full fields, and their sampling strides."""
+
+    probes: list[float] = Field(default_factory=list, description="stations x (m) for stress histories")
+    history_stride: int = Field(default=1, ge=1, description="keep every k-th step in the histories")
+    fields: bool = Field(default=False, description="keep displacement and stress along the tool")
+    field_stride: int = Field(default=10, ge=1, description="keep every k-th step in the fields")
+
+
+class Case(_Model):
+    """One impact case: striker, tool, contact, optional medium and force, numerics, outputs."""
+
+    name: str = "case"
+    description: str | None = None
+    striker: Striker
+    tool: Tool
+    contact: Contact
+    medium: Medium | None = None
+    force: Force | None = None
+    numerics: Numerics
+    outputs: Outputs = Field(default_factory=Outputs)
+
+    @model_validator(mode="after")
+    def _probes_on_tool(self) -> "Case":
+        for i, x in enumerate(self.outputs.probes):
+            if not 0.0 <= x <= self.tool.length:
+                raise _field_error(
+                    "Case", ("outputs", "probes", i),
+                    f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m", x,
+                )
+        return self
+
+
+class FieldError(BaseModel):
+    """One reason a case was refused, with the dotted path of the field it concerns."""
+
+    field: str
+    message: str
+
+
+class CaseError(ValueError):
+    """A case that cannot be solved; `errors` names each offending field."""
+
+    def __init__(self, errors: list[FieldError]):
+        self.errors = errors
+        super().__init__("; ".join(f"{e.field}: {e.message}" for e in errors))
+
+
+_MESSAGES = {
+    "missing": "is required",
+    "extra_forbidden": "is not a known field",
+    "greater_than": "must be > {gt}",
+    "greater_than_equal": "must be ≥ {ge}",
+    "less_than": "must be < {lt}",
+    "less_than_equal": "must be ≤ {le}",
+    "finite_number": "must be a finite number",
+    "float_parsing": "must be a number",
+    "float_type": "must be a number",
+    "int_parsing": "must be a whole number",
+    "int_type": "must be a whole number",
+    "int_from_float": "must be a whole number",
+    "too_short": "must have at least {min_length} entries",
+    "list_type": "must be a list",
+    "model_type": "must be an object",
+    "model_attributes_type": "must be an object",
+    "union_tag_invalid": "kind must be one of {expected_tags}",
+    "union_tag_not_found": "needs a 'kind' ({discriminator})",
+}
+
+
+def field_path(loc: tuple) -> str:
+    """('tool', 'profile', 'area', 2) -> 'tool.profile.area[2]'."""
+    path = ""
+    for part in loc:
+        if isinstance(part, int):
+            path += f"[{part}]"
+        else:
+            path += ("." if path else "") + str(part)
+    return path or "case"
+
+
+def describe_errors(error: ValidationError) -> list[FieldError]:
+    """Pydantic's errors as field paths and reasons an engineer reads."""
+    described = []
+    for e in error.errors(include_url=False):
+        template = _MESSAGES.get(e["type"])
+        message = template.format(**e.get("ctx", {})) if template else e["msg"]
+        # A discriminated union adds the chosen kind to the path ("force.pulse.duration").
+        loc = tuple(p for p in e["loc"] if p not in ("sine", "abs_sine", "pulse"))
+        described.append(FieldError(field=field_path(loc), message=message))
+    return described
+
+
+def parse_case(data: dict | str | bytes) -> Case:
+    """Validate a case given as a dict or JSON text; raise `CaseError` naming each bad field."""
+    try:
+        if isinstance(data, (str, bytes)):
+            return Case.model_validate_json(data)
+        return Case.model_validate(data)
+    except ValidationError as error:
+        raise CaseError(describe_errors(error)) from None
+
+
+def load_case(path: str | Path) -> Case:
+    """Read and validate a case JSON file."""
+    text = Path(path).read_text()
+    try:
+        json.loads(text)
+    except json.JSONDecodeError as error:
+        raise CaseError([FieldError(field="case", message=f"is not valid JSON: {error}")]) from None
+    return parse_case(text)
