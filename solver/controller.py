@@ -203,3 +203,17 @@ def simulate_rod(
     )
     return Result(case=case, numerics=num, history=history, probe_x=np.asarray(out.probes, float),
                   probe_stress=probe_stress, fields=fields, summary=summary)
+
+
+def warm_up() -> None:
+    """Compile the kernel into Numba's on-disk cache (a no-op when it is there already)."""
+    from .case import parse_case
+
+    simulate_rod(parse_case({
+        "striker": {"mass": 1.0, "velocity": 1.0},
+        "tool": {"length": 1.0, "youngs_modulus": 1e9, "density": 1e3, "area": 1e-3},
+        "contact": {"stiffness": 1e8, "exponent": 0.5},
+        "force": {"kind": "pulse", "amplitude": 1.0, "duration": 1e-5},
+        "numerics": {"duration": 1e-4, "cells": 4},
+        "outputs": {"probes": [0.5], "fields": True},
+    }))

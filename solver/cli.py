@@ -1,0 +1,72 @@
+"""`percussim`: run an impact case from the command line."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+EXIT_FAILED, EXIT_INVALID = 1, 2
+
+
+def _run(args: argparse.Namespace) -> int:
+    from .case import CaseError, load_case
+    from .controller import NumericalFailure
+    from .io import write_result
+    from .simulate import simulate
+
+    try:
+        case = load_case(args.case)
+        result = simulate(case, model=args.model)
+    except FileNotFoundError:
+        print(f"percussim: no such case file: {args.case}", file=sys.stderr)
+        return EXIT_INVALID
+    except CaseError as error:
+        print(f"percussim: invalid case {args.case}:", file=sys.stderr)
+        for e in error.errors:
+            print(f"  {e.field}: {e.message}", file=sys.stderr)
+        return EXIT_INVALID
+    except NumericalFailure as error:
+        print(f"percussim: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    text = json.dumps(result.summary, indent=2)
+    print(text)
+    if args.summary:
+        Path(args.summary).write_text(text + "\n")
+    if args.output:
+        write_result(result, args.output)
+    for warning in result.summary["warnings"]:
+        print(f"percussim: warning: {warning}", file=sys.stderr)
+    return 0
+
+
+def _warmup(args: argparse.Namespace) -> int:
+    from .controller import warm_up
+
+    warm_up()
+    return 0
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="percussim", description=__doc__)
+    commands = p.add_subparsers(dest="command", required=True)
+    run = commands.add_parser("run", help="solve a case locally and print its pulse summary")
+    run.add_argument("case", help="impact case JSON")
+    run.add_argument("--summary", metavar="OUT.json", help="also write the summary here")
+    run.add_argument("--output", metavar="RESULT.h5", help="write the full result (HDF5) here")
+    run.add_argument("--model", choices=["rod", "lumped"],
+                     help="override numerics.model: the elastic rod or the two-mass model problem")
+    run.set_defaults(handler=_run)
+    warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
+    warm.set_defaults(handler=_warmup)
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    return args.handler(args)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

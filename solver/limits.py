@@ -1,0 +1,54 @@
+"""Size limits checked before a run starts, so a case too large is refused, never killed later."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from . import kernel as K
+from .case import Case, CaseError, FieldError
+from .grid import ResolvedNumerics
+
+
+@dataclass(frozen=True)
+class Limits:
+    max_cells: int = 100_000
+    max_steps: int = 20_000_000
+    max_node_steps: float = 2e10  # cells × steps: about a few minutes of kernel time
+    max_output_values: float = 2e8  # numbers kept in histories, probes and fields (1.6 GB)
+
+
+def output_values(case: Case, numerics: ResolvedNumerics) -> float:
+    """How many numbers the run keeps for its outputs."""
+    out = case.outputs
+    rows = numerics.steps // out.history_stride + 1
+    values = rows * (K.HISTORY_COLUMNS + len(out.probes))
+    if out.fields and numerics.model == "rod":
+        values += (numerics.steps // out.field_stride + 1) * 2 * (numerics.cells + 1)
+    return float(values)
+
+
+def check_limits(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits()) -> None:
+    """Raise `CaseError` naming each limit the case exceeds and the field that sets it."""
+    errors = []
+    if numerics.cells > limits.max_cells:
+        errors.append(FieldError(field="numerics.cells",
+                                 message=f"{numerics.cells} cells exceed the limit of {limits.max_cells}"))
+    if numerics.steps > limits.max_steps:
+        errors.append(FieldError(
+            field="numerics.time_step",
+            message=f"{numerics.steps} time steps (duration / time_step) exceed the limit of "
+                    f"{limits.max_steps}: raise numerics.time_step or shorten numerics.duration"))
+    work = float(numerics.cells) * numerics.steps
+    if numerics.model == "rod" and work > limits.max_node_steps:
+        errors.append(FieldError(
+            field="numerics",
+            message=f"{work:.3g} node-steps (cells × steps) exceed the limit of "
+                    f"{limits.max_node_steps:.3g}: use fewer cells or a larger time_step"))
+    values = output_values(case, numerics)
+    if values > limits.max_output_values:
+        errors.append(FieldError(
+            field="outputs",
+            message=f"the outputs would keep {values:.3g} numbers, over the limit of "
+                    f"{limits.max_output_values:.3g}: raise outputs.history_stride or outputs.field_stride"))
+    if errors:
+        raise CaseError(errors)

@@ -1,0 +1,23 @@
+"""A new process finds the kernel in Numba's cache and does not compile it again."""
+
+import json
+import subprocess
+import sys
+
+PROBE = """
+import json
+from solver import kernel, load_case, simulate_rod
+simulate_rod(load_case("examples/fig3.json"))
+s = kernel.advance.stats
+print(json.dumps({"hits": sum(s.cache_hits.values()), "misses": sum(s.cache_misses.values())}))
+"""
+
+
+def test_a_new_process_loads_the_compiled_kernel():
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    runs = [json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=root, capture_output=True,
+                                      text=True, check=True, timeout=300).stdout) for _ in range(2)]
+    # The first run may have filled the cache; the second must only read it.
+    assert runs[1] == {"hits": 1, "misses": 0}

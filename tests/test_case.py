@@ -1,0 +1,74 @@
+"""Invalid cases are refused with the field path and a reason an engineer reads."""
+
+import json
+
+import pytest
+
+from conftest import BASE_CASE, merge
+from solver import CaseError, parse_case, resolve_numerics
+from solver.limits import Limits, check_limits
+
+PROFILE = {"area": None, "profile": {"x": [0.0, 0.5, 1.0, 1.2], "area": [0.01, 0.01, 0.005, 0.004]}}
+
+
+def _refusal(changes: dict) -> dict[str, str]:
+    with pytest.raises(CaseError) as caught:
+        parse_case(merge(BASE_CASE, changes))
+    return {e.field: e.message for e in caught.value.errors}
+
+
+@pytest.mark.parametrize("changes, field, words", [
+    ({"striker": {"mass": -1.0}}, "striker.mass", "must be > 0"),
+    ({"tool": {"area": 0.0}}, "tool.area", "must be > 0"),
+    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.2], "area": [0.01, 0.01, -0.005, 0.004]}}},
+     "tool.profile.area[2]", "must be > 0"),
+    ({"tool": {**PROFILE, "profile": {"x": [0, 0.7, 0.5, 1.2], "area": [0.01, 0.01, 0.005, 0.004]}}},
+     "tool.profile.x", "strictly increasing: x[2]"),
+    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0], "area": [0.01, 0.01, 0.005, 0.004]}}},
+     "tool.profile.area", "one area per station"),
+    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.3], "area": [0.01, 0.01, 0.005, 0.004]}}},
+     "tool.profile.x[3]", "must equal tool.length"),
+    ({"tool": {"profile": PROFILE["profile"]}}, "tool.area", "exactly one"),
+    ({"contact": {"exponent": 0.7}}, "contact.exponent", "must be ≤ 0.5"),
+    ({"contact": {"exponent": -0.1}}, "contact.exponent", "must be ≥ 0"),
+    ({"contact": {"tension_stiffness": -1.0}}, "contact.tension_stiffness", "must be ≥ 0"),
+    ({"medium": {"damping": -5.0}}, "medium.damping", "must be ≥ 0"),
+    ({"numerics": {"gamma": 0.3}}, "numerics.gamma", "must be ≥ 0.5"),
+    ({"numerics": {"duration": None}}, "numerics.duration", "is required"),
+    ({"numerics": {"cells": 10.5}}, "numerics.cells", "whole number"),
+    ({"outputs": {"probes": [0.1, 1.5]}}, "outputs.probes[1]", "must lie on the tool"),
+    ({"striker": {"speed": 5.0}}, "striker.speed", "not a known field"),
+    ({"force": {"kind": "square", "amplitude": 1.0}}, "force", "kind must be one of"),
+    ({"force": {"kind": "pulse", "amplitude": 1.0, "duration": 0.0}}, "force.duration", "must be > 0"),
+])
+def test_refusal_names_the_field(changes, field, words):
+    errors = _refusal(changes)
+    assert field in errors, errors
+    assert words in errors[field]
+
+
+def test_non_finite_numbers_are_refused_from_json():
+    text = json.dumps(merge(BASE_CASE, {"striker": {"velocity": float("nan")}}))
+    with pytest.raises(CaseError) as caught:
+        parse_case(text)
+    assert [e.field for e in caught.value.errors] == ["striker.velocity"]
+
+
+def test_valid_profile_and_defaults():
+    case = parse_case(merge(BASE_CASE, {"tool": PROFILE, "numerics": {"time_step": None, "cells": None}}))
+    numerics = resolve_numerics(case)
+    assert numerics.cells == 100 and numerics.gamma == 0.5
+    assert 0 < numerics.courant <= 1.0  # the default step never exceeds the wave's Courant limit
+
+
+@pytest.mark.parametrize("changes, limits, field, words", [
+    ({"numerics": {"cells": 5000}}, Limits(max_cells=1000), "numerics.cells", "limit of 1000"),
+    ({"numerics": {"duration": 1.0}}, Limits(max_steps=10**6), "numerics.time_step", "limit of 1000000"),
+    ({"outputs": {"fields": True, "field_stride": 1}}, Limits(max_output_values=1e5), "outputs", "limit"),
+])
+def test_a_case_over_a_limit_is_refused_up_front(changes, limits, field, words):
+    case = parse_case(merge(BASE_CASE, changes))
+    with pytest.raises(CaseError) as caught:
+        check_limits(case, resolve_numerics(case), limits)
+    errors = {e.field: e.message for e in caught.value.errors}
+    assert words in errors[field]

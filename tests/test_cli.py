@@ -1,0 +1,43 @@
+"""`percussim run`: prints the summary, writes files, exit 2 naming the field on a bad case."""
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+
+from conftest import BASE_CASE, merge
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def _percussim(*args, cwd):
+    return subprocess.run([sys.executable, "-m", "solver", *args], cwd=cwd, capture_output=True,
+                          text=True, env=None, timeout=120)
+
+
+def test_run_prints_and_writes_the_summary_and_result(tmp_path):
+    case = tmp_path / "case.json"
+    case.write_text(json.dumps(merge(BASE_CASE, {"numerics": {"duration": 5e-4}})))
+    done = _percussim("run", str(case), "--summary", "s.json", "--output", "r.h5", cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    printed = json.loads(done.stdout)
+    assert json.loads((tmp_path / "s.json").read_text()) == printed
+    assert 3e-4 < printed["co_impact_time"] < 3.5e-4
+    with h5py.File(tmp_path / "r.h5") as f:
+        assert json.loads(f["summary"][()]) == printed
+
+
+def test_invalid_case_exits_2_with_the_field(tmp_path):
+    case = tmp_path / "bad.json"
+    case.write_text(json.dumps(merge(BASE_CASE, {"contact": {"exponent": 0.9}, "striker": {"mass": 0}})))
+    done = _percussim("run", str(case), cwd=tmp_path)
+    assert done.returncode == 2
+    assert "contact.exponent: must be ≤ 0.5" in done.stderr
+    assert "striker.mass: must be > 0" in done.stderr
+    assert done.stdout == ""
+    broken = tmp_path / "broken.json"
+    broken.write_text("{not json")
+    assert _percussim("run", str(broken), cwd=tmp_path).returncode == 2
+    assert _percussim("run", "missing.json", cwd=tmp_path).returncode == 2

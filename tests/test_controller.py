@@ -1,0 +1,58 @@
+"""The controller: chunking changes nothing, progress rises, cancellation stops, sampling as asked."""
+
+import numpy as np
+import pytest
+
+import solver.controller as controller
+from conftest import BASE_CASE, merge
+from solver import Cancelled, parse_case, simulate_rod
+
+CASE = merge(BASE_CASE, {"numerics": {"duration": 1e-3},
+                         "outputs": {"probes": [0.3], "fields": True, "field_stride": 7}})
+
+
+def test_chunk_size_does_not_change_the_result(monkeypatch):
+    whole = simulate_rod(parse_case(CASE))
+    monkeypatch.setattr(controller, "CHUNK_NODE_STEPS", 101 * 13)  # 13 steps a chunk
+    chunked = simulate_rod(parse_case(CASE))
+    assert chunked.summary == whole.summary
+    for name in whole.history:
+        np.testing.assert_array_equal(chunked.history[name], whole.history[name])
+    np.testing.assert_array_equal(chunked.fields.stress, whole.fields.stress)
+    np.testing.assert_array_equal(chunked.fields.time, whole.fields.time)
+
+
+def test_progress_rises_to_one_and_cancel_stops(monkeypatch):
+    monkeypatch.setattr(controller, "CHUNK_NODE_STEPS", 101 * 100)
+    seen = []
+    simulate_rod(parse_case(CASE), progress=seen.append)
+    assert len(seen) > 5 and seen == sorted(seen) and seen[-1] == 1.0
+    calls = []
+    with pytest.raises(Cancelled):
+        simulate_rod(parse_case(CASE), cancelled=lambda: len(calls) >= 3 or calls.append(1) is not None)
+    assert len(calls) == 3
+
+
+def test_sampling_keeps_what_is_asked():
+    full = simulate_rod(parse_case(CASE))
+    steps = full.numerics.steps
+    assert len(full.history["time"]) == steps + 1
+    np.testing.assert_allclose(full.fields.time, np.arange(0, steps + 1, 7) * full.numerics.time_step)
+    assert full.fields.displacement.shape == (steps // 7 + 1, 101)
+    strided = simulate_rod(parse_case(merge(CASE, {"outputs": {"history_stride": 10, "fields": False}})))
+    assert strided.fields is None
+    for name in full.history:
+        np.testing.assert_array_equal(strided.history[name], full.history[name][::10])
+    np.testing.assert_array_equal(strided.probe_stress, full.probe_stress[::10])
+    # The summary is observed every step, whatever is kept.
+    assert strided.summary["peak_contact_force"] == full.summary["peak_contact_force"]
+
+
+def test_probe_at_a_node_and_at_the_ends_match_the_field():
+    case = merge(CASE, {"outputs": {"probes": [0.0, 0.36, 1.2], "field_stride": 1}})
+    result = simulate_rod(parse_case(case))
+    for k, node in enumerate((0, 30, 100)):
+        np.testing.assert_allclose(result.probe_stress[:, k], result.fields.stress[:, node], rtol=1e-12)
+    # At the struck end the stress is the contact force over the area (boundary row (9)).
+    np.testing.assert_allclose(result.fields.stress[2:, 0],
+                               -result.history["contact/force"][2:] / 0.014209, rtol=1e-6, atol=1e3)

@@ -1,0 +1,56 @@
+"""A Hertz contact on a tapered tool converges under refinement at the scheme's first order."""
+
+import math
+
+import numpy as np
+import pytest
+
+from solver import parse_case, simulate_rod
+
+TAPERED = {
+    "striker": {"mass": 10.0, "velocity": 5.0},
+    "tool": {"length": 0.5, "youngs_modulus": 2.1e11, "density": 7800.0,
+             "profile": {"x": [0.0, 0.3, 0.5], "area": [0.005, 0.005, 0.0015]}},
+    "contact": {"stiffness": 8e11, "exponent": 0.5, "damping": 3e3, "tension_stiffness": 3e6},
+    "medium": {"stiffness": 2e8, "damping": 1e3},
+    "numerics": {"duration": 6e-4},
+    "outputs": {"probes": [0.45]},
+}
+WAVE_SPEED = math.sqrt(2.1e11 / 7800.0)
+
+
+def _quantities(cells: int) -> dict[str, float]:
+    case = parse_case(TAPERED | {"numerics": {"duration": 6e-4, "cells": cells,
+                                              "time_step": 0.5 * (0.5 / cells) / WAVE_SPEED}})
+    result = simulate_rod(case)
+    s = result.summary
+    assert s["warnings"] == []
+    return {
+        "co_impact_time": s["co_impact_time"],
+        "peak_contact_force": s["peak_contact_force"]["value"],
+        "max_tensile_stress": s["max_tensile_stress"]["value"],
+        "max_compressive_stress": s["max_compressive_stress"]["value"],
+        "cone_probe_compression": -result.probe_stress[:, 0].min(),
+    }
+
+
+@pytest.fixture(scope="module")
+def ladder() -> dict[int, dict[str, float]]:
+    return {cells: _quantities(cells) for cells in (50, 100, 200, 400, 800, 1600)}
+
+
+@pytest.mark.parametrize("name, grids", [
+    ("co_impact_time", (50, 100, 200, 400)),
+    ("peak_contact_force", (50, 100, 200, 400)),
+    ("max_tensile_stress", (50, 100, 200, 400)),
+    # The peak moves from the struck end into the cone once the grid resolves the cone's front.
+    ("max_compressive_stress", (400, 800, 1600)),
+    ("cone_probe_compression", (400, 800, 1600)),
+])
+def test_differences_shrink_at_first_order(ladder, name, grids):
+    values = np.array([ladder[g][name] for g in grids])
+    differences = np.abs(np.diff(values))
+    orders = np.log2(differences[:-1] / differences[1:])
+    assert np.all((orders > 0.7) & (orders < 1.3)), (name, values, orders)
+    # The last refinement changes the value by little: the ladder really is converging.
+    assert differences[-1] / abs(values[-1]) < 0.02
