@@ -56,8 +56,11 @@ def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float,
 
 def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
                   contacts: np.ndarray, energy: np.ndarray, history: dict[str, np.ndarray],
-                  max_area_gradient: float = 0.0) -> dict:
-    """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout."""
+                  max_area_gradient: float = 0.0, extra_warnings: list[str] | None = None) -> dict:
+    """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout.
+
+    `extra_warnings` (the caller's own, e.g. outputs a model cannot provide) follow the checks'.
+    """
     count = int(trackers[K.T_CONTACTS])
     intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[:min(count, len(contacts))]]
     if trackers[K.T_IN_CONTACT]:
@@ -105,5 +108,6 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
             "max_excess_fraction": float(excess),
         },
         "force_history": _downsample(history),
-        "warnings": _warnings(case, numerics, trackers, excess, max_area_gradient),
+        "warnings": (_warnings(case, numerics, trackers, excess, max_area_gradient)
+                     + list(extra_warnings or [])),
     }
