@@ -30,14 +30,15 @@ def _run(args: argparse.Namespace) -> int:
     except NumericalFailure as error:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
+    # Files first: a closed stdout (`| head`) must not lose the result.
     text = json.dumps(result.summary, indent=2)
-    print(text)
     if args.summary:
         Path(args.summary).write_text(text + "\n")
     if args.output:
         write_result(result, args.output)
     for warning in result.summary["warnings"]:
         print(f"percussim: warning: {warning}", file=sys.stderr)
+    print(text)
     return 0
 
 

@@ -41,3 +41,16 @@ def test_invalid_case_exits_2_with_the_field(tmp_path):
     broken.write_text("{not json")
     assert _percussim("run", str(broken), cwd=tmp_path).returncode == 2
     assert _percussim("run", "missing.json", cwd=tmp_path).returncode == 2
+
+
+def test_files_are_written_even_when_stdout_closes_early(tmp_path):
+    case = tmp_path / "case.json"
+    case.write_text(json.dumps(merge(BASE_CASE, {"numerics": {"duration": 5e-4}})))
+    reader = subprocess.Popen([sys.executable, "-m", "solver", "run", str(case), "--summary", "s.json",
+                               "--output", "r.h5"], cwd=tmp_path, stdout=subprocess.PIPE,
+                              stderr=subprocess.DEVNULL)
+    reader.stdout.close()  # like `| head -0`: nobody reads the summary
+    reader.wait(timeout=120)
+    assert json.loads((tmp_path / "s.json").read_text())["name"] == "test"
+    with h5py.File(tmp_path / "r.h5") as f:
+        assert "contact/force" in f

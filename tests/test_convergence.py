@@ -1,27 +1,22 @@
 """A Hertz contact on a tapered tool converges under refinement at the scheme's first order."""
 
+import json
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
 
+from conftest import merge
 from solver import parse_case, simulate_rod
 
-TAPERED = {
-    "striker": {"mass": 10.0, "velocity": 5.0},
-    "tool": {"length": 0.5, "youngs_modulus": 2.1e11, "density": 7800.0,
-             "profile": {"x": [0.0, 0.3, 0.5], "area": [0.005, 0.005, 0.0015]}},
-    "contact": {"stiffness": 8e11, "exponent": 0.5, "damping": 3e3, "tension_stiffness": 3e6},
-    "medium": {"stiffness": 2e8, "damping": 1e3},
-    "numerics": {"duration": 6e-4},
-    "outputs": {"probes": [0.45]},
-}
+TAPERED = json.loads((Path(__file__).parent / "cases" / "tapered_hertz.json").read_text())
 WAVE_SPEED = math.sqrt(2.1e11 / 7800.0)
 
 
 def _quantities(cells: int) -> dict[str, float]:
-    case = parse_case(TAPERED | {"numerics": {"duration": 6e-4, "cells": cells,
-                                              "time_step": 0.5 * (0.5 / cells) / WAVE_SPEED}})
+    case = parse_case(merge(TAPERED, {"numerics": {"cells": cells,
+                                                   "time_step": 0.5 * (0.5 / cells) / WAVE_SPEED}}))
     result = simulate_rod(case)
     s = result.summary
     assert s["warnings"] == []

@@ -1,0 +1,46 @@
+"""Closed-form reference: linear contact on a long uniform rod (model.md, reference 1).
+
+Before the first reflection is back (t < 2L/a) the struck end sees the impedance `Z = S·ρ·a`, and
+the overlap obeys `δ'' + (k/Z)δ' + (k/m1)δ = 0`, δ(0) = 0, δ'(0) = W1, with `k = c1` (α = 0).
+"""
+
+from __future__ import annotations
+
+import math
+
+
+class LinearImpact:
+    """A striker `m1` at `W1` on a steel rod through a linear contact of damping ratio `ζ`."""
+
+    def __init__(self, zeta: float = 0.3, m1: float = 20.0, w1: float = 5.0, area: float = 0.01,
+                 length: float = 2.0, youngs_modulus: float = 2.1e11, density: float = 7800.0):
+        self.m1, self.w1, self.area, self.length = m1, w1, area, length
+        self.youngs_modulus, self.density = youngs_modulus, density
+        self.a = math.sqrt(youngs_modulus / density)
+        self.impedance = area * density * self.a
+        self.k = (2 * zeta * self.impedance) ** 2 / m1  # ζ = k/(2Zω) with ω = sqrt(k/m1)
+        omega = math.sqrt(self.k / m1)
+        self.zeta = self.k / (2 * self.impedance * omega)
+        self.omega_d = omega * math.sqrt(1 - self.zeta**2)
+        self.decay = self.zeta * omega
+        self.contact_time = math.pi / self.omega_d
+        self.peak_time = math.atan2(self.omega_d, self.decay) / self.omega_d
+        self.peak_force = self.force(self.peak_time)
+
+    def force(self, t: float) -> float:
+        """Contact force `k·δ(t)` while in contact; the stress is `σ(x, t) = −F(t − x/a)/S`."""
+        return self.k * self.w1 / self.omega_d * math.exp(-self.decay * t) * math.sin(self.omega_d * t)
+
+    def case(self, cells: int, courant: float = 0.5, **outputs) -> dict:
+        """The case as JSON-ready dict, on `cells` cells at Courant number `aτ/h`."""
+        h = self.length / cells
+        return {
+            "name": "linear-impact-reference",
+            "striker": {"mass": self.m1, "velocity": self.w1},
+            "tool": {"length": self.length, "area": self.area,
+                     "youngs_modulus": self.youngs_modulus, "density": self.density},
+            "contact": {"stiffness": self.k, "exponent": 0.0},
+            "numerics": {"duration": 1.2 * self.contact_time, "cells": cells,
+                         "time_step": courant * h / self.a},
+            "outputs": outputs,
+        }
