@@ -174,6 +174,8 @@ def advance(
             y_cur = y[cur]
             delta_cur = y_cur - uc[0]
             g = contact_stiffness(delta_cur, c1, alpha, c0)
+            r_n = external_force((m - 1) * tau, force_kind, force_amplitude, force_omega,
+                                 force_start, force_duration)  # R(t_n), explicit in row (11)
             if m == 1:
                 # (12), (13): first order in τ, the tool (struck end included) still at rest.
                 for i in range(n + 1):
@@ -192,9 +194,7 @@ def advance(
                 rel = b1_tau * (y_cur - uc[0])
                 a11 = m1_tau2 + gb
                 a12 = -gb
-                b_y = m1_tau2 * (2.0 * y_cur - y[old]) + rel + external_force(
-                    (m - 1) * tau, force_kind, force_amplitude, force_omega, force_start,
-                    force_duration)
+                b_y = m1_tau2 * (2.0 * y_cur - y[old]) + rel + r_n
                 a21 = gb
                 a22 = -(k0 * (1.0 - p[1]) + gb)
                 b_0 = rel - k0 * un[1]
@@ -234,9 +234,7 @@ def advance(
             un_mid = 0.5 * (un[n] + uc[n])
             medium_pot = 0.5 * c2 * un_mid * un_mid
             if m >= 2:
-                energy[E_EXTERNAL_WORK] += external_force(
-                    (m - 1) * tau, force_kind, force_amplitude, force_omega, force_start,
-                    force_duration) * 0.5 * (y_new - y[old])
+                energy[E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
             dd = delta - delta_cur
             energy[E_DISSIPATED_CONTACT] += b1_tau * dd * dd
             dn = un[n] - uc[n]
