@@ -49,6 +49,13 @@ def _warmup(args: argparse.Namespace) -> int:
     return 0
 
 
+def _worker(args: argparse.Namespace) -> int:
+    from worker.main import run_worker
+
+    run_worker(concurrency=args.concurrency, loglevel=args.loglevel, name=args.name)
+    return 0
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="percussim", description=__doc__)
     commands = p.add_subparsers(dest="command", required=True)
@@ -61,6 +68,11 @@ def parser() -> argparse.ArgumentParser:
     run.set_defaults(handler=_run)
     warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
     warm.set_defaults(handler=_warmup)
+    work = commands.add_parser("worker", help="run a queue worker (PERCUSSIM_BROKER_URL; none: embedded)")
+    work.add_argument("--concurrency", type=int, default=1, help="jobs run at once (processes)")
+    work.add_argument("--loglevel", default="info")
+    work.add_argument("--name", help="worker name (default percussim@HOST)")
+    work.set_defaults(handler=_worker)
     return p
 
 

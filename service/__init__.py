@@ -1,0 +1,1 @@
+"""percussim HTTP service: validate, enqueue, read results."""

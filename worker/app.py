@@ -1,0 +1,66 @@
+"""The Celery app, configured from the environment (`worker.settings`).
+
+Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
+delivered again; each worker process takes one job at a time.
+"""
+
+from __future__ import annotations
+
+import threading
+
+from celery import Celery
+from celery.signals import worker_ready, worker_shutdown
+
+from .settings import settings
+from .store import WorkerRegistry
+
+HEARTBEAT_SECONDS = 5.0
+
+
+def make_app() -> Celery:
+    s = settings()
+    app = Celery("percussim", include=["worker.tasks"])
+    config = {
+        "task_acks_late": True,
+        "task_reject_on_worker_lost": True,
+        "worker_prefetch_multiplier": 1,
+        "task_time_limit": s.job_time_limit + 60,  # the hard stop behind the job's own limit
+        "task_ignore_result": True,  # status and results live in the results store
+        "broker_connection_retry_on_startup": True,
+    }
+    if s.embedded:
+        folder = s.broker_folder / "queue"
+        folder.mkdir(parents=True, exist_ok=True)
+        config |= {
+            "broker_url": "filesystem://",
+            "broker_transport_options": {"data_folder_in": str(folder), "data_folder_out": str(folder),
+                                         "store_processed": False},
+            "worker_enable_remote_control": False,  # the filesystem transport cannot broadcast
+        }
+    else:
+        config |= {"broker_url": s.broker_url,
+                   "broker_transport_options": {"visibility_timeout": s.job_time_limit + 120}}
+    app.conf.update(config)
+    return app
+
+
+app = make_app()
+_stop = threading.Event()
+
+
+@worker_ready.connect
+def _start_heartbeat(sender, **_):
+    registry = WorkerRegistry(settings().results_dir)
+    name = sender.hostname
+
+    def beat():
+        while not _stop.is_set():
+            registry.beat(name)
+            _stop.wait(HEARTBEAT_SECONDS)
+
+    threading.Thread(target=beat, name="percussim-heartbeat", daemon=True).start()
+
+
+@worker_shutdown.connect
+def _stop_heartbeat(**_):
+    _stop.set()

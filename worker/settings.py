@@ -1,0 +1,45 @@
+"""Configuration of the queue, the results store and the limits, from `PERCUSSIM_*` variables.
+
+With no broker URL the queue is embedded: Celery's filesystem transport under the results
+folder, so one machine needs no external server. The same code runs against Redis when
+`PERCUSSIM_BROKER_URL` is set; the difference is only this configuration.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from solver.limits import Limits
+
+
+class Settings(BaseSettings):
+    model_config = SettingsConfigDict(env_prefix="PERCUSSIM_")
+
+    broker_url: str | None = Field(default=None, description="e.g. redis://redis:6379/0; none: embedded")
+    results_dir: Path = Field(default=Path("percussim-data"), description="the shared results store")
+    job_time_limit: float = Field(default=900.0, gt=0, description="seconds a job may run")
+    max_cells: int = Limits.max_cells
+    max_steps: int = Limits.max_steps
+    max_node_steps: float = Limits.max_node_steps
+    max_output_values: float = Limits.max_output_values
+
+    @property
+    def embedded(self) -> bool:
+        return not self.broker_url
+
+    @property
+    def broker_folder(self) -> Path:
+        return self.results_dir / "broker"
+
+    def limits(self) -> Limits:
+        return Limits(max_cells=self.max_cells, max_steps=self.max_steps,
+                      max_node_steps=self.max_node_steps, max_output_values=self.max_output_values)
+
+
+@lru_cache
+def settings() -> Settings:
+    return Settings()

@@ -1,0 +1,133 @@
+"""The results store: one folder a job under the results folder, readable by any process.
+
+    jobs/<id>/job.json      status, progress, timestamps, error (rewritten atomically)
+    jobs/<id>/case.json     the case as submitted
+    jobs/<id>/summary.json  the pulse summary, once succeeded
+    jobs/<id>/result.h5     the HDF5 result, once succeeded
+    jobs/<id>/cancel        present once a cancel was asked for
+
+Every write goes to a temporary name and is renamed, so a reader never sees half a file and a
+job delivered twice writes the same files again instead of twice. Job ids are random and
+checked against their pattern before any path is built from them.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import secrets
+import tempfile
+from datetime import datetime, timezone
+from pathlib import Path
+
+QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
+FINISHED = (SUCCEEDED, FAILED, CANCELLED)
+_ID = re.compile(r"[A-Za-z0-9_-]{22}")
+
+
+class UnknownJob(KeyError):
+    """No job has this id."""
+
+
+def now() -> str:
+    return datetime.now(timezone.utc).isoformat()
+
+
+def write_atomic(path: Path, data: bytes) -> None:
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as f:
+            f.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+class JobStore:
+    def __init__(self, root: Path):
+        self.jobs = Path(root) / "jobs"
+        self.jobs.mkdir(parents=True, exist_ok=True)
+
+    def folder(self, job_id: str) -> Path:
+        if not isinstance(job_id, str) or not _ID.fullmatch(job_id):
+            raise UnknownJob(job_id)
+        folder = self.jobs / job_id
+        if not (folder / "job.json").is_file():
+            raise UnknownJob(job_id)
+        return folder
+
+    def create(self, case: dict) -> dict:
+        """A new queued job for `case` (validated JSON); returns its record."""
+        job_id = secrets.token_urlsafe(16)  # 22 characters, 128 random bits
+        folder = self.jobs / job_id
+        folder.mkdir()
+        write_atomic(folder / "case.json", json.dumps(case).encode())
+        record = {"id": job_id, "name": case.get("name"), "status": QUEUED, "progress": 0.0,
+                  "created": now(), "started": None, "finished": None, "error": None,
+                  "attempts": 0, "worker": None}
+        write_atomic(folder / "job.json", json.dumps(record).encode())
+        return record
+
+    def get(self, job_id: str) -> dict:
+        return json.loads((self.folder(job_id) / "job.json").read_text())
+
+    def update(self, job_id: str, **changes) -> dict:
+        record = self.get(job_id) | changes
+        write_atomic(self.folder(job_id) / "job.json", json.dumps(record).encode())
+        return record
+
+    def case(self, job_id: str) -> dict:
+        return json.loads((self.folder(job_id) / "case.json").read_text())
+
+    def summary(self, job_id: str) -> dict:
+        return json.loads((self.folder(job_id) / "summary.json").read_text())
+
+    def write_summary(self, job_id: str, summary: dict) -> None:
+        write_atomic(self.folder(job_id) / "summary.json", json.dumps(summary).encode())
+
+    def result_path(self, job_id: str) -> Path:
+        return self.folder(job_id) / "result.h5"
+
+    def request_cancel(self, job_id: str) -> None:
+        write_atomic(self.folder(job_id) / "cancel", b"")
+
+    def cancel_requested(self, job_id: str) -> bool:
+        return (self.folder(job_id) / "cancel").exists()
+
+    def list(self, offset: int = 0, limit: int = 50) -> tuple[int, list[dict]]:
+        """(total, records) newest first."""
+        records = []
+        for folder in self.jobs.iterdir():
+            try:
+                records.append(json.loads((folder / "job.json").read_text()))
+            except (OSError, ValueError):
+                continue  # a folder being created
+        records.sort(key=lambda r: r["created"], reverse=True)
+        return len(records), records[offset:offset + limit]
+
+
+class WorkerRegistry:
+    """Workers announce themselves with a heartbeat file; readiness asks for a recent one."""
+
+    def __init__(self, root: Path):
+        self.folder = Path(root) / "workers"
+        self.folder.mkdir(parents=True, exist_ok=True)
+
+    def beat(self, name: str) -> None:
+        safe = re.sub(r"[^A-Za-z0-9_.@-]", "_", name)
+        write_atomic(self.folder / f"{safe}.json",
+                     json.dumps({"name": name, "time": datetime.now(timezone.utc).timestamp()}).encode())
+
+    def alive(self, within: float) -> list[str]:
+        limit = datetime.now(timezone.utc).timestamp() - within
+        names = []
+        for path in self.folder.glob("*.json"):
+            try:
+                beat = json.loads(path.read_text())
+            except (OSError, ValueError):
+                continue
+            if beat["time"] >= limit:
+                names.append(beat["name"])
+        return sorted(names)
