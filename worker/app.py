@@ -29,12 +29,13 @@ def make_app() -> Celery:
         "broker_connection_retry_on_startup": True,
     }
     if s.embedded:
-        folder = s.broker_folder / "queue"
+        folder, control = s.broker_folder / "queue", s.broker_folder / "control"
         folder.mkdir(parents=True, exist_ok=True)
         config |= {
             "broker_url": "filesystem://",
+            # The control folder defaults to ./control: keep everything under the results folder.
             "broker_transport_options": {"data_folder_in": str(folder), "data_folder_out": str(folder),
-                                         "store_processed": False},
+                                         "control_folder": str(control), "store_processed": False},
             "worker_enable_remote_control": False,  # the filesystem transport cannot broadcast
         }
     else:

@@ -1,0 +1,124 @@
+"""Starts the real thing for the live tests: redis-server, `percussim worker`s, `percussim serve`.
+
+Every process runs in its own process group on loopback ports, and is stopped with its children.
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import time
+from contextlib import contextmanager
+from pathlib import Path
+
+import httpx
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def wait_for(check, timeout: float, what: str):
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        try:
+            value = check()
+            if value:
+                return value
+        except (httpx.HTTPError, OSError):
+            pass
+        time.sleep(0.1)
+    raise TimeoutError(f"{what} not ready within {timeout} s")
+
+
+class Process:
+    def __init__(self, args: list[str], env: dict, log: Path):
+        self.log = log
+        self.popen = subprocess.Popen(args, env=env, cwd=ROOT, stdout=log.open("wb"),
+                                      stderr=subprocess.STDOUT, start_new_session=True)
+
+    def stop(self, sig=signal.SIGTERM, timeout: float = 15.0) -> None:
+        if self.popen.poll() is None:
+            try:
+                os.killpg(self.popen.pid, sig)
+                self.popen.wait(timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(self.popen.pid, signal.SIGKILL)
+                self.popen.wait()
+            except ProcessLookupError:
+                pass
+
+
+@contextmanager
+def redis_server(folder: Path):
+    """A real redis-server on a free loopback port, with append-only persistence in `folder`."""
+    binary = shutil.which("redis-server")
+    if binary is None:
+        raise RuntimeError("redis-server is not installed: run the tests with scripts/test")
+    port = free_port()
+    folder.mkdir(parents=True, exist_ok=True)
+    server = Process([binary, "--port", str(port), "--bind", "127.0.0.1", "--dir", str(folder),
+                      "--appendonly", "yes", "--save", ""], dict(os.environ), folder / "redis.log")
+    url = f"redis://127.0.0.1:{port}/0"
+    import redis
+
+    wait_for(lambda: redis.Redis.from_url(url, socket_timeout=0.5).ping(), 15, "redis-server")
+    try:
+        yield url
+    finally:
+        server.stop()
+
+
+class Stack:
+    """The API and its workers, sharing one results folder (and a broker, if given)."""
+
+    def __init__(self, folder: Path, broker_url: str | None, workers: int = 1,
+                 worker_env: dict | None = None):
+        self.folder = folder
+        self.env = {k: v for k, v in os.environ.items() if not k.startswith("PERCUSSIM_")}
+        self.env["PERCUSSIM_RESULTS_DIR"] = str(folder / "results")
+        self.worker_env = worker_env or {}
+        if broker_url:
+            self.env["PERCUSSIM_BROKER_URL"] = broker_url
+        self.port = free_port()
+        self.url = f"http://127.0.0.1:{self.port}"
+        self.processes: list[Process] = []
+        percussim = [sys.executable, "-m", "solver"]
+        serve = [*percussim, "serve", "--port", str(self.port)]
+        if broker_url:  # the API alone, workers as separate processes
+            self.processes.append(Process([*serve, "--no-worker"], self.env, folder / "api.log"))
+            for k in range(workers):
+                self.add_worker(f"w{k}")
+        else:  # embedded: serve starts its own workers
+            self.processes.append(Process([*serve, "--workers", str(workers)], self.env, folder / "api.log"))
+        self.client = httpx.Client(base_url=self.url, timeout=30)
+        wait_for(lambda: self.client.get("/readyz").status_code == 200, 60, "the API and a worker")
+
+    def add_worker(self, name: str) -> Process:
+        worker = Process([sys.executable, "-m", "solver", "worker", "--name", f"{name}@percussim"],
+                         self.env | self.worker_env, self.folder / f"worker-{name}.log")
+        self.processes.append(worker)
+        return worker
+
+    def wait_status(self, job_id: str, statuses: tuple[str, ...], timeout: float = 120) -> dict:
+        def status():
+            record = self.client.get(f"/v1/jobs/{job_id}").json()
+            return record if record["status"] in statuses else None
+        return wait_for(status, timeout, f"job {job_id} in {statuses}")
+
+    def logs(self) -> str:
+        return "\n".join(f"--- {p.log.name}\n{p.log.read_text(errors='replace')[-3000:]}"
+                         for p in self.processes)
+
+    def stop(self) -> None:
+        self.client.close()
+        for p in reversed(self.processes):
+            p.stop()
