@@ -56,6 +56,20 @@ def _worker(args: argparse.Namespace) -> int:
     return 0
 
 
+def _serve(args: argparse.Namespace) -> int:
+    from service.main import run_service
+
+    run_service(host=args.host, port=args.port, workers=args.workers, start_workers=not args.no_worker)
+    return 0
+
+
+def _count(text: str) -> int:
+    """A number of processes: a whole number, 0 or more."""
+    if not (text.isascii() and text.isdigit()):
+        raise argparse.ArgumentTypeError(f"must be a whole number, 0 or more, not {text!r}")
+    return int(text)
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="percussim", description=__doc__)
     commands = p.add_subparsers(dest="command", required=True)
@@ -73,6 +87,14 @@ def parser() -> argparse.ArgumentParser:
     work.add_argument("--loglevel", default="info")
     work.add_argument("--name", help="worker name (default percussim@HOST)")
     work.set_defaults(handler=_worker)
+    serve = commands.add_parser("serve", help="run the HTTP API (embedded: with its own workers)")
+    serve.add_argument("--host", default="127.0.0.1")
+    serve.add_argument("--port", type=int, default=8000)
+    started = serve.add_mutually_exclusive_group()
+    started.add_argument("--workers", type=_count, metavar="N",
+                         help="queue workers to start (default: 1 embedded, 0 with PERCUSSIM_BROKER_URL)")
+    started.add_argument("--no-worker", action="store_true", help="run the API alone")
+    serve.set_defaults(handler=_serve)
     return p
 
 

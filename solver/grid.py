@@ -7,7 +7,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from .case import Case, Tool
+from .case import Case, CaseError, FieldError, Tool
 
 DEFAULT_CELLS = 100
 STEPS_PER_CONTACT = 200  # default τ resolves the estimated contact by this many steps
@@ -42,7 +42,7 @@ def contact_time_estimate(case: Case) -> float:
     p = 1.0 + alpha  # force exponent
     w1 = abs(case.striker.velocity)
     if w1 > 0:
-        depth = ((p + 1.0) * m1 * w1**2 / (2.0 * c1)) ** (1.0 / (p + 1.0))
+        depth = ((p + 1.0) * m1 * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
     elif case.force is not None and case.force.amplitude != 0:
         depth = (abs(case.force.amplitude) / c1) ** (1.0 / p)
     else:
@@ -74,7 +74,13 @@ def resolve_numerics(case: Case, model: str | None = None) -> ResolvedNumerics:
     h = case.tool.length / cells
     a = wave_speed(case.tool)
     tau = num.time_step or min(h / a, contact_time_estimate(case) / STEPS_PER_CONTACT)
-    steps = max(1, math.ceil(num.duration / tau - 1e-9))
+    steps = num.duration / tau if tau > 0 else math.inf
+    if not math.isfinite(steps):
+        raise CaseError([FieldError(
+            field="numerics.time_step",
+            message=f"no time step can be chosen for this case (the estimated contact time is "
+                    f"{tau * STEPS_PER_CONTACT:.3g} s): give numerics.time_step")])
+    steps = max(1, math.ceil(steps - 1e-9))
     return ResolvedNumerics(
         model=model or num.model, time_step=tau, cells=cells, gamma=num.gamma,
         steps=steps, courant=a * tau / h,

@@ -16,6 +16,7 @@ from contextlib import contextmanager
 from pathlib import Path
 
 import httpx
+import redis
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -33,7 +34,7 @@ def wait_for(check, timeout: float, what: str):
             value = check()
             if value:
                 return value
-        except (httpx.HTTPError, OSError):
+        except (httpx.HTTPError, redis.RedisError, OSError):
             pass
         time.sleep(0.1)
     raise TimeoutError(f"{what} not ready within {timeout} s")
@@ -68,10 +69,8 @@ def redis_server(folder: Path):
     server = Process([binary, "--port", str(port), "--bind", "127.0.0.1", "--dir", str(folder),
                       "--appendonly", "yes", "--save", ""], dict(os.environ), folder / "redis.log")
     url = f"redis://127.0.0.1:{port}/0"
-    import redis
-
-    wait_for(lambda: redis.Redis.from_url(url, socket_timeout=0.5).ping(), 15, "redis-server")
     try:
+        wait_for(lambda: redis.Redis.from_url(url, socket_timeout=0.5).ping(), 15, "redis-server")
         yield url
     finally:
         server.stop()

@@ -72,3 +72,11 @@ def test_a_case_over_a_limit_is_refused_up_front(changes, limits, field, words):
         check_limits(case, resolve_numerics(case), limits)
     errors = {e.field: e.message for e in caught.value.errors}
     assert words in errors[field]
+
+
+def test_a_case_whose_time_step_cannot_be_chosen_is_refused():
+    case = parse_case(merge(BASE_CASE, {"striker": {"velocity": 1e200},
+                                        "numerics": {"time_step": None}}))
+    with pytest.raises(CaseError) as caught:
+        resolve_numerics(case)
+    assert caught.value.errors[0].field == "numerics.time_step"

@@ -11,41 +11,31 @@ import threading
 from celery import Celery
 from celery.signals import worker_ready, worker_shutdown
 
-from .settings import settings
+from .broker import broker_config, queue_folder
+from .settings import Settings, settings
 from .store import WorkerRegistry
 
 HEARTBEAT_SECONDS = 5.0
 
 
-def make_app() -> Celery:
-    s = settings()
+def make_app(s: Settings) -> Celery:
     app = Celery("percussim", include=["worker.tasks"])
-    config = {
+    app.conf.update(broker_config(s), **{
         "task_acks_late": True,
         "task_reject_on_worker_lost": True,
         "worker_prefetch_multiplier": 1,
         "task_time_limit": s.job_time_limit + 60,  # the hard stop behind the job's own limit
         "task_ignore_result": True,  # status and results live in the results store
         "broker_connection_retry_on_startup": True,
-    }
+        # The filesystem transport cannot broadcast.
+        "worker_enable_remote_control": not s.embedded,
+    })
     if s.embedded:
-        folder, control = s.broker_folder / "queue", s.broker_folder / "control"
-        folder.mkdir(parents=True, exist_ok=True)
-        config |= {
-            "broker_url": "filesystem://",
-            # The control folder defaults to ./control: keep everything under the results folder.
-            "broker_transport_options": {"data_folder_in": str(folder), "data_folder_out": str(folder),
-                                         "control_folder": str(control), "store_processed": False},
-            "worker_enable_remote_control": False,  # the filesystem transport cannot broadcast
-        }
-    else:
-        config |= {"broker_url": s.broker_url,
-                   "broker_transport_options": {"visibility_timeout": s.job_time_limit + 120}}
-    app.conf.update(config)
+        queue_folder(s).mkdir(parents=True, exist_ok=True)
     return app
 
 
-app = make_app()
+app = make_app(settings())
 _stop = threading.Event()
 
 

@@ -10,6 +10,7 @@ from solver.io import write_result
 from solver.simulate import simulate
 
 from .app import app
+from .broker import RUN_JOB
 from .settings import settings
 from .store import CANCELLED, FAILED, FINISHED, RUNNING, SUCCEEDED, JobStore, now
 
@@ -20,7 +21,7 @@ class TimeLimitExceeded(Exception):
     pass
 
 
-@app.task(name="percussim.run_job")
+@app.task(name=RUN_JOB)
 def run_job(job_id: str) -> str:
     """Solve job `job_id`. Idempotent: a job delivered again after it finished is left as it is,
     and one delivered again mid-run (its worker died) runs again and rewrites the same files."""

@@ -1,0 +1,58 @@
+"""The percussim HTTP API (the contract's table): `create_app(settings)` and `app` for uvicorn.
+
+Creating the app writes nothing: the results store is opened per request, so importing this module
+(uvicorn does, for `app`) creates no folder wherever it happens to run.
+"""
+
+from __future__ import annotations
+
+from fastapi import FastAPI
+from fastapi.responses import JSONResponse
+
+from worker.settings import Settings, settings as env_settings
+from worker.store import WorkerRegistry
+
+from . import errors, presets
+from .jobs import jobs_router
+from .queue import JobQueue
+
+READY_WITHIN = 15.0  # seconds: three missed worker heartbeats (every 5 s) and a worker is gone
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """The API on the results folder and broker of `settings` (default: the environment's)."""
+    settings = settings or env_settings()
+    queue = JobQueue(settings)
+    app = FastAPI(
+        title="percussim",
+        summary="Simulation of percussive impact devices: striker, tool, contact and medium.",
+        description="Submit an impact case (SI units) as a job, follow it, then fetch its pulse "
+                    "summary and its HDF5 result. The presets are the paper's cases.",
+        version="1",
+    )
+    errors.install(app)
+    app.include_router(jobs_router(settings, queue, presets.openapi_examples()))
+    app.include_router(presets.router)
+
+    @app.get("/healthz", tags=["health"])
+    def healthz() -> dict:
+        """Liveness: the API answers."""
+        return {"status": "ok"}
+
+    @app.get("/readyz", tags=["health"], responses={503: {"description": "not ready, with the reason"}})
+    def readyz():
+        """Readiness: the broker is reachable and a worker has reported recently."""
+        workers = WorkerRegistry(settings.results_dir).alive(within=READY_WITHIN)
+        reason = queue.problem()
+        if reason is None and not workers:
+            reason = (f"no worker has reported in the last {READY_WITHIN:g} s "
+                      "(start one with `percussim worker`)")
+        if reason:
+            return JSONResponse(status_code=503, content={
+                "status": "unavailable", "reason": reason, "broker": queue.describe(), "workers": workers})
+        return {"status": "ready", "broker": queue.describe(), "workers": workers}
+
+    return app
+
+
+app = create_app()

@@ -1,0 +1,84 @@
+"""Error answers: every refused case names its fields, in the words `percussim run` uses.
+
+422 `{"detail": [{"field": "contact.exponent", "message": "must be ≤ 0.5"}, ...]}` for a case
+that is invalid or too large, 404 `{"detail": "..."}` for an unknown job.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel
+
+from solver.case import CaseError, FieldError, field_path, parse_case
+from worker.store import UnknownJob
+
+
+class FieldErrors(BaseModel):
+    """The answer to a refused request: each offending field and why."""
+
+    detail: list[FieldError]
+
+
+class Problem(BaseModel):
+    """An error answer in words."""
+
+    detail: str
+
+
+def _body_errors(body: Any, errors: list[dict]) -> list[FieldError]:
+    """The body's errors, as the case model itself words them."""
+    if not isinstance(body, dict):
+        return [FieldError(field="body", message="must be a JSON object (the impact case), "
+                                                 "sent as application/json")]
+    # Validating the case again gives exactly the paths and words of `percussim run`; it only
+    # runs for a request already refused.
+    try:
+        parse_case(body)
+    except CaseError as error:
+        return error.errors
+    return [FieldError(field=field_path(tuple(e["loc"])[1:]), message=e["msg"]) for e in errors]
+
+
+def request_errors(exc: RequestValidationError) -> list[FieldError]:
+    """A request FastAPI refused, as field paths ("body" stripped) and reasons."""
+    described, body = [], []
+    for e in exc.errors():
+        loc = tuple(e["loc"])
+        if e["type"] == "json_invalid":
+            described.append(FieldError(
+                field="body", message=f"is not valid JSON: {e['ctx']['error']} (at character {loc[1]})"))
+        elif loc[:1] == ("body",):
+            body.append(e)
+        else:  # a query or path parameter: "query.limit"
+            described.append(FieldError(field=field_path(loc), message=e["msg"]))
+    if body:
+        described += _body_errors(exc.body, body)
+    return described
+
+
+def _field_errors(errors: list[FieldError]) -> JSONResponse:
+    return JSONResponse(status_code=422, content={"detail": [e.model_dump() for e in errors]})
+
+
+async def _invalid_request(request: Request, exc: RequestValidationError) -> JSONResponse:
+    return _field_errors(request_errors(exc))
+
+
+async def _invalid_case(request: Request, exc: CaseError) -> JSONResponse:
+    # Raised by the up-front limits check: the limit and the field that sets it.
+    return _field_errors(exc.errors)
+
+
+async def _unknown_job(request: Request, exc: UnknownJob) -> JSONResponse:
+    return JSONResponse(status_code=404, content={"detail": f"no job with id {exc.args[0]!r}"})
+
+
+def install(app: FastAPI) -> None:
+    """Register the handlers on `app`; FastAPI's own 404 and 405 answers are left as they are."""
+    app.add_exception_handler(RequestValidationError, _invalid_request)
+    app.add_exception_handler(CaseError, _invalid_case)
+    app.add_exception_handler(UnknownJob, _unknown_job)

@@ -1,0 +1,165 @@
+"""`/v1/jobs`: submit a case, follow its job, fetch its summary and result, cancel it.
+
+The routes only validate, publish and read the results store the workers write. No
+`from __future__ import annotations` here: FastAPI must see the request examples, a local of
+`jobs_router`, in the signature of `submit`.
+"""
+
+import re
+from datetime import datetime
+from typing import Annotated, Any, Literal
+
+from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
+from fastapi.responses import FileResponse
+from pydantic import BaseModel, ConfigDict
+
+from solver.case import Case
+from solver.grid import resolve_numerics
+from solver.limits import check_limits
+from worker.settings import Settings
+from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
+
+from .errors import FieldErrors, Problem
+from .queue import BROKER_ERRORS, JobQueue
+
+RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker is down
+
+
+class Links(BaseModel):
+    self: str
+    summary: str
+    result: str
+
+
+class Job(BaseModel):
+    """A job's record in the results store, with the links to follow it."""
+
+    model_config = ConfigDict(extra="allow")  # whatever else the store records is passed on
+
+    id: str
+    name: str | None
+    status: Literal["queued", "running", "succeeded", "failed", "cancelled"]
+    progress: float
+    created: datetime
+    started: datetime | None
+    finished: datetime | None
+    error: str | None
+    links: Links
+
+
+class JobList(BaseModel):
+    total: int
+    offset: int
+    limit: int
+    jobs: list[Job]
+
+
+def _view(request: Request, record: dict) -> dict:
+    """The record with its links (paths relative to the API's root)."""
+    job_id = record["id"]
+    return record | {"links": {
+        "self": request.app.url_path_for("get_job", job_id=job_id),
+        "summary": request.app.url_path_for("get_summary", job_id=job_id),
+        "result": request.app.url_path_for("get_result", job_id=job_id),
+    }}
+
+
+def _not_ready(record: dict, what: str) -> HTTPException:
+    """409 naming the job's status (and its error if it failed)."""
+    status = record["status"]
+    if status == FAILED:
+        detail = f"job {record['id']} failed, so it has no {what}: {record['error']}"
+    elif status == CANCELLED:
+        detail = f"job {record['id']} was cancelled, so it has no {what}"
+    else:
+        detail = f"job {record['id']} is {status}: its {what} is ready once it has succeeded"
+    return HTTPException(status_code=409, detail=detail)
+
+
+def _download_name(record: dict) -> str:
+    """`<name>-<id>.h5`, the name reduced to characters safe in any file system."""
+    name = re.sub(r"[^A-Za-z0-9_.-]+", "_", record.get("name") or "case").strip("._") or "case"
+    return f"{name}-{record['id']}.h5"
+
+
+def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | None) -> APIRouter:
+    """The job routes for the results store and broker of `settings`."""
+    router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
+    not_found = {404: {"model": Problem, "description": "no job with this id"}}
+    not_ready = {409: {"model": Problem, "description": "the job has not succeeded"}}
+
+    def store() -> JobStore:
+        return JobStore(settings.results_dir)
+
+    @router.post("", status_code=202, response_model=Job, responses={
+        422: {"model": FieldErrors, "description": "the case is invalid or exceeds a limit"},
+        503: {"model": Problem, "description": "the broker is unreachable; retry later"}})
+    def submit(request: Request, response: Response,
+               case: Annotated[Case, Body(openapi_examples=examples)]) -> dict:
+        """Queue an impact case. A case over the size limits is refused here, naming the limit."""
+        check_limits(case, resolve_numerics(case), settings.limits())
+        jobs = store()
+        record = jobs.create(case.model_dump(mode="json", exclude_none=True))
+        try:
+            queue.enqueue(record["id"])
+        except BROKER_ERRORS as error:
+            # The job would never run: say so in its record rather than leave it queued.
+            jobs.update(record["id"], status=FAILED, finished=now(),
+                        error=f"the job could not be queued: {error}")
+            raise HTTPException(
+                status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
+                detail=f"the job queue is unavailable ({queue.describe()}: {error}); "
+                       f"the case was not queued, submit it again later") from None
+        view = _view(request, record)
+        response.headers["Location"] = view["links"]["self"]
+        return view
+
+    @router.get("", response_model=JobList, responses={422: {"model": FieldErrors}})
+    def list_jobs(request: Request, offset: Annotated[int, Query(ge=0)] = 0,
+                  limit: Annotated[int, Query(ge=1, le=500)] = 50) -> dict:
+        """Recent jobs, newest first."""
+        total, records = store().list(offset, limit)
+        return {"total": total, "offset": offset, "limit": limit,
+                "jobs": [_view(request, r) for r in records]}
+
+    @router.get("/{job_id}", response_model=Job, responses=not_found)
+    def get_job(request: Request, job_id: str) -> dict:
+        """A job's status, progress (0..1), timestamps and error."""
+        return _view(request, store().get(job_id))
+
+    @router.get("/{job_id}/summary", responses=not_found | not_ready)
+    def get_summary(job_id: str) -> dict:
+        """The pulse summary of a succeeded job."""
+        jobs = store()
+        record = jobs.get(job_id)
+        if record["status"] != SUCCEEDED:
+            raise _not_ready(record, "summary")
+        return jobs.summary(job_id)
+
+    @router.get("/{job_id}/result.h5", response_class=FileResponse, responses=not_found | not_ready | {
+        200: {"content": {"application/x-hdf5": {}}, "description": "the HDF5 result"}})
+    def get_result(job_id: str) -> FileResponse:
+        """The HDF5 result of a succeeded job."""
+        jobs = store()
+        record = jobs.get(job_id)
+        if record["status"] != SUCCEEDED:
+            raise _not_ready(record, "result")
+        return FileResponse(jobs.result_path(job_id), media_type="application/x-hdf5",
+                            filename=_download_name(record))
+
+    @router.delete("/{job_id}", status_code=202, response_model=Job, responses=not_found | {
+        409: {"model": Problem, "description": "the job has already finished"}})
+    def cancel_job(request: Request, job_id: str) -> dict:
+        """Cancel a job: a queued one at once, a running one between two chunks of its run."""
+        jobs = store()
+        record = jobs.get(job_id)
+        if record["status"] in FINISHED:
+            raise HTTPException(status_code=409,
+                                detail=f"job {job_id} has already finished: it is {record['status']}")
+        # The marker first: a worker taking the job from now on sees it and does not run it.
+        jobs.request_cancel(job_id)
+        if record["status"] == QUEUED:
+            record = jobs.update(job_id, status=CANCELLED, finished=now())
+        return _view(request, record)
+
+    return router

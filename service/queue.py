@@ -1,0 +1,65 @@
+"""The service's side of the job queue: publish a job, tell whether the broker is reachable.
+
+The API only publishes; it never imports the worker's Celery app, whose module configures itself
+from the environment when imported. Publishing with an app made from the service's own settings
+keeps `create_app(Settings(...))` on the broker those settings name (tests use a temporary
+folder); `worker.broker` gives both sides the same broker configuration.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import redis.exceptions
+from celery import Celery
+from kombu.exceptions import OperationalError
+from kombu.utils.url import maybe_sanitize_url
+
+from worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
+from worker.settings import Settings
+
+# What publishing raises when the broker cannot be reached (kombu wraps most of them).
+BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError,
+                 OSError)
+
+
+class JobQueue:
+    """Publishes `percussim.run_job` messages to the broker the workers consume."""
+
+    def __init__(self, settings: Settings):
+        self.settings = settings
+        self.app = Celery("percussim-api", set_as_current=False)
+        self.app.conf.update(broker_config(settings))
+
+    @property
+    def queue_folder(self) -> Path:
+        """The embedded broker's message folder."""
+        return queue_folder(self.settings)
+
+    def describe(self) -> str:
+        """The broker in words, with any password masked."""
+        if self.settings.embedded:
+            return f"embedded (filesystem broker in {self.settings.broker_folder})"
+        return maybe_sanitize_url(self.settings.broker_url)
+
+    def enqueue(self, job_id: str) -> None:
+        """Publish job `job_id`; raises one of `BROKER_ERRORS` if the broker cannot take it."""
+        if self.settings.embedded:
+            # The worker creates the folder too; the API may be up before any worker is.
+            self.queue_folder.mkdir(parents=True, exist_ok=True)
+        self.app.send_task(RUN_JOB, args=[job_id], ignore_result=True)
+
+    def problem(self) -> str | None:
+        """Why the broker cannot be reached now, or None if it can."""
+        if self.settings.embedded:
+            folder = self.queue_folder
+            if not (folder.is_dir() and os.access(folder, os.W_OK)):
+                return f"the embedded broker folder {folder} is missing or not writable"
+            return None
+        try:
+            with self.app.connection_for_write() as connection:
+                connection.ensure_connection(max_retries=1, interval_start=0, timeout=CONNECT_TIMEOUT)
+        except BROKER_ERRORS as error:
+            return f"the broker {self.describe()} is unreachable: {error}"
+        return None

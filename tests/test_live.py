@@ -1,0 +1,102 @@
+"""The service against a live stack: real redis-server, real Celery workers, the real API.
+
+The same flow runs in Redis mode and in the embedded default (no external server).
+"""
+
+from __future__ import annotations
+
+import io
+import time
+
+import h5py
+import numpy as np
+import pytest
+
+from conftest import merge
+from live_stack import Stack, redis_server
+from solver.presets import load_preset, preset_json
+from solver.simulate import simulate
+
+# A job of several seconds: long enough to watch progress and to cancel it while it runs.
+LONG = {"numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
+        "outputs": {"history_stride": 100, "probes": []}}
+
+
+@pytest.fixture(scope="module")
+def redis_url(tmp_path_factory):
+    with redis_server(tmp_path_factory.mktemp("redis")) as url:
+        yield url
+
+
+@pytest.fixture(scope="module", params=["redis", "embedded"])
+def stack(request, tmp_path_factory):
+    broker = request.getfixturevalue("redis_url") if request.param == "redis" else None
+    s = Stack(tmp_path_factory.mktemp(request.param), broker)
+    yield s
+    s.stop()
+
+
+def _submit(stack: Stack, case: dict) -> dict:
+    answer = stack.client.post("/v1/jobs", json=case)
+    assert answer.status_code == 202, answer.text
+    assert answer.json()["status"] == "queued"
+    return answer.json()
+
+
+@pytest.mark.parametrize("preset", ["fig3", "fig9"])
+def test_a_preset_runs_to_the_same_summary_as_the_solver(stack, preset):
+    job = _submit(stack, preset_json(preset))
+    record = stack.wait_status(job["id"], ("succeeded", "failed"))
+    assert record["status"] == "succeeded", (record, stack.logs())
+    assert record["progress"] == 1.0
+    direct = simulate(load_preset(preset))
+    summary = stack.client.get(f"/v1/jobs/{job['id']}/summary").json()
+    assert summary == direct.summary
+    download = stack.client.get(f"/v1/jobs/{job['id']}/result.h5")
+    assert download.status_code == 200
+    with h5py.File(io.BytesIO(download.content)) as f:
+        np.testing.assert_array_equal(f["contact/force"][()], direct.history["contact/force"])
+        np.testing.assert_array_equal(f["probes/stress"][()], direct.probe_stress)
+        assert f.attrs["format"] == "percussim-result"
+
+
+def test_an_invalid_case_gets_422_naming_the_field(stack):
+    answer = stack.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"contact": {"exponent": 0.9}}))
+    assert answer.status_code == 422
+    assert {"field": "contact.exponent", "message": "must be ≤ 0.5"} in answer.json()["detail"]
+
+
+def test_progress_rises_and_cancel_stops_running_and_queued_jobs(stack):
+    running = _submit(stack, merge(preset_json("fig3"), LONG))
+    first = stack.wait_status(running["id"], ("running",), timeout=60)
+    seen = [first["progress"]]
+    while len(set(seen)) < 3 and stack.client.get(f"/v1/jobs/{running['id']}").json()["status"] == "running":
+        time.sleep(0.3)
+        seen.append(stack.client.get(f"/v1/jobs/{running['id']}").json()["progress"])
+    assert seen == sorted(seen) and len(set(seen)) >= 3, seen  # progress rises while it runs
+    queued = _submit(stack, preset_json("fig3"))  # the only worker is busy: it waits
+    assert stack.client.get(f"/v1/jobs/{queued['id']}").json()["status"] == "queued"
+    assert stack.client.delete(f"/v1/jobs/{queued['id']}").status_code == 202
+    assert stack.client.get(f"/v1/jobs/{queued['id']}").json()["status"] == "cancelled"
+    assert stack.client.delete(f"/v1/jobs/{running['id']}").status_code == 202
+    stopped = stack.wait_status(running["id"], ("cancelled", "succeeded", "failed"), timeout=30)
+    assert stopped["status"] == "cancelled" and stopped["progress"] < 1.0
+    # The cancelled queued job never runs, and the worker is free for the next job.
+    after = _submit(stack, preset_json("fig3"))
+    assert stack.wait_status(after["id"], ("succeeded", "failed"))["status"] == "succeeded"
+    assert stack.client.get(f"/v1/jobs/{queued['id']}").json()["started"] is None
+    assert stack.client.get(f"/v1/jobs/{running['id']}/summary").status_code == 409
+
+
+def test_a_case_the_solver_refuses_ends_failed_with_the_reason(redis_url, tmp_path):
+    """A worker configured with a smaller limit than the API refuses the case when it runs it."""
+    s = Stack(tmp_path, redis_url, worker_env={"PERCUSSIM_MAX_CELLS": "150"})
+    try:
+        job = _submit(s, merge(preset_json("fig3"), {"numerics": {"cells": 200}}))
+        record = s.wait_status(job["id"], ("succeeded", "failed"))
+        assert record["status"] == "failed"
+        assert "numerics.cells" in record["error"] and "limit of 150" in record["error"]
+        conflict = s.client.get(f"/v1/jobs/{job['id']}/summary")
+        assert conflict.status_code == 409
+    finally:
+        s.stop()

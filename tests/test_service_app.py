@@ -1,0 +1,252 @@
+"""The HTTP API without a worker: validation, the job records, errors, presets, health, OpenAPI.
+
+Jobs are published to the embedded broker under the test's folder, where no worker takes them, so
+a submitted job stays queued.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import time
+
+import pytest
+from fastapi.testclient import TestClient
+
+from conftest import BASE_CASE, merge
+from service.app import create_app
+from solver.presets import PRESETS_ENV, preset_json, preset_names
+from worker.settings import Settings
+from worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry, now
+
+
+@pytest.fixture(autouse=True)
+def clean_environment(monkeypatch):
+    """Only what a test sets: no broker URL, limits or presets folder from the caller's shell."""
+    for name in list(os.environ):
+        if name.startswith("PERCUSSIM_"):
+            monkeypatch.delenv(name)
+
+
+def _client(tmp_path, **settings) -> TestClient:
+    return TestClient(create_app(Settings(results_dir=tmp_path, **settings)))
+
+
+@pytest.fixture
+def client(tmp_path) -> TestClient:
+    return _client(tmp_path)
+
+
+def _submit(client: TestClient, case: dict = BASE_CASE) -> dict:
+    answer = client.post("/v1/jobs", json=case)
+    assert answer.status_code == 202, answer.text
+    return answer.json()
+
+
+PROFILE = {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.01, 0.01, -1.0]}}
+
+
+@pytest.mark.parametrize("changes, field, message", [
+    ({"contact": {"exponent": 0.9}}, "contact.exponent", "must be ≤ 0.5"),
+    ({"tool": PROFILE}, "tool.profile.area[2]", "must be > 0.0"),
+    ({"striker": None}, "striker", "is required"),
+    ({"colour": "red"}, "colour", "is not a known field"),
+    ({"force": {"kind": "pulse", "amplitude": 1e3}}, "force.duration", "is required"),
+    ({"force": {"kind": "square", "amplitude": 1e3}}, "force",
+     "kind must be one of 'sine', 'abs_sine', 'pulse'"),
+    ({"numerics": {"cells": 10.5}}, "numerics.cells", "must be a whole number"),
+    ({"outputs": {"probes": [0.1, 2.0]}}, "outputs.probes[1]",
+     "must lie on the tool, 0 ≤ x ≤ tool.length = 1.2 m"),
+])
+def test_an_invalid_case_gets_422_naming_the_field(client, changes, field, message):
+    answer = client.post("/v1/jobs", json=merge(BASE_CASE, changes))
+    assert answer.status_code == 422
+    assert answer.json() == {"detail": [{"field": field, "message": message}]}
+
+
+def test_every_invalid_field_is_named_at_once(client):
+    answer = client.post("/v1/jobs", json=merge(BASE_CASE, {"striker": {"mass": 0},
+                                                            "contact": {"exponent": -1}}))
+    assert answer.status_code == 422
+    assert {e["field"] for e in answer.json()["detail"]} == {"striker.mass", "contact.exponent"}
+
+
+@pytest.mark.parametrize("content, headers, message", [
+    ("{not json", {"content-type": "application/json"}, "is not valid JSON"),
+    ("[1, 2]", {"content-type": "application/json"}, "must be a JSON object"),
+    (json.dumps(BASE_CASE), {"content-type": "text/plain"}, "sent as application/json"),
+    ("", {"content-type": "application/json"}, "must be a JSON object"),
+])
+def test_a_body_that_is_not_a_json_object_is_named_body(client, content, headers, message):
+    answer = client.post("/v1/jobs", content=content, headers=headers)
+    assert answer.status_code == 422
+    [error] = answer.json()["detail"]
+    assert error["field"] == "body" and message in error["message"]
+
+
+def test_a_case_over_the_limits_is_refused_up_front_naming_the_limit(tmp_path):
+    client = _client(tmp_path, max_cells=50, max_steps=1000)
+    answer = client.post("/v1/jobs", json=BASE_CASE)  # 100 cells, 1205 steps
+    assert answer.status_code == 422
+    errors = {e["field"]: e["message"] for e in answer.json()["detail"]}
+    assert "limit of 50" in errors["numerics.cells"]
+    assert "limit of 1000" in errors["numerics.time_step"]
+    assert client.get("/v1/jobs").json()["total"] == 0, "a refused case creates no job"
+
+
+def test_a_submitted_job_is_queued_with_its_links_and_published(client, tmp_path):
+    answer = client.post("/v1/jobs", json=BASE_CASE)
+    assert answer.status_code == 202
+    job = answer.json()
+    assert job["status"] == "queued" and job["progress"] == 0.0 and job["name"] == "test"
+    assert job["started"] is None and job["finished"] is None and job["error"] is None
+    assert job["links"] == {"self": f"/v1/jobs/{job['id']}", "summary": f"/v1/jobs/{job['id']}/summary",
+                            "result": f"/v1/jobs/{job['id']}/result.h5"}
+    assert answer.headers["location"] == job["links"]["self"]
+    assert client.get(job["links"]["self"]).json() == job
+    stored = JobStore(tmp_path).case(job["id"])
+    assert stored["striker"] == BASE_CASE["striker"] and stored["numerics"]["gamma"] == 0.5
+    messages = list((tmp_path / "broker" / "queue").glob("*.msg"))
+    assert len(messages) == 1 and job["id"] in messages[0].read_text()
+
+
+def test_summary_and_result_are_409_until_the_job_succeeds(client):
+    job = _submit(client)
+    for what in ("summary", "result.h5"):
+        answer = client.get(f"/v1/jobs/{job['id']}/{what}")
+        assert answer.status_code == 409
+        assert "queued" in answer.json()["detail"]
+
+
+def test_a_failed_job_names_its_error_in_the_409(client, tmp_path):
+    job = _submit(client)
+    JobStore(tmp_path).update(job["id"], status=FAILED, finished=now(), error="the kernel diverged")
+    answer = client.get(f"/v1/jobs/{job['id']}/summary")
+    assert answer.status_code == 409
+    assert "failed" in answer.json()["detail"] and "the kernel diverged" in answer.json()["detail"]
+
+
+def test_a_succeeded_job_serves_its_summary_and_hdf5_file(client, tmp_path):
+    job = _submit(client, merge(BASE_CASE, {"name": "my rod/2"}))
+    store = JobStore(tmp_path)
+    store.write_summary(job["id"], {"co_impact_time": 3.35e-4})
+    store.result_path(job["id"]).write_bytes(b"\x89HDF\r\n\x1a\n fake")
+    store.update(job["id"], status=SUCCEEDED, progress=1.0, finished=now())
+    assert client.get(f"/v1/jobs/{job['id']}/summary").json() == {"co_impact_time": 3.35e-4}
+    download = client.get(f"/v1/jobs/{job['id']}/result.h5")
+    assert download.status_code == 200
+    assert download.headers["content-type"] == "application/x-hdf5"
+    assert f'filename="my_rod_2-{job["id"]}.h5"' in download.headers["content-disposition"]
+    assert download.content == b"\x89HDF\r\n\x1a\n fake"
+
+
+def test_delete_cancels_a_queued_job_and_409s_a_finished_one(client, tmp_path):
+    job = _submit(client)
+    answer = client.delete(f"/v1/jobs/{job['id']}")
+    assert answer.status_code == 202
+    assert answer.json()["status"] == "cancelled" and answer.json()["finished"] is not None
+    assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"
+    assert JobStore(tmp_path).cancel_requested(job["id"]), "a worker taking it later must skip it"
+    again = client.delete(f"/v1/jobs/{job['id']}")
+    assert again.status_code == 409 and "cancelled" in again.json()["detail"]
+
+
+def test_delete_of_a_running_job_asks_the_worker_to_stop(client, tmp_path):
+    job = _submit(client)
+    store = JobStore(tmp_path)
+    store.update(job["id"], status="running", started=now())
+    answer = client.delete(f"/v1/jobs/{job['id']}")
+    assert answer.status_code == 202 and answer.json()["status"] == "running"
+    assert store.cancel_requested(job["id"])
+
+
+@pytest.mark.parametrize("job_id", ["AAAAAAAAAAAAAAAAAAAAAA", "short", "A" * 23, "a.b"])
+@pytest.mark.parametrize("method, suffix", [("GET", ""), ("GET", "/summary"), ("GET", "/result.h5"),
+                                            ("DELETE", "")])
+def test_an_unknown_or_malformed_id_is_404(client, job_id, method, suffix):
+    answer = client.request(method, f"/v1/jobs/{job_id}{suffix}")
+    assert answer.status_code == 404
+    assert job_id in answer.json()["detail"]
+
+
+def test_the_job_list_is_paginated_newest_first(client):
+    ids = [_submit(client)["id"] for _ in range(5)]
+    page = client.get("/v1/jobs", params={"offset": 1, "limit": 2}).json()
+    assert page["total"] == 5 and page["offset"] == 1 and page["limit"] == 2
+    assert [j["id"] for j in page["jobs"]] == ids[::-1][1:3]
+    assert [j["id"] for j in client.get("/v1/jobs").json()["jobs"]] == ids[::-1]
+
+
+@pytest.mark.parametrize("params, field", [({"limit": 0}, "query.limit"), ({"limit": 501}, "query.limit"),
+                                           ({"offset": -1}, "query.offset")])
+def test_the_job_list_refuses_a_bad_page(client, params, field):
+    answer = client.get("/v1/jobs", params=params)
+    assert answer.status_code == 422
+    assert [e["field"] for e in answer.json()["detail"]] == [field]
+
+
+def test_presets_are_listed_and_served_as_case_json(client):
+    listed = client.get("/v1/presets").json()
+    assert [p["name"] for p in listed] == preset_names() and "fig3" in preset_names()
+    assert all(p["description"] for p in listed)
+    assert client.get("/v1/presets/fig3").json() == preset_json("fig3")
+    unknown = client.get("/v1/presets/nope")
+    assert unknown.status_code == 404 and "fig3" in unknown.json()["detail"]
+
+
+def test_openapi_offers_every_preset_as_an_example_case(client):
+    post = client.get("/openapi.json").json()["paths"]["/v1/jobs"]["post"]
+    examples = post["requestBody"]["content"]["application/json"]["examples"]
+    assert list(examples) == preset_names()
+    assert examples["fig9"]["value"] == preset_json("fig9")
+    assert post["responses"]["422"]["content"]["application/json"]["schema"]["$ref"].endswith("/FieldErrors")
+    assert client.get("/docs").status_code == 200
+
+
+def test_an_empty_presets_folder_leaves_the_api_working(tmp_path, monkeypatch):
+    empty = tmp_path / "presets"
+    empty.mkdir()
+    monkeypatch.setenv(PRESETS_ENV, str(empty))
+    client = _client(tmp_path / "results")
+    assert client.get("/v1/presets").json() == []
+    post = client.get("/openapi.json").json()["paths"]["/v1/jobs"]["post"]
+    assert "examples" not in post["requestBody"]["content"]["application/json"]
+    assert client.post("/v1/jobs", json=BASE_CASE).status_code == 202
+
+
+def test_healthz(client):
+    answer = client.get("/healthz")
+    assert answer.status_code == 200 and answer.json() == {"status": "ok"}
+
+
+def test_readyz_needs_a_recent_worker_heartbeat(client, tmp_path):
+    (tmp_path / "broker" / "queue").mkdir(parents=True)  # the embedded broker, as a worker makes it
+    answer = client.get("/readyz")
+    assert answer.status_code == 503
+    assert "no worker" in answer.json()["reason"] and answer.json()["workers"] == []
+    registry = WorkerRegistry(tmp_path)
+    stale = registry.folder / "old@host.json"
+    stale.write_text(json.dumps({"name": "old@host", "time": time.time() - 60}))
+    assert client.get("/readyz").status_code == 503, "a heartbeat a minute old is a lost worker"
+    registry.beat("w1@host")
+    ready = client.get("/readyz")
+    assert ready.status_code == 200
+    assert ready.json()["status"] == "ready" and ready.json()["workers"] == ["w1@host"]
+
+
+def test_readyz_needs_the_embedded_broker_folder(client, tmp_path):
+    WorkerRegistry(tmp_path).beat("w1@host")
+    answer = client.get("/readyz")
+    assert answer.status_code == 503 and "broker" in answer.json()["reason"]
+
+
+def test_an_unreachable_broker_is_503_and_the_job_is_marked_failed(tmp_path):
+    client = _client(tmp_path, broker_url="redis://:secret@127.0.0.1:1/0")  # nothing listens on port 1
+    answer = client.post("/v1/jobs", json=BASE_CASE)
+    assert answer.status_code == 503
+    assert answer.headers["retry-after"].isdigit()
+    assert "secret" not in answer.text and "not queued" in answer.json()["detail"]
+    [job] = client.get("/v1/jobs").json()["jobs"]
+    assert job["status"] == "failed" and "could not be queued" in job["error"]
+    ready = client.get("/readyz")
+    assert ready.status_code == 503 and "unreachable" in ready.json()["reason"]

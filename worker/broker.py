@@ -1,0 +1,40 @@
+"""Where jobs are queued, for given settings: shared by the workers and the API, no side effects.
+
+With no broker URL the queue is Celery's filesystem transport under the results folder; with one
+(Redis), the transport options bound how long a dead connection can hold a caller.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+from .settings import Settings
+
+RUN_JOB = "percussim.run_job"  # the job task's name
+CONNECT_TIMEOUT = 3.0  # seconds: an unreachable broker must not hold a request for long
+
+
+def queue_folder(settings: Settings) -> Path:
+    """The embedded broker's message folder."""
+    return settings.broker_folder / "queue"
+
+
+def broker_config(settings: Settings) -> dict:
+    """Celery configuration of the broker the settings name."""
+    if settings.embedded:
+        folder = str(queue_folder(settings))
+        return {
+            "broker_url": "filesystem://",
+            # The control folder defaults to ./control: keep everything under the results folder.
+            "broker_transport_options": {"data_folder_in": folder, "data_folder_out": folder,
+                                         "control_folder": str(settings.broker_folder / "control"),
+                                         "store_processed": False},
+        }
+    return {
+        "broker_url": settings.broker_url,
+        "broker_transport_options": {
+            "visibility_timeout": settings.job_time_limit + 120,  # redelivery of a lost job
+            "socket_connect_timeout": CONNECT_TIMEOUT,
+            "socket_timeout": CONNECT_TIMEOUT,
+        },
+    }
