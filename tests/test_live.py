@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import io
 import time
+from datetime import datetime
 
 import h5py
 import numpy as np
@@ -98,5 +99,18 @@ def test_a_case_the_solver_refuses_ends_failed_with_the_reason(redis_url, tmp_pa
         assert "numerics.cells" in record["error"] and "limit of 150" in record["error"]
         conflict = s.client.get(f"/v1/jobs/{job['id']}/summary")
         assert conflict.status_code == 409
+    finally:
+        s.stop()
+
+
+def test_a_job_past_its_time_limit_ends_failed_with_the_reason(redis_url, tmp_path):
+    s = Stack(tmp_path, redis_url, worker_env={"PERCUSSIM_JOB_TIME_LIMIT": "1"})
+    try:
+        job = _submit(s, merge(preset_json("fig3"), LONG))
+        record = s.wait_status(job["id"], ("succeeded", "failed", "cancelled"), timeout=60)
+        assert record["status"] == "failed"
+        assert "time limit of 1 s" in record["error"]
+        started, finished = (datetime.fromisoformat(record[k]) for k in ("started", "finished"))
+        assert (finished - started).total_seconds() < 5  # stopped between chunks, not at the end
     finally:
         s.stop()
