@@ -14,5 +14,6 @@ def simulate(case: Case, model: str | None = None, progress: ProgressCallback | 
     """Solve `case` with `model` ('rod' or 'lumped'; default `case.numerics.model`)."""
     numerics = resolve_numerics(case, model=model)
     check_limits(case, numerics, limits)
-    run = simulate_lumped if numerics.model == "lumped" else simulate_rod
-    return run(case, progress=progress, cancelled=cancelled)
+    if numerics.model == "lumped":
+        return simulate_lumped(case, progress=progress, cancelled=cancelled)
+    return simulate_rod(case, numerics=numerics, progress=progress, cancelled=cancelled)

@@ -3,6 +3,7 @@
 import json
 import subprocess
 import sys
+from pathlib import Path
 
 PROBE = """
 import json
@@ -14,8 +15,6 @@ print(json.dumps({"hits": sum(s.cache_hits.values()), "misses": sum(s.cache_miss
 
 
 def test_a_new_process_loads_the_compiled_kernel():
-    from pathlib import Path
-
     root = Path(__file__).resolve().parents[1]
     runs = [json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=root, capture_output=True,
                                       text=True, check=True, timeout=300).stdout) for _ in range(2)]
