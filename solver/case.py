@@ -144,18 +144,40 @@ Force = Annotated[Union[SineForce, AbsSineForce, PulseForce], Field(discriminato
 
 
 class Numerics(_Model):
-    """Time span and grid. `time_step` (τ) and `cells` (N = L/h) default from the case itself."""
+    """Time span, grid and scheme. `time_step` (τ) and `cells` (N = L/h) default from the case itself;
+    with `tolerance` instead, the solver chooses model, scheme and grid to meet it."""
 
     duration: Positive
     time_step: Positive | None = None
     cells: int | None = Field(default=None, ge=1)
+    tolerance: float | None = Field(
+        default=None, ge=1e-5, le=0.2,
+        description="relative accuracy asked on co-impact time, peak contact force and maximum "
+                    "stress; the solver chooses model, scheme and grid and reports its error estimate",
+    )
+    scheme: Literal["paper", "sigma", "explicit"] | None = Field(
+        default=None,
+        description="'paper': the weighted scheme (8) with γ (first order); 'sigma': the symmetric "
+                    "σ-scheme (second order, energy-conserving); 'explicit': central differences "
+                    "(second order, Courant number a·τ/h ≤ 1). Default 'paper', or chosen under tolerance",
+    )
     gamma: float = Field(
         default=0.5, le=1.0,
-        description="weight γ of the new time layer in scheme (8); 0.5 ≤ γ ≤ 1",
+        description="weight γ of the new time layer in the paper's scheme (8); 0.5 ≤ γ ≤ 1",
     )
-    model: Literal["rod", "lumped"] = Field(
-        default="rod",
-        description="'rod': the tool as an elastic rod (8)–(13); 'lumped': the two-mass model problem (21)–(25)",
+    sigma: float = Field(
+        default=0.25, le=1.0,
+        description="weight σ of layers n±1 in the σ-scheme; 1/4 ≤ σ ≤ 1",
+    )
+    end_masses: bool | None = Field(
+        default=None,
+        description="keep the half-cell mass at each end of the tool (second-order end conditions); "
+                    "default: yes for 'sigma' and 'explicit', no for 'paper' (its massless ends (9), (10))",
+    )
+    model: Literal["rod", "lumped"] | None = Field(
+        default=None,
+        description="'rod': the tool as an elastic rod (8)–(13); 'lumped': the two-mass model problem "
+                    "(21)–(25). Default 'rod', or chosen under tolerance",
     )
 
     @field_validator("gamma")
@@ -165,9 +187,32 @@ class Numerics(_Model):
             raise PydanticCustomError(
                 "value_error",
                 "must be ≥ 0.5: the weighted scheme is only stable for every time step when "
-                "γ ≥ 1/2, and no explicit-capable scheme is available for γ < 1/2",
+                "γ ≥ 1/2; for an explicit scheme use numerics.scheme = 'explicit'",
             )
         return gamma
+
+    @field_validator("sigma")
+    @classmethod
+    def _sigma_stable(cls, sigma: float) -> float:
+        if sigma < 0.25:
+            raise PydanticCustomError(
+                "value_error",
+                "must be ≥ 0.25: the σ-scheme is stable for every time step only when σ ≥ 1/4; "
+                "for σ = 0 use numerics.scheme = 'explicit'",
+            )
+        return sigma
+
+    @model_validator(mode="after")
+    def _tolerance_or_grid(self) -> "Numerics":
+        if self.tolerance is not None:
+            given = [name for name in ("time_step", "cells") if getattr(self, name) is not None]
+            if given:
+                raise _field_error(
+                    "Numerics", ("tolerance",),
+                    f"cannot be combined with numerics.{given[0]}: under a tolerance the solver "
+                    "chooses the grid; give one or the other", self.tolerance,
+                )
+        return self
 
 
 class Outputs(_Model):

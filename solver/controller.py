@@ -54,9 +54,9 @@ class NumericalFailure(RuntimeError):
     def __init__(self, time: float, numerics: ResolvedNumerics):
         self.time = time
         super().__init__(
-            f"the solution became non-finite at t = {time:.6g} s (time step {numerics.time_step:.3g} s, "
-            f"{numerics.cells} cells, γ = {numerics.gamma}); likely cause: a contact or medium "
-            "far stiffer than the time step resolves. Reduce numerics.time_step or raise numerics.gamma."
+            f"the solution became non-finite at t = {time:.6g} s (scheme '{numerics.scheme}', time "
+            f"step {numerics.time_step:.3g} s, {numerics.cells} cells); likely cause: a contact or "
+            "medium far stiffer than the time step resolves. Reduce numerics.time_step."
         )
 
 
@@ -134,14 +134,18 @@ def simulate_rod(
 ) -> Result:
     """Solve the case with the tool as an elastic rod (the paper's scheme (8)–(13))."""
     num = numerics or resolve_numerics(case, model="rod")
-    grid = make_grid(case.tool, num.cells)
+    scheme = num.weights()
+    grid = make_grid(case.tool, num.cells, scheme)
     n, tau, h = grid.cells, num.time_step, grid.h
     tool = case.tool
     r = (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
     c2 = case.medium.stiffness if case.medium else 0.0
     b2 = case.medium.damping if case.medium else 0.0
-    p, inv_den, upper = K.factor_tool_rows(
-        grid.q, grid.area, h, tool.youngs_modulus, c2, b2, r, num.gamma, tau)
+    end_stiffness = (grid.end_area[0] * tool.youngs_modulus / h,
+                     grid.end_area[1] * tool.youngs_modulus / h)
+    p, inv_den, carry = K.factor_tool_rows(
+        grid.lower, grid.upper, grid.node_area, end_stiffness[1], c2, b2, r, tau, tool.density, h,
+        scheme.weight_new, scheme.centered, scheme.end_masses)
 
     out = case.outputs
     probe_node, probe_weight = _probe_nodes(grid, out.probes)
@@ -164,8 +168,11 @@ def simulate_rod(
         field_u = np.empty((frames, n + 1))
         field_stress = np.empty((frames, n + 1))
         status, n_hist, n_field = K.advance(
-            first, last, u, y, grid.q, grid.area, grid.area_mid, p, inv_den, upper,
-            h, tau, r, num.gamma, tool.youngs_modulus, tool.density,
+            first, last, u, y, grid.lower, grid.upper, grid.node_area, grid.area_mid,
+            grid.uniform, p, inv_den, carry,
+            h, tau, r, tool.youngs_modulus, tool.density, *end_stiffness,
+            grid.area[0], grid.area[-1],
+            scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses,
             case.striker.mass, case.striker.velocity,
             case.contact.stiffness, case.contact.exponent, case.contact.tension_stiffness,
             case.contact.damping, c2, b2, *_force_parameters(case),
@@ -199,7 +206,8 @@ def simulate_rod(
         )
     summary = build_summary(
         case=case, numerics=num, trackers=trackers, contacts=contacts, energy=energy,
-        history=history, max_area_gradient=float(np.max(np.abs(grid.q))),
+        history=history,
+        max_area_gradient=0.0 if scheme.flux_form else float(np.max(np.abs(grid.q))),
     )
     return Result(case=case, numerics=num, history=history, probe_x=np.asarray(out.probes, float),
                   probe_stress=probe_stress, fields=fields, summary=summary)

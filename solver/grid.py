@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from .case import Case, CaseError, FieldError, Tool
+from .schemes import Scheme, make_scheme, scheme_of
 
 DEFAULT_CELLS = 100
 STEPS_PER_CONTACT = 200  # default τ resolves the estimated contact by this many steps
@@ -56,49 +57,77 @@ class ResolvedNumerics:
     """The numerics a run actually uses; stored with every result."""
 
     model: str
+    scheme: str
     time_step: float
     cells: int
     gamma: float
+    sigma: float
+    end_masses: bool
     steps: int
     courant: float  # a·τ/h
 
     def as_dict(self) -> dict:
         return asdict(self)
 
+    def weights(self) -> Scheme:
+        return make_scheme(self.scheme, self.gamma, self.sigma, self.end_masses)
 
-def resolve_numerics(case: Case, model: str | None = None) -> ResolvedNumerics:
-    """Fill in the defaults: N = 100 cells; τ the smaller of h/a (Courant 1) and the estimated
-    contact time / 200, so that both the wave and the lagged contact stiffness are resolved."""
+    @property
+    def node_steps(self) -> float:
+        """The work of a rod run: nodes × steps."""
+        return float(self.cells + 1) * (self.steps + 1)
+
+
+def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = None,
+                     cells: int | None = None, time_step: float | None = None) -> ResolvedNumerics:
+    """Fill in the defaults (arguments override the case): N = 100 cells; τ the smaller of h/a
+    (Courant 1) and the estimated contact time / 200, so that both the wave and the contact are
+    resolved. An explicit scheme's Courant limit is checked here, before anything runs."""
     num = case.numerics
-    cells = num.cells or DEFAULT_CELLS
+    weights = scheme_of(num, scheme)
+    cells = cells or num.cells or DEFAULT_CELLS
     h = case.tool.length / cells
     a = wave_speed(case.tool)
-    tau = num.time_step or min(h / a, contact_time_estimate(case) / STEPS_PER_CONTACT)
+    tau = time_step or num.time_step or min(h / a, contact_time_estimate(case) / STEPS_PER_CONTACT)
     steps = num.duration / tau if tau > 0 else math.inf
     if not math.isfinite(steps):
         raise CaseError([FieldError(
             field="numerics.time_step",
             message=f"no time step can be chosen for this case (the estimated contact time is "
                     f"{tau * STEPS_PER_CONTACT:.3g} s): give numerics.time_step")])
+    courant = a * tau / h
+    if courant > weights.courant_limit * (1.0 + 1e-9):
+        raise CaseError([FieldError(
+            field="numerics.time_step",
+            message=f"the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = {tau:.4g} s on "
+                    f"{cells} cells gives {courant:.4g}: set numerics.time_step ≤ {h / a:.4g} s, "
+                    "use fewer cells, or numerics.scheme = 'sigma'")])
     steps = max(1, math.ceil(steps - 1e-9))
     return ResolvedNumerics(
-        model=model or num.model, time_step=tau, cells=cells, gamma=num.gamma,
-        steps=steps, courant=a * tau / h,
+        model=model or num.model or "rod", scheme=weights.name, time_step=tau, cells=cells,
+        gamma=num.gamma, sigma=num.sigma, end_masses=weights.end_masses, steps=steps, courant=courant,
     )
 
 
 @dataclass(frozen=True)
 class Grid:
-    """The tool on `N + 1` nodes `x_i = i·h`.
+    """The tool on `N + 1` nodes `x_i = i·h`, with the coefficients of the scheme's operator.
 
-    `area` is `S_i`, `area_mid` the cell areas `(S_i + S_{i+1})/2`, and `q` the scheme's
-    area-gradient factor `q_i = (S_{i+1} − S_{i−1})/(4 S_i)` (0 at the ends and on a uniform tool).
+    `area` is `S_i`, `area_mid` the mean area of each cell, `q` the paper's area-gradient factor
+    `q_i = (S_{i+1} − S_{i−1})/(4 S_i)`. The operator is `Λu_i = lower_i·(u_{i−1} − u_i) +
+    upper_i·(u_{i+1} − u_i)`: `1 ∓ q_i` in the paper's form, `S_{i∓½}/S̄_i` in the conservative
+    form (S̄_i the mean of the two cells). `node_area·ρh` is each node's mass (0 at a massless
+    end) and `end_area` the areas in the end rows' stiffness `S·E/h`.
     """
 
     x: np.ndarray
     area: np.ndarray
     area_mid: np.ndarray
     q: np.ndarray
+    lower: np.ndarray
+    upper: np.ndarray
+    node_area: np.ndarray
+    end_area: tuple[float, float]
     h: float
     youngs_modulus: float
     density: float
@@ -109,15 +138,44 @@ class Grid:
 
     @property
     def uniform(self) -> bool:
-        return not np.any(self.q)
+        return bool(np.all(self.area == self.area[0]))
 
 
-def make_grid(tool: Tool, cells: int) -> Grid:
+def _area_integral(tool: Tool, x: np.ndarray) -> np.ndarray:
+    """`∫_0^x S dx`, exact for the piecewise-linear profile."""
+    if tool.profile is None:
+        return tool.area * x
+    px, pa = np.asarray(tool.profile.x), np.asarray(tool.profile.area)
+    at_stations = np.concatenate(([0.0], np.cumsum(np.diff(px) * 0.5 * (pa[1:] + pa[:-1]))))
+    k = np.clip(np.searchsorted(px, x, side="right") - 1, 0, len(px) - 2)
+    slope = (pa[k + 1] - pa[k]) / (px[k + 1] - px[k])
+    d = x - px[k]
+    return at_stations[k] + pa[k] * d + 0.5 * slope * d * d
+
+
+def make_grid(tool: Tool, cells: int, scheme: Scheme) -> Grid:
     x = np.linspace(0.0, tool.length, cells + 1)
+    h = tool.length / cells
     area = tool_area(tool, x)
+    area_mid = np.diff(_area_integral(tool, x)) / h
     q = np.zeros_like(area)
     q[1:-1] = (area[2:] - area[:-2]) / (4.0 * area[1:-1])
+    lower, upper = np.zeros_like(area), np.zeros_like(area)
+    if scheme.flux_form:
+        node_area = np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]),
+                                    [0.5 * area_mid[-1]]))
+        lower[1:-1] = area_mid[:-1] / node_area[1:-1]
+        upper[1:-1] = area_mid[1:] / node_area[1:-1]
+        end_area = (float(area_mid[0]), float(area_mid[-1]))
+    else:
+        node_area = area.copy()
+        node_area[[0, -1]] *= 0.5
+        lower[1:-1] = 1.0 - q[1:-1]
+        upper[1:-1] = 1.0 + q[1:-1]
+        end_area = (float(area[0]), float(area[-1]))
+    if not scheme.end_masses:
+        node_area[[0, -1]] = 0.0
     return Grid(
-        x=x, area=area, area_mid=0.5 * (area[1:] + area[:-1]), q=q, h=tool.length / cells,
-        youngs_modulus=tool.youngs_modulus, density=tool.density,
+        x=x, area=area, area_mid=area_mid, q=q, lower=lower, upper=upper, node_area=node_area,
+        end_area=end_area, h=h, youngs_modulus=tool.youngs_modulus, density=tool.density,
     )

@@ -1,19 +1,29 @@
-"""The time-stepping kernel: the paper's weighted scheme (8)–(13), one tridiagonal solve a step.
+"""The time-stepping kernel: every scheme of `schemes.py` as one tridiagonal solve a step.
 
 Unknowns of layer n+1 are `[y, u_0, …, u_N]` (model.md). The rows `u_1 … u_N` never change from
 step to step (only their right-hand sides do), so their elimination, swept from the working end
 toward the struck end as in the paper's (14)–(20), is factored once in `factor_tool_rows`:
-`u_i = P_i·u_{i−1} + Q_i`. A step then computes the `Q_i` (one pass), solves the 2×2 system of
-the striker row (11) and the struck-end row (9) with the lagged contact stiffness `G(δ^n)`, and
-substitutes forward (one pass). Everything the summary needs (contact intervals, peaks, the
-energy audit) is observed inside the loop, so a summary-only run keeps nothing of size N·M.
+`u_i = P_i·u_{i−1} + Q_i`. A step then computes the `Q_i` (one pass), solves the striker row (11)
+and the struck-end row (9) together, and substitutes forward (one pass).
+
+Those two rows are linear but for the contact force. It is the difference quotient of the contact
+potential Φ (`Φ' = G(δ)·δ`) between the new overlap and a reference one (layer n for the paper,
+n−1 for the centred schemes), plus the damper `b1`: a scalar monotone equation for δ^{n+1},
+solved by safeguarded Newton. Unlike the paper's lagged `G(δ^n)·δ^{n+1}` it never creates energy,
+whatever the time step; the two agree to first order in τ.
+
+Everything the summary needs (contact intervals, peaks, the energy audit) is observed inside the
+loop, so a summary-only run keeps nothing of size N·M.
 
 All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3, n%3, (n+1)%3` of
 `u` (3 × (N+1)) and of the striker's `y` (3), so no state but the layer index is carried between
-chunks.
+chunks. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first step
+is an ordinary step of the scheme.
 """
 
 from __future__ import annotations
+
+import math
 
 import numpy as np
 from numba import njit
@@ -38,7 +48,8 @@ T_CO_IMPACT, T_REBOUND_VELOCITY = 11, 12
 T_ENERGY_EXCESS = 13  # max over time of (stored + dissipated − input): > 0 means energy created
 T_FAILED_TIME = 14
 T_MIN_CONTACT_STEPS = 15  # fewest steps any finished contact interval was resolved by
-TRACKER_SLOTS = 16
+T_FORCE_BEFORE, T_FORCE_BEFORE_THAT = 16, 17  # contact force at layers m−1, m−2
+TRACKER_SLOTS = 18
 
 # Energy slots: running work and dissipation, and the stored terms of the last layer
 E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM = 0, 1, 2
@@ -58,25 +69,45 @@ def new_trackers() -> np.ndarray:
     return t
 
 
-def factor_tool_rows(q, area, h, youngs_modulus, medium_stiffness, medium_damping, r, gamma, tau):
-    """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the interior upper coefficients.
+@njit(cache=True)
+def boundary_weights(weight_new, centered, end_masses, tau):
+    """How the end rows and the boundary terms weight the layers.
 
-    Row u_N (10): `−k_N·u_{N−1} + (k_N + c2 + b2/τ)·u_N = (b2/τ)·u_N^n`, `k_N = S_N·E/h`.
-    Rows u_i (8): `−γr(1−q_i)·u_{i−1} + (1+2γr)·u_i − γr(1+q_i)·u_{i+1} = rhs_i`.
+    Returns `(end_weight, spring_weight, damper_factor, back)`: the end rows' weight of the new
+    layer in the tool's own stiffness (the interior's with end masses; 1 for quasi-static massless
+    ends); the boundary springs' weight of the new layer (the rest on the reference layer); the
+    dampers' rate factor (`1/(2τ)` centred, `1/τ` backward); how many layers before the new one
+    the boundary terms' reference layer lies (2: n−1 centred; 1: n for the paper).
     """
-    n = len(q) - 1
+    end_weight = weight_new if end_masses else 1.0
+    if centered:
+        return end_weight, 0.5, 0.5 / tau, 2
+    return end_weight, 1.0, 1.0 / tau, 1
+
+
+def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_stiffness,
+                     medium_damping, r, tau, density, h, weight_new, centered, end_masses):
+    """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the coefficient of `Q_{i+1}`.
+
+    Row u_N: `(M_N/τ² + θ·k_N + θ_s·c2 + b2·d)·u_N − θ·k_N·u_{N−1} = rhs`, `k_N = S·E/h`, with
+    the weights of `boundary_weights`.
+    Rows u_i: `−w·r·lower_i·u_{i−1} + (1 + w·r·(lower_i + upper_i))·u_i − w·r·upper_i·u_{i+1} = rhs_i`.
+    """
+    end_weight, spring_weight, damper_factor, _ = boundary_weights(weight_new, centered, end_masses, tau)
+    n = len(node_area) - 1
     p = np.zeros(n + 1)
     inv_den = np.zeros(n + 1)
-    upper = -gamma * r * (1.0 + q)
-    k_n = area[n] * youngs_modulus / h
-    diag_n = k_n + medium_stiffness + medium_damping / tau
-    p[n] = k_n / diag_n
+    carry = weight_new * r * grid_upper
+    mass_n = density * h * node_area[n] / (tau * tau)
+    diag_n = (mass_n + end_weight * end_stiffness + spring_weight * medium_stiffness
+              + medium_damping * damper_factor)
+    p[n] = end_weight * end_stiffness / diag_n
     inv_den[n] = 1.0 / diag_n
     for i in range(n - 1, 0, -1):
-        den = 1.0 + 2.0 * gamma * r + upper[i] * p[i + 1]
-        p[i] = gamma * r * (1.0 - q[i]) / den
+        den = 1.0 + weight_new * r * (grid_lower[i] + grid_upper[i]) - carry[i] * p[i + 1]
+        p[i] = weight_new * r * grid_lower[i] / den
         inv_den[i] = 1.0 / den
-    return p, inv_den, upper
+    return p, inv_den, carry
 
 
 @njit(cache=True, inline="always")
@@ -93,38 +124,112 @@ def external_force(t, kind, amplitude, omega, start, duration):
 
 
 @njit(cache=True, inline="always")
-def contact_stiffness(delta, c1, alpha, c0):
-    """`G(δ)` of (7): `c1·δ^α` in contact, `c0` in separation."""
-    if delta >= 0.0:
-        if alpha == 0.0:
-            return c1
-        return c1 * delta**alpha
-    return c0
-
-
-@njit(cache=True, inline="always")
 def contact_potential(delta, c1, alpha, c0):
-    """Energy stored in the contact: `c1·δ^(α+2)/(α+2)`, or `c0·δ²/2` in separation."""
+    """Φ(δ), the energy stored in the contact: `c1·δ^(α+2)/(α+2)`, or `c0·δ²/2` in separation."""
     if delta >= 0.0:
         return c1 * delta ** (alpha + 2.0) / (alpha + 2.0)
     return 0.5 * c0 * delta * delta
 
 
 @njit(cache=True, inline="always")
-def node_stress(u, i, n, e_over_h):
-    """`σ_i = E·∂u/∂x` (tension +): central inside, one-sided at the ends (= end force / S)."""
+def contact_spring_force(delta, c1, alpha, c0):
+    """Φ'(δ) = G(δ)·δ of (7): `c1·δ^(α+1)` in contact, `c0·δ` in separation."""
+    if delta >= 0.0:
+        return c1 * delta ** (alpha + 1.0)
+    return c0 * delta
+
+
+@njit(cache=True, inline="always")
+def contact_spring_stiffness(delta, c1, alpha, c0):
+    """Φ''(δ): `(α+1)·c1·δ^α` in contact, `c0` in separation."""
+    if delta >= 0.0:
+        if alpha == 0.0:
+            return c1
+        return (alpha + 1.0) * c1 * delta**alpha
+    return c0
+
+
+@njit(cache=True, inline="always")
+def quotient_force(delta, ref, c1, alpha, c0):
+    """`(Φ(δ) − Φ(ref))/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref)."""
+    diff = delta - ref
+    if abs(diff) > 1e-7 * (abs(delta) + abs(ref)):
+        f = (contact_potential(delta, c1, alpha, c0) - contact_potential(ref, c1, alpha, c0)) / diff
+        return f, (contact_spring_force(delta, c1, alpha, c0) - f) / diff
+    mid = 0.5 * (delta + ref)
+    return (contact_spring_force(mid, c1, alpha, c0),
+            0.5 * contact_spring_stiffness(mid, c1, alpha, c0))
+
+
+@njit(cache=True)
+def solve_overlap(free, compliance, ref, guess, c1, alpha, c0, damper):
+    """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
+
+    F increases with δ (Φ is convex), so the root is unique and lies between `free` and
+    `free − compliance·F(free)`; Newton steps that leave that bracket are replaced by bisection.
+    """
+    f_free = quotient_force(free, ref, c1, alpha, c0)[0] + damper * (free - ref)
+    other = free - compliance * f_free
+    lo, hi = min(free, other), max(free, other)
+    if lo == hi:
+        return free
+    x = min(max(guess, lo), hi)
+    scale = 1e-15 * (abs(lo) + abs(hi))
+    for _ in range(100):
+        f, df = quotient_force(x, ref, c1, alpha, c0)
+        g = x + compliance * (f + damper * (x - ref)) - free
+        if g == 0.0:
+            return x
+        if g > 0.0:
+            hi = x
+        else:
+            lo = x
+        step = g / (1.0 + compliance * (df + damper))
+        x_new = x - step
+        if not lo < x_new < hi:
+            x_new = 0.5 * (lo + hi)
+        if abs(x_new - x) <= scale or hi - lo <= scale:
+            return x_new
+        x = x_new
+    return x
+
+
+@njit(cache=True, inline="always")
+def crossing(before_that, before, now):
+    """Where in the last step (0 … 1) the overlap crossed zero, on the parabola through its last
+    three values (a straight line when it has only two); third order, so the contact times' error
+    is the scheme's, not where the crossing fell between two layers."""
+    linear = before / (before - now)
+    if not (before_that == before_that):
+        return linear
+    a = 0.5 * (now + before_that) - before
+    b = 0.5 * (now - before_that)
+    disc = b * b - 4.0 * a * before
+    if a == 0.0 or disc < 0.0:
+        return linear
+    root = math.sqrt(disc)
+    for x in ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a)):
+        if 0.0 <= x <= 1.0:
+            return x
+    return linear
+
+
+@njit(cache=True, inline="always")
+def node_stress(u, i, n, e_over_h, struck_end_stress, working_end_stress):
+    """`σ_i = E·∂u/∂x` (tension +): central inside; at the ends the end force over the area."""
     if i == 0:
-        return e_over_h * (u[1] - u[0])
+        return struck_end_stress
     if i == n:
-        return e_over_h * (u[n] - u[n - 1])
+        return working_end_stress
     return 0.5 * e_over_h * (u[i + 1] - u[i - 1])
 
 
 @njit(cache=True)
 def advance(
     first, last,
-    u, y, q, area, area_mid, p, inv_den, upper,
-    h, tau, r, gamma, youngs_modulus, density,
+    u, y, grid_lower, grid_upper, node_area, area_mid, uniform, p, inv_den, carry,
+    h, tau, r, youngs_modulus, density, end_stiffness_0, end_stiffness_n, end_area_0, end_area_n,
+    weight_new, weight_old, centered, end_masses,
     striker_mass, striker_velocity,
     c1, alpha, c0, b1, c2, b2,
     force_kind, force_amplitude, force_omega, force_start, force_duration,
@@ -134,20 +239,29 @@ def advance(
 ):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
+    The interior operator weights layers n+1, n, n−1 by `weight_new`, `1 − weight_new −
+    weight_old`, `weight_old`. `centered` centres the boundary terms on layer n (springs
+    `(z^{n+1} + z^{n−1})/2`, dampers `(z^{n+1} − z^{n−1})/(2τ)`, the contact quotient between
+    δ^{n+1} and δ^{n−1}); otherwise they are the paper's (new layer, `(z^{n+1} − z^n)/τ`).
+    `end_masses` gives the end rows the interior's weights (they then carry their half-cell mass
+    `node_area·ρh`); massless ends are quasi-static, all on the new layer.
+
     Writes every `history_stride`-th layer to `history`/`probes` and every `field_stride`-th to
     `field_u`/`field_stress` (strides ≤ 0 keep nothing), from row 0 of each buffer. Returns
     `(status, rows of history written, rows of fields written)`; on a non-finite value it stops
     with `STATUS_NON_FINITE` and the time in `trackers[T_FAILED_TIME]`.
     """
-    n = len(q) - 1
-    m1_tau2 = striker_mass / (tau * tau)
-    b1_tau = b1 / tau
-    b2_tau = b2 / tau
-    k0 = area[0] * youngs_modulus / h
-    w_explicit = (1.0 - gamma) * r
+    n = len(node_area) - 1
+    weight_cur = 1.0 - weight_new - weight_old
+    inv_tau2 = 1.0 / (tau * tau)
+    m1_tau2 = striker_mass * inv_tau2
+    mass_0 = density * h * node_area[0] * inv_tau2
+    mass_n = density * h * node_area[n] * inv_tau2
+    end_weight, spring_weight, damper_factor, back = boundary_weights(
+        weight_new, centered, end_masses, tau)
+    strain_sigma = weight_new if centered else 0.25  # 0.25: strain energy at the midpoint
     e_over_h = youngs_modulus / h
-    kinetic_factor = 0.5 * density * h / (tau * tau)
-    strain_factor = 0.5 * youngs_modulus / h
+    kinetic_factor = 0.5 * density * h * inv_tau2
     initial_energy = 0.5 * striker_mass * striker_velocity * striker_velocity
     n_hist = 0
     n_field = 0
@@ -158,87 +272,116 @@ def advance(
         old = (m - 2) % 3
         t = m * tau
         un = u[new]
-        uc = u[cur]
-        uo = u[old]
         if m == 0:
-            # (5), (6): tool at rest, striker at 0 moving at W1.
+            # (5), (6): tool at rest, striker at 0 moving at W1; layer −1 one step before.
             for i in range(n + 1):
                 un[i] = 0.0
+                u[2, i] = 0.0
             y[new] = 0.0
-            y_cur = 0.0
-            delta_cur = 0.0
-            contact_force = 0.0
+            y[2] = -striker_velocity * tau
+            contact_force = b1 * striker_velocity
             medium_force = 0.0
             velocity = striker_velocity
+            s0 = -contact_force / end_area_0
+            sn = 0.0
         else:
+            uc = u[cur]
+            uo = u[old]
+            ur = u[(m - back) % 3]
             y_cur = y[cur]
             delta_cur = y_cur - uc[0]
-            g = contact_stiffness(delta_cur, c1, alpha, c0)
+            delta_old = y[old] - uo[0]
+            delta_ref = y[(m - back) % 3] - ur[0]
             r_n = external_force((m - 1) * tau, force_kind, force_amplitude, force_omega,
                                  force_start, force_duration)  # R(t_n), explicit in row (11)
-            if m == 1:
-                # (12), (13): first order in τ, the tool (struck end included) still at rest.
-                for i in range(n + 1):
-                    un[i] = 0.0
-                y[new] = striker_velocity * tau
-            else:
-                # Right-hand sides of rows u_N … u_1, eliminated toward the struck end.
-                qn = b2_tau * uc[n] * inv_den[n]
-                un[n] = qn  # Q_i is kept in `un` until the forward substitution overwrites it
+
+            # Right-hand sides of rows u_N … u_1, eliminated toward the struck end. The explicit
+            # layers enter the operator as one combination v = w_n·u^n + w_{n−1}·u^{n−1}.
+            v_right = weight_cur * uc[n] + weight_old * uo[n]
+            v_mid = weight_cur * uc[n - 1] + weight_old * uo[n - 1]
+            rhs = (mass_n * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - spring_weight) * ur[n]
+                   + b2 * damper_factor * ur[n])
+            if end_masses:
+                rhs -= end_stiffness_n * (v_right - v_mid)
+            un[n] = rhs * inv_den[n]  # Q_i is kept in `un` until the forward substitution
+            if uniform:
                 for i in range(n - 1, 0, -1):
-                    lap = uc[i + 1] - 2.0 * uc[i] + uc[i - 1] + q[i] * (uc[i + 1] - uc[i - 1])
-                    rhs = 2.0 * uc[i] - uo[i] + w_explicit * lap
-                    un[i] = (rhs - upper[i] * un[i + 1]) * inv_den[i]
-                # Striker row (11) and struck-end row (9) with u_1 = P_1·u_0 + Q_1.
-                gb = g + b1_tau
-                rel = b1_tau * (y_cur - uc[0])
-                a11 = m1_tau2 + gb
-                a12 = -gb
-                b_y = m1_tau2 * (2.0 * y_cur - y[old]) + rel + r_n
-                a21 = gb
-                a22 = -(k0 * (1.0 - p[1]) + gb)
-                b_0 = rel - k0 * un[1]
-                det = a11 * a22 - a12 * a21
-                y_new = (b_y * a22 - a12 * b_0) / det
-                u0_new = (a11 * b_0 - a21 * b_y) / det
-                if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
-                    trackers[T_FAILED_TIME] = t
-                    return STATUS_NON_FINITE, n_hist, n_field
-                y[new] = y_new
-                un[0] = u0_new
-                for i in range(1, n + 1):
-                    un[i] = p[i] * un[i - 1] + un[i]
-            y_new = y[new]
-            delta = y_new - un[0]
-            contact_force = g * delta + b1_tau * (delta - delta_cur)
-            medium_force = c2 * un[n] + b2_tau * (un[n] - uc[n])
+                    v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
+                    rhs = 2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right)
+                    un[i] = (rhs + carry[i] * un[i + 1]) * inv_den[i]
+                    v_right = v_mid
+                    v_mid = v_left
+            else:
+                for i in range(n - 1, 0, -1):
+                    v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
+                    lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
+                    rhs = 2.0 * uc[i] - uo[i] + r * lap
+                    un[i] = (rhs + carry[i] * un[i + 1]) * inv_den[i]
+                    v_right = v_mid
+                    v_mid = v_left
+            # Striker row (11) and struck-end row (9) with u_1 = P_1·u_0 + Q_1:
+            # a_y·y = b_y − F and a_0·u_0 = b_0 + F, F the contact force, a scalar equation in δ.
+            a_y = m1_tau2
+            b_y = m1_tau2 * (2.0 * y_cur - y[old]) + r_n
+            a_0 = mass_0 + end_weight * end_stiffness_0 * (1.0 - p[1])
+            b_0 = mass_0 * (2.0 * uc[0] - uo[0]) + end_weight * end_stiffness_0 * un[1]
+            if end_masses:
+                b_0 += end_stiffness_0 * (v_right - v_mid)  # v_right = v_1, v_mid = v_0 here
+            delta_free = b_y / a_y - b_0 / a_0
+            compliance = 1.0 / a_y + 1.0 / a_0
+            delta = solve_overlap(delta_free, compliance, delta_ref, 2.0 * delta_cur - delta_old,
+                                  c1, alpha, c0, b1 * damper_factor)
+            force = (quotient_force(delta, delta_ref, c1, alpha, c0)[0]
+                     + b1 * damper_factor * (delta - delta_ref))
+            y_new = (b_y - force) / a_y
+            u0_new = (b_0 + force) / a_0
+            if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
+                trackers[T_FAILED_TIME] = t
+                return STATUS_NON_FINITE, n_hist, n_field
+            y[new] = y_new
+            un[0] = u0_new
+            for i in range(1, n + 1):
+                un[i] = p[i] * un[i - 1] + un[i]
+
+            # The forces at layer m: the contact law with second-order backward rates.
+            delta = y_new - u0_new
             if m == 1:
+                delta_rate = (delta - delta_cur) / tau
+                end_rate = (un[n] - uc[n]) / tau
                 velocity = striker_velocity
             else:
+                delta_rate = (3.0 * delta - 4.0 * delta_cur + delta_old) / (2.0 * tau)
+                end_rate = (3.0 * un[n] - 4.0 * uc[n] + uo[n]) / (2.0 * tau)
                 velocity = (3.0 * y_new - 4.0 * y_cur + y[old]) / (2.0 * tau)
+            contact_force = contact_spring_force(delta, c1, alpha, c0) + b1 * delta_rate
+            medium_force = c2 * un[n] + b2 * end_rate
+            s0 = -contact_force / end_area_0
+            sn = -medium_force / end_area_n
 
-            # Energy at layer m − 1/2: velocities from (m−1, m), positions at their midpoint.
+            # Energy at layer m − ½, in the form each scheme conserves (or dissipates).
             dy = y_new - y_cur
-            striker_kinetic = 0.5 * striker_mass * dy * dy / (tau * tau)
+            striker_kinetic = 0.5 * striker_mass * dy * dy * inv_tau2
             tool_kinetic = 0.0
-            for i in range(1, n):
+            for i in range(n + 1):
                 du = un[i] - uc[i]
-                tool_kinetic += area[i] * du * du
+                tool_kinetic += node_area[i] * du * du
             tool_kinetic *= kinetic_factor
             tool_strain = 0.0
             for i in range(n):
-                de = (un[i + 1] + uc[i + 1]) - (un[i] + uc[i])
-                tool_strain += area_mid[i] * de * de
-            tool_strain *= 0.25 * strain_factor
-            contact_pot = contact_potential(0.5 * (delta + delta_cur), c1, alpha, c0)
-            un_mid = 0.5 * (un[n] + uc[n])
-            medium_pot = 0.5 * c2 * un_mid * un_mid
-            if m >= 2:
-                energy[E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
-            dd = delta - delta_cur
-            energy[E_DISSIPATED_CONTACT] += b1_tau * dd * dd
-            dn = un[n] - uc[n]
-            energy[E_DISSIPATED_MEDIUM] += b2_tau * dn * dn
+                ea = un[i + 1] - un[i]
+                eb = uc[i + 1] - uc[i]
+                tool_strain += area_mid[i] * (strain_sigma * (ea * ea + eb * eb)
+                                              + (1.0 - 2.0 * strain_sigma) * ea * eb)
+            tool_strain *= 0.5 * e_over_h
+            contact_pot = (spring_weight * contact_potential(delta, c1, alpha, c0)
+                           + (1.0 - spring_weight) * contact_potential(delta_cur, c1, alpha, c0))
+            medium_pot = 0.5 * c2 * (spring_weight * un[n] * un[n]
+                                     + (1.0 - spring_weight) * uc[n] * uc[n])
+            energy[E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
+            rate = damper_factor * (delta - delta_ref)
+            energy[E_DISSIPATED_CONTACT] += b1 * rate * rate * tau
+            rate = damper_factor * (un[n] - ur[n])
+            energy[E_DISSIPATED_MEDIUM] += b2 * rate * rate * tau
             energy[E_STRIKER_KINETIC] = striker_kinetic
             energy[E_TOOL_KINETIC] = tool_kinetic
             energy[E_TOOL_STRAIN] = tool_strain
@@ -255,7 +398,7 @@ def advance(
 
             # Stress extremes along the tool.
             for i in range(n + 1):
-                s = node_stress(un, i, n, e_over_h)
+                s = node_stress(un, i, n, e_over_h, s0, sn)
                 if -s > trackers[T_MAX_COMPRESSION]:
                     trackers[T_MAX_COMPRESSION] = -s
                     trackers[T_MAX_COMPRESSION_X] = i * h
@@ -267,11 +410,24 @@ def advance(
             if contact_force > trackers[T_PEAK_FORCE]:
                 trackers[T_PEAK_FORCE] = contact_force
                 trackers[T_PEAK_FORCE_TIME] = t
+            # A maximum between layers: the vertex of the parabola through the last three forces,
+            # so the peak's error is the scheme's, not the sampling's.
+            f1 = trackers[T_FORCE_BEFORE]
+            f2 = trackers[T_FORCE_BEFORE_THAT]
+            if m >= 3 and f1 >= f2 and f1 > contact_force:
+                curvature = 2.0 * f1 - f2 - contact_force
+                offset = 0.5 * (contact_force - f2) / curvature
+                vertex = f1 + 0.25 * (contact_force - f2) * offset
+                if vertex > trackers[T_PEAK_FORCE]:
+                    trackers[T_PEAK_FORCE] = vertex
+                    trackers[T_PEAK_FORCE_TIME] = t - tau + offset * tau
+            trackers[T_FORCE_BEFORE_THAT] = f1
+            trackers[T_FORCE_BEFORE] = contact_force
 
             # Contact intervals: δ ≥ 0 is contact; crossings are placed by linear interpolation.
             in_contact = trackers[T_IN_CONTACT] != 0.0
             if in_contact and delta < 0.0:
-                t_cross = t - tau + tau * delta_cur / (delta_cur - delta)
+                t_cross = t - tau + tau * crossing(delta_old if m >= 2 else np.nan, delta_cur, delta)
                 k = int(trackers[T_CONTACTS])
                 if k < contacts.shape[0]:
                     contacts[k, 0] = trackers[T_CONTACT_START]
@@ -282,11 +438,12 @@ def advance(
                     trackers[T_MIN_CONTACT_STEPS] = steps
                 if k == 0:
                     trackers[T_CO_IMPACT] = t_cross
-                    trackers[T_REBOUND_VELOCITY] = dy / tau
+                    trackers[T_REBOUND_VELOCITY] = velocity
                 trackers[T_IN_CONTACT] = 0.0
             elif not in_contact and delta >= 0.0:
                 trackers[T_IN_CONTACT] = 1.0
-                trackers[T_CONTACT_START] = t - tau + tau * (-delta_cur) / (delta - delta_cur)
+                trackers[T_CONTACT_START] = t - tau + tau * crossing(
+                    delta_old if m >= 2 else np.nan, delta_cur, delta)
 
         if m == 0:
             trackers[T_IN_CONTACT] = 1.0  # δ(0) = 0: contact from the first instant
@@ -320,14 +477,14 @@ def advance(
             for k in range(len(probe_node)):
                 j = probe_node[k]
                 w = probe_weight[k]
-                s = (1.0 - w) * node_stress(un, j, n, e_over_h)
+                s = (1.0 - w) * node_stress(un, j, n, e_over_h, s0, sn)
                 if w > 0.0:
-                    s += w * node_stress(un, j + 1, n, e_over_h)
+                    s += w * node_stress(un, j + 1, n, e_over_h, s0, sn)
                 probes[n_hist, k] = s
             n_hist += 1
         if field_stride > 0 and m % field_stride == 0:
             for i in range(n + 1):
                 field_u[n_field, i] = un[i]
-                field_stress[n_field, i] = node_stress(un, i, n, e_over_h)
+                field_stress[n_field, i] = node_stress(un, i, n, e_over_h, s0, sn)
             n_field += 1
     return STATUS_OK, n_hist, n_field

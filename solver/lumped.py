@@ -329,7 +329,8 @@ def simulate_lumped(
     `outputs.history_stride`-th); the integrator chooses its own steps. Progress is reported and
     cancellation checked between integration segments.
     """
-    num = numerics or dataclasses.replace(resolve_numerics(case, model="lumped"), cells=0, courant=0.0)
+    num = numerics or dataclasses.replace(resolve_numerics(case, model="lumped"), scheme="dop853",
+                                         end_masses=False, cells=0, courant=0.0)
     p = Parameters.of(case)
     t_end = num.steps * num.time_step
     time = np.arange(0, num.steps + 1, case.outputs.history_stride) * num.time_step

@@ -11,7 +11,7 @@ from .case import Case
 from .grid import ResolvedNumerics
 
 FORCE_HISTORY_POINTS = 2000
-MIN_STEPS_PER_CONTACT = 20  # below this the lagged contact stiffness costs more than ~1%
+MIN_STEPS_PER_CONTACT = 20  # below this the contact force's time error exceeds about 1%
 ENERGY_EXCESS_LIMIT = 0.005  # energy created by the scheme, as a fraction of the input
 
 
@@ -37,8 +37,9 @@ def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float,
     if math.isfinite(steps) and steps < MIN_STEPS_PER_CONTACT:
         shorter = numerics.time_step * steps / MIN_STEPS_PER_CONTACT
         found.append(
-            f"a contact interval was resolved by only {steps:.1f} time steps; the lagged contact "
-            f"stiffness needs at least {MIN_STEPS_PER_CONTACT}: set numerics.time_step ≤ {shorter:.3g} s"
+            f"a contact interval was resolved by only {steps:.1f} time steps; about 1% accuracy on "
+            f"the contact needs at least {MIN_STEPS_PER_CONTACT}: set numerics.time_step ≤ {shorter:.3g} s "
+            "or give numerics.tolerance"
         )
     if max_area_gradient > 1.0:
         cells = math.ceil(numerics.cells * max_area_gradient * 1.25)
