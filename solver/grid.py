@@ -23,9 +23,12 @@ def tool_area(tool: Tool, x: np.ndarray) -> np.ndarray:
 
 def tool_mass(tool: Tool) -> float:
     """`m2 = ρ∫S dx`, exact for the piecewise-linear profile."""
-    if tool.profile is None:
-        return tool.density * tool.area * tool.length
-    return tool.density * float(np.trapezoid(tool.profile.area, tool.profile.x))
+    return float(tool_mass_ahead(tool, np.array([tool.length]))[0])
+
+
+def tool_mass_ahead(tool: Tool, x: np.ndarray) -> np.ndarray:
+    """`ρ∫_0^x S dx` (kg): the mass of the tool between the struck end and x."""
+    return tool.density * area_integral(tool, np.asarray(x, dtype=float))
 
 
 def wave_speed(tool: Tool) -> float:
@@ -141,7 +144,7 @@ class Grid:
         return bool(np.all(self.area == self.area[0]))
 
 
-def _area_integral(tool: Tool, x: np.ndarray) -> np.ndarray:
+def area_integral(tool: Tool, x: np.ndarray) -> np.ndarray:
     """`∫_0^x S dx`, exact for the piecewise-linear profile."""
     if tool.profile is None:
         return tool.area * x
@@ -157,7 +160,7 @@ def make_grid(tool: Tool, cells: int, scheme: Scheme) -> Grid:
     x = np.linspace(0.0, tool.length, cells + 1)
     h = tool.length / cells
     area = tool_area(tool, x)
-    area_mid = np.diff(_area_integral(tool, x)) / h
+    area_mid = np.diff(area_integral(tool, x)) / h
     q = np.zeros_like(area)
     q[1:-1] = (area[2:] - area[:-2]) / (4.0 * area[1:-1])
     lower, upper = np.zeros_like(area), np.zeros_like(area)

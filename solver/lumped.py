@@ -32,7 +32,8 @@ from . import kernel as K
 from .case import Case, Force
 from .controller import (HISTORY_PATHS, MAX_CONTACTS, CancelCheck, Cancelled, NumericalFailure,
                          ProgressCallback, Result)
-from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass
+from .grid import (ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass,
+                   tool_mass_ahead)
 from .summary import build_summary
 
 RTOL = 1e-10
@@ -44,8 +45,10 @@ CONTACT_SIDE = 1e-300
 X1, V1, X2, V2, WORK, DISSIPATED_CONTACT, DISSIPATED_MEDIUM = range(7)
 STATES = 7
 
-NO_STRESS_WARNING = ("the lumped model has no stress along the tool: outputs.probes and "
-                     "outputs.fields are not computed")
+NO_FIELDS_WARNING = ("the lumped model has no wave in the tool: outputs.fields are not computed "
+                     "(probes and stress maxima are its quasi-static stress)")
+STRESS_STATIONS = 129  # stations along the tool scanned for the quasi-static stress maxima
+STRESS_CHUNK = 4096  # samples of the histories scanned at a time
 
 
 class IntegrationFailure(NumericalFailure):
@@ -301,13 +304,45 @@ def contact_table(log: ContactLog) -> np.ndarray:
     return table
 
 
-def fill_trackers(case: Case, log: ContactLog, peak: tuple[float, float], excess: float) -> np.ndarray:
-    """The kernel's trackers; stress is known only at the struck end, as the contact force / S(0)."""
+def quasi_static_stress(case: Case, p: Parameters, contact: np.ndarray, medium: np.ndarray,
+                        x: np.ndarray) -> np.ndarray:
+    """Stress (tension +) at stations `x` of the rigid tool, each sample: the part of the tool
+    ahead of x, mass `μ(x)·m2`, moves with the whole, so `σ = −((1 − μ)·F_c + μ·F_m)/S(x)`."""
+    mu = np.clip(tool_mass_ahead(case.tool, x) / p.m2, 0.0, 1.0)
+    return -(np.outer(contact, 1.0 - mu) + np.outer(medium, mu)) / tool_area(case.tool, x)
+
+
+def stress_extremes(case: Case, p: Parameters, history: dict[str, np.ndarray],
+                    peak: tuple[float, float]) -> np.ndarray:
+    """`(max compression, x, t, max tension, x, t)` of the quasi-static stress, scanned in chunks
+    so the memory stays independent of the run's length; the struck end's compression at the
+    peak contact force (found between samples) is a candidate too."""
+    x = np.union1d(np.linspace(0.0, case.tool.length, STRESS_STATIONS),
+                   case.tool.profile.x if case.tool.profile else [])
+    time = history["time"]
+    at_peak = peak[0] / float(tool_area(case.tool, np.zeros(1))[0])
+    best = np.array([at_peak, 0.0, peak[1], 0.0, 0.0, 0.0])
+    for start in range(0, len(time), STRESS_CHUNK):
+        part = slice(start, start + STRESS_CHUNK)
+        stress = quasi_static_stress(case, p, history["contact/force"][part],
+                                     history["medium/force"][part], x)
+        for sign, slot in ((-1.0, 0), (1.0, 3)):
+            k = np.argmax(sign * stress)
+            value = sign * stress.flat[k]
+            if value > best[slot]:
+                row, col = np.unravel_index(k, stress.shape)
+                best[slot:slot + 3] = value, x[col], time[part][row]
+    return best
+
+
+def fill_trackers(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
+                  excess: float) -> np.ndarray:
+    """The kernel's trackers from the contact log, the refined peak force and the stress maxima."""
     trackers = K.new_trackers()
     trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = peak
-    trackers[K.T_MAX_COMPRESSION] = peak[0] / float(tool_area(case.tool, np.zeros(1))[0])
-    trackers[K.T_MAX_COMPRESSION_X] = 0.0
-    trackers[K.T_MAX_COMPRESSION_TIME] = peak[1]
+    (trackers[K.T_MAX_COMPRESSION], trackers[K.T_MAX_COMPRESSION_X],
+     trackers[K.T_MAX_COMPRESSION_TIME], trackers[K.T_MAX_TENSION], trackers[K.T_MAX_TENSION_X],
+     trackers[K.T_MAX_TENSION_TIME]) = stress
     trackers[K.T_CONTACTS] = len(log.intervals)
     trackers[K.T_IN_CONTACT] = float(log.in_contact)
     trackers[K.T_CONTACT_START] = log.start
@@ -353,12 +388,15 @@ def simulate_lumped(
 
     history = history_table(case, p, time, samples)
     initial = 0.5 * p.m1 * case.striker.velocity ** 2
-    trackers = fill_trackers(case, log, peak, energy_excess(history, initial))
-    wants_stress = bool(case.outputs.probes) or case.outputs.fields
+    trackers = fill_trackers(log, peak, stress_extremes(case, p, history, peak),
+                             energy_excess(history, initial))
     summary = build_summary(
         case=case, numerics=num, trackers=trackers, contacts=contact_table(log),
         energy=final_energy(p, final), history=history,
-        extra_warnings=[NO_STRESS_WARNING] if wants_stress else [],
+        extra_warnings=[NO_FIELDS_WARNING] if case.outputs.fields else [],
     )
-    return Result(case=case, numerics=num, history=history, probe_x=np.empty(0),
-                  probe_stress=np.empty((len(time), 0)), fields=None, summary=summary)
+    probe_x = np.asarray(case.outputs.probes, dtype=float)
+    probe_stress = quasi_static_stress(case, p, history["contact/force"], history["medium/force"],
+                                       probe_x)
+    return Result(case=case, numerics=num, history=history, probe_x=probe_x,
+                  probe_stress=probe_stress, fields=None, summary=summary)

@@ -85,6 +85,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
     return {
         "name": case.name,
         "model": numerics.model,
+        "scheme": numerics.scheme,
         "numerics": numerics.as_dict(),
         "co_impact_time": _number(trackers[K.T_CO_IMPACT]),
         "contacts": intervals,

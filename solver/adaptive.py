@@ -1,0 +1,170 @@
+"""Tolerance-driven runs: the solver chooses model, scheme and grid, and estimates its own error.
+
+Given `numerics.tolerance` (relative, on the co-impact time, the peak contact force and the
+maximum stress), a run goes:
+
+1. **Lumped model when the tool is stiff against the impact.** The two-mass model (21)–(25) is the
+   rod's rigid limit; what it misses grows as ε², ε the ratio of the two-mass system's highest
+   frequency to the tool's lowest elastic one, `πa/(2L)`. Over 156 cases (tools 5–40 cm, tapered
+   or not, strikers 1–100 kg, c1 1e9–1e11, stiff and soft media; `bench/lumped_error.py`) the
+   relative error stayed below 0.6·ε²; the estimate here is `LUMPED_ERROR·ε²` with
+   LUMPED_ERROR = 1, and the lumped model is taken when that is below the tolerance.
+2. **Otherwise the rod with the explicit scheme at Courant number 1** (second order and
+   energy-conserving; at Courant 1 a wave crosses a uniform tool without dispersion, so the stress
+   maxima converge at second order too, where the σ-scheme's dispersion overshoot converges at
+   about 1.4), on a ladder of grids refined in h and τ together: a coarse grid resolving the
+   estimated contact by `START_POINTS` steps, then twice as fine, then as fine as the observed
+   difference says is needed (Richardson: the finer grid's error is `|Q_f − Q_c|/(r^p − 1)`).
+   It stops when every quantity's estimate is within the tolerance; the finer run is the result.
+"""
+
+from __future__ import annotations
+
+import math
+import numpy as np
+
+from .case import Case, CaseError, FieldError, Outputs
+from .controller import CancelCheck, ProgressCallback, Result, simulate_rod
+from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
+from .limits import Limits, check_limits
+from .lumped import simulate_lumped
+from .schemes import make_scheme
+
+QUANTITIES = ("co_impact_time", "peak_contact_force", "max_stress")
+LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.6)
+START_POINTS = 10  # the first grid resolves the estimated contact by this many steps and cells
+SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
+MIN_REFINEMENT = 1.5  # smallest refinement between two grids of the ladder
+MAX_RUNS = 8
+DEFAULT_SCHEME = "explicit"
+COURANT = 1.0 - 1e-9  # the explicit scheme's limit, kept with a margin for rounding
+
+
+def quantities(summary: dict) -> dict[str, float | None]:
+    """The quantities a tolerance applies to, from a summary (None when the run has none)."""
+    stress = max(summary["max_compressive_stress"]["value"], summary["max_tensile_stress"]["value"])
+    return {
+        "co_impact_time": summary["co_impact_time"],
+        "peak_contact_force": summary["peak_contact_force"]["value"] or None,
+        "max_stress": stress or None,
+    }
+
+
+def rigidity(case: Case) -> float:
+    """ε: the two-mass system's highest frequency over the tool's lowest elastic one, `πa/(2L)`.
+
+    The contact is linearised at the depth of a rigid-wall impact (the estimate the time step
+    starts from too): tangent stiffness `(1+α)·c1·depth^α`.
+    """
+    c1, alpha, m1 = case.contact.stiffness, case.contact.exponent, case.striker.mass
+    m2 = tool_mass(case.tool)
+    period = contact_time_estimate(case)
+    k_contact = (1.0 + alpha) * m1 * (math.pi / period) ** 2  # = (1+α)·G at the rigid-wall depth
+    k_medium = case.medium.stiffness if case.medium else 0.0
+    stiffness = np.array([[k_contact, -k_contact], [-k_contact, k_contact + k_medium]])
+    omega2 = max(np.linalg.eigvals(stiffness / np.array([[m1], [m2]])).real)
+    return math.sqrt(max(omega2, 0.0)) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
+
+
+def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, float]:
+    """Richardson estimate of the finer grid's relative error per quantity."""
+    estimate = {}
+    for name in QUANTITIES:
+        f, c = fine[name], coarse[name]
+        if f is None or c is None:
+            continue
+        estimate[name] = abs(f - c) / factor / abs(f)
+    return estimate
+
+
+def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
+    """Progress of the stage-th run mapped into [1 − 2^−stage, 1 − 2^−(stage+1)]: monotone
+    although the number of runs is not known in advance."""
+    if progress is None:
+        return None
+    low, width = 1.0 - 0.5**stage, 0.5 ** (stage + 1)
+    return lambda fraction: progress(low + width * fraction)
+
+
+def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
+    """The case with only what a summary needs kept: no probes, no fields, a sparse history."""
+    stride = max(1, numerics.steps // 2000)
+    return case.model_copy(update={"outputs": Outputs(history_stride=stride)})
+
+
+def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
+                       cancelled: CancelCheck | None = None, limits: Limits = Limits()) -> Result:
+    """Meet `case.numerics.tolerance`; the summary reports the estimate, the runs and the choice."""
+    tol = case.numerics.tolerance
+    model = case.numerics.model
+    eps = rigidity(case)
+    lumped_error = LUMPED_ERROR * eps**2
+    if model == "lumped" or (model is None and case.numerics.scheme is None and lumped_error <= tol):
+        result = simulate_lumped(case, progress=progress, cancelled=cancelled)
+        why = (f"the tool is stiff against the impact (ε = {eps:.3g}: its lowest elastic frequency "
+               f"is {1 / eps:.3g}× the impact's), so the two-mass model (21)–(25) meets the "
+               f"tolerance; its modelling error is estimated as {LUMPED_ERROR:g}·ε² = {lumped_error:.2g}")
+        if model == "lumped":
+            why = f"numerics.model = 'lumped' as asked; modelling error estimated as ε² = {lumped_error:.2g}"
+        estimate = {name: lumped_error for name, v in quantities(result.summary).items() if v is not None}
+        return _annotated(result, tol, estimate, runs=[result.numerics], why=why)
+
+    scheme = case.numerics.scheme or DEFAULT_SCHEME
+    order = make_scheme(scheme, case.numerics.gamma, case.numerics.sigma, case.numerics.end_masses).order
+    period = contact_time_estimate(case)
+    a, length = wave_speed(case.tool), case.tool.length
+
+    runs: list[tuple[ResolvedNumerics, dict]] = []
+    factor = 1.0
+    for stage in range(MAX_RUNS):
+        tau = period / (START_POINTS * factor)
+        cells = max(2, math.ceil(length / (a * tau)))
+        numerics = resolve_numerics(case, model="rod", scheme=scheme, cells=cells,
+                                    time_step=min(COURANT * length / cells / a, tau))
+        final_candidate = stage > 0
+        run_case = case if final_candidate else _summary_only(case, numerics)
+        try:
+            check_limits(run_case, numerics, limits)
+        except CaseError as error:
+            raise CaseError([FieldError(
+                field="numerics.tolerance",
+                message=f"a tolerance of {tol:g} needs about {numerics.cells} cells and "
+                        f"{numerics.steps} steps, beyond this service's limits ({error}): loosen it")]) from None
+        result = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
+                              cancelled=cancelled)
+        runs.append((numerics, quantities(result.summary)))
+        if stage == 0:
+            factor *= 2.0
+            continue
+        (previous, coarse), (_, fine) = runs[-2], runs[-1]
+        ratio = math.sqrt((previous.time_step / numerics.time_step) * (numerics.cells / previous.cells))
+        estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
+        worst = max(estimate.values(), default=0.0)
+        if worst <= tol:
+            why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
+                   f"free of dispersion along a uniform tool there) on grids refined until the "
+                   f"estimated error is within the tolerance; the lumped model was not enough "
+                   f"(estimated modelling error {lumped_error:.2g})"
+                   if case.numerics.scheme is None else
+                   f"numerics.scheme = '{scheme}' as asked, on grids refined until the estimated error "
+                   "is within the tolerance")
+            return _annotated(result, tol, estimate, runs=[n for n, _ in runs], why=why)
+        needed = (worst / (SAFETY * tol)) ** (1.0 / order)
+        factor *= max(needed, MIN_REFINEMENT)
+    raise CaseError([FieldError(
+        field="numerics.tolerance",
+        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}): "
+                "loosen it or give numerics.cells and numerics.time_step")])
+
+
+def _annotated(result: Result, tol: float, estimate: dict[str, float],
+               runs: list[ResolvedNumerics], why: str) -> Result:
+    result.summary.update({
+        "tolerance": tol,
+        "error_estimate": {**estimate, "worst": max(estimate.values(), default=0.0)},
+        "why": why,
+        "runs": [{"model": n.model, "scheme": n.scheme, "cells": n.cells,
+                  "time_step": n.time_step, "steps": n.steps} for n in runs],
+    })
+    return result
+
