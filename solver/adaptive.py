@@ -36,6 +36,7 @@ START_POINTS = 10  # the first grid resolves the estimated contact by this many 
 SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
 MIN_REFINEMENT = 1.5  # smallest refinement between two grids of the ladder
 MAX_RUNS = 8
+MIN_CELLS = 2  # the coarsest grid's cells on a tool short against the contact
 DEFAULT_SCHEME = "explicit"
 COURANT = 1.0 - 1e-9  # the explicit scheme's limit, kept with a margin for rounding
 
@@ -118,7 +119,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     factor = 1.0
     for stage in range(MAX_RUNS):
         tau = period / (START_POINTS * factor)
-        cells = max(2, math.ceil(length / (a * tau)))
+        cells = max(math.ceil(MIN_CELLS * factor), math.ceil(length / (a * tau)))
         numerics = resolve_numerics(case, model="rod", scheme=scheme, cells=cells,
                                     time_step=min(COURANT * length / cells / a, tau))
         final_candidate = stage > 0

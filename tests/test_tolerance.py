@@ -1,0 +1,114 @@
+"""Tolerance-driven runs: the true error stays within the tolerance asked, the work within 3× of
+the cheapest fixed grid that meets it, and the summary says what was chosen and why."""
+
+import math
+
+import pytest
+
+from conftest import STEEL, merge
+from solver import CaseError, parse_case, simulate_rod
+from solver.adaptive import quantities, rigidity
+from solver.limits import Limits
+from solver.reference import LinearImpact
+from solver.simulate import simulate
+
+SCHEMES_AT_COURANT = (("paper", 1.0), ("sigma", 1.0), ("sigma", 0.5), ("explicit", 1.0), ("explicit", 0.5))
+
+
+def true_errors(summary: dict, truth: dict) -> dict[str, float]:
+    found = quantities(summary)
+    return {name: abs(found[name] / truth[name] - 1.0) for name in truth}
+
+
+def node_steps(runs: list[dict]) -> float:
+    """The work of a run: nodes × steps, summed over the grids it tried."""
+    return sum((r["cells"] + 1) * (r["steps"] + 1) for r in runs)
+
+
+def cheapest_fixed_grid(reference: LinearImpact, tol: float) -> tuple[float, tuple]:
+    """The least work of any scheme on a ladder of grids (2^(1/4) apart) whose true error on every
+    quantity is within `tol`."""
+    truth = reference_truth(reference)
+    best = (math.inf, None)
+    for scheme, courant in SCHEMES_AT_COURANT:
+        for k in range(40):
+            cells = round(8 * 2 ** (k / 4))
+            case = merge(reference.case(cells, courant=courant), {"numerics": {"scheme": scheme}})
+            result = simulate_rod(parse_case(case))
+            if max(true_errors(result.summary, truth).values()) <= tol:
+                work = (cells + 1) * (result.numerics.steps + 1)
+                best = min(best, (work, (scheme, courant, cells)))
+                break
+    return best
+
+
+def reference_truth(ref: LinearImpact) -> dict[str, float]:
+    return {"co_impact_time": ref.contact_time, "peak_contact_force": ref.peak_force,
+            "max_stress": ref.peak_force / ref.area}
+
+
+@pytest.mark.parametrize("tol", [1e-2, 1e-3, 1e-4])
+def test_closed_form_is_met_within_the_tolerance_at_a_cost_near_the_cheapest_grid(tol):
+    ref = LinearImpact()
+    case = merge(ref.case(10), {"numerics": {"cells": None, "time_step": None, "tolerance": tol}})
+    summary = simulate(parse_case(case)).summary
+    errors = true_errors(summary, reference_truth(ref))
+    work = node_steps(summary["runs"])
+    cheapest, grid = cheapest_fixed_grid(ref, tol)
+    print(f"tol {tol:g}: true errors {errors}, estimate {summary['error_estimate']}, "
+          f"work {work:.0f} node-steps against {cheapest:.0f} for the cheapest fixed grid {grid}: "
+          f"{work / cheapest:.2f}×")
+    assert max(errors.values()) <= tol
+    assert summary["error_estimate"]["worst"] <= tol
+    assert work <= 3 * cheapest
+    assert summary["model"] == "rod" and summary["scheme"] == "explicit"
+    assert "Courant number 1" in summary["why"] and summary["tolerance"] == tol
+
+
+SHORT_TOOL = {
+    "name": "short-stiff-tool",
+    "striker": {"mass": 13.0, "velocity": 5.0},
+    "tool": {"length": 0.02, "area": 0.002, **STEEL},
+    "contact": {"stiffness": 1e9, "exponent": 0.5},
+    "medium": {"stiffness": 2e8, "damping": 10.0},
+    "numerics": {"duration": 4e-3, "tolerance": 1e-2},
+}
+
+
+def test_a_tool_short_against_the_contact_gets_the_lumped_model_and_meets_the_tolerance():
+    case = parse_case(SHORT_TOOL)
+    assert rigidity(case) < 0.1
+    summary = simulate(case).summary
+    assert summary["model"] == "lumped"
+    assert "stiff against the impact" in summary["why"]
+    # The rod, converged: its σ-scheme on a fine grid.
+    fine = merge(SHORT_TOOL, {"numerics": {"tolerance": None, "scheme": "sigma", "cells": 16,
+                                           "time_step": 5e-7}})
+    truth = quantities(simulate_rod(parse_case(fine)).summary)
+    errors = true_errors(summary, truth)
+    print(f"lumped: true errors {errors}, estimate {summary['error_estimate']}")
+    assert max(errors.values()) <= summary["error_estimate"]["worst"] <= 1e-2
+
+
+def test_a_tolerance_beyond_the_limits_is_refused_naming_it():
+    case = parse_case(merge(LinearImpact().case(10), {"numerics": {"cells": None, "time_step": None,
+                                                                   "tolerance": 1e-5}}))
+    with pytest.raises(CaseError) as error:
+        simulate(case, limits=Limits(max_node_steps=1e5))
+    [e] = error.value.errors
+    assert e.field == "numerics.tolerance" and "loosen it" in e.message
+
+
+def test_a_tolerance_and_a_grid_together_are_refused():
+    with pytest.raises(CaseError) as error:
+        parse_case(merge(SHORT_TOOL, {"numerics": {"cells": 50}}))
+    [e] = error.value.errors
+    assert e.field == "numerics.tolerance" and "numerics.cells" in e.message
+
+
+def test_fixed_grids_say_what_they_used_and_why():
+    plain = simulate(parse_case(merge(SHORT_TOOL, {"numerics": {"tolerance": None}}))).summary
+    assert plain["scheme"] == "paper" and "default" in plain["why"]
+    asked = simulate(parse_case(merge(SHORT_TOOL, {"numerics": {"tolerance": None, "scheme": "sigma"}})))
+    assert asked.summary["scheme"] == "sigma" and "as asked" in asked.summary["why"]
+    assert "error_estimate" not in asked.summary
