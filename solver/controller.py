@@ -135,7 +135,7 @@ def simulate_rod(
     """Solve the case with the tool as an elastic rod (the paper's scheme (8)–(13))."""
     num = numerics or resolve_numerics(case, model="rod")
     scheme = num.weights()
-    grid = make_grid(case.tool, num.cells, scheme)
+    grid = make_grid(case.tool, num.cells, scheme.end_masses)
     n, tau, h = grid.cells, num.time_step, grid.h
     tool = case.tool
     r = (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
@@ -207,7 +207,6 @@ def simulate_rod(
     summary = build_summary(
         case=case, numerics=num, trackers=trackers, contacts=contacts, energy=energy,
         history=history,
-        max_area_gradient=0.0 if scheme.flux_form else float(np.max(np.abs(grid.q))),
     )
     return Result(case=case, numerics=num, history=history, probe_x=np.asarray(out.probes, float),
                   probe_stress=probe_stress, fields=fields, summary=summary)

@@ -150,11 +150,14 @@ def contact_spring_stiffness(delta, c1, alpha, c0):
 
 
 @njit(cache=True, inline="always")
-def quotient_force(delta, ref, c1, alpha, c0):
-    """`(Φ(δ) − Φ(ref))/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref)."""
+def quotient_force(delta, ref, ref_potential, c1, alpha, c0):
+    """`(Φ(δ) − Φ_ref)/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref).
+
+    `Φ_ref` is Φ(ref) but for the state before impact, where no link acts yet and it is 0.
+    """
     diff = delta - ref
     if abs(diff) > 1e-7 * (abs(delta) + abs(ref)):
-        f = (contact_potential(delta, c1, alpha, c0) - contact_potential(ref, c1, alpha, c0)) / diff
+        f = (contact_potential(delta, c1, alpha, c0) - ref_potential) / diff
         return f, (contact_spring_force(delta, c1, alpha, c0) - f) / diff
     mid = 0.5 * (delta + ref)
     return (contact_spring_force(mid, c1, alpha, c0),
@@ -162,13 +165,13 @@ def quotient_force(delta, ref, c1, alpha, c0):
 
 
 @njit(cache=True)
-def solve_overlap(free, compliance, ref, guess, c1, alpha, c0, damper):
+def solve_overlap(free, compliance, ref, ref_potential, guess, c1, alpha, c0, damper):
     """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
 
     F increases with δ (Φ is convex), so the root is unique and lies between `free` and
     `free − compliance·F(free)`; Newton steps that leave that bracket are replaced by bisection.
     """
-    f_free = quotient_force(free, ref, c1, alpha, c0)[0] + damper * (free - ref)
+    f_free = quotient_force(free, ref, ref_potential, c1, alpha, c0)[0] + damper * (free - ref)
     other = free - compliance * f_free
     lo, hi = min(free, other), max(free, other)
     if lo == hi:
@@ -176,7 +179,7 @@ def solve_overlap(free, compliance, ref, guess, c1, alpha, c0, damper):
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):
-        f, df = quotient_force(x, ref, c1, alpha, c0)
+        f, df = quotient_force(x, ref, ref_potential, c1, alpha, c0)
         g = x + compliance * (f + damper * (x - ref)) - free
         if g == 0.0:
             return x
@@ -329,9 +332,10 @@ def advance(
                 b_0 += end_stiffness_0 * (v_right - v_mid)  # v_right = v_1, v_mid = v_0 here
             delta_free = b_y / a_y - b_0 / a_0
             compliance = 1.0 / a_y + 1.0 / a_0
-            delta = solve_overlap(delta_free, compliance, delta_ref, 2.0 * delta_cur - delta_old,
-                                  c1, alpha, c0, b1 * damper_factor)
-            force = (quotient_force(delta, delta_ref, c1, alpha, c0)[0]
+            ref_potential = contact_potential(delta_ref, c1, alpha, c0) if m >= back else 0.0
+            delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
+                                  2.0 * delta_cur - delta_old, c1, alpha, c0, b1 * damper_factor)
+            force = (quotient_force(delta, delta_ref, ref_potential, c1, alpha, c0)[0]
                      + b1 * damper_factor * (delta - delta_ref))
             y_new = (b_y - force) / a_y
             u0_new = (b_0 + force) / a_0

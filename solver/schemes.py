@@ -1,12 +1,13 @@
 """The time-stepping schemes a case can ask for, as the few numbers the kernel needs.
 
-All three share the kernel's step (one elimination along the tool, one scalar contact solve):
+All three share the kernel's step (one elimination along the tool, one scalar contact solve) and
+the operator `(S·u_x)_x` in conservative form (cell areas between nodes, `grid.py`):
 
 - `paper`: the weighted scheme (8)–(13), `γ` on the new layer and `1 − γ` on the current one,
   massless ends (9), (10) and backward dampers. First order in τ; dissipative for γ ≥ 1/2.
-- `sigma`: the symmetric σ-scheme, `σu^{n+1} + (1 − 2σ)u^n + σu^{n−1}` in the operator, in the
-  conservative form `(S·u_x)_x`, boundary terms centred on layer n. Second order; for σ ≥ 1/4
-  stable for every τ and it conserves a discrete energy.
+- `sigma`: the symmetric σ-scheme, `σu^{n+1} + (1 − 2σ)u^n + σu^{n−1}` in the operator,
+  boundary terms centred on layer n. Second order; for σ ≥ 1/4 stable for every τ and it conserves
+  a discrete energy.
 - `explicit`: σ = 0, central differences; stable for Courant numbers `a·τ/h ≤ 1`.
 
 With `end_masses` each end node carries its half-cell mass (`ρS(h/2)·ü_0 = S E (u_1 − u_0)/h + F_c`),
@@ -30,7 +31,6 @@ class Scheme:
     `weight_new`, `weight_old`: weight of layers n+1 and n−1 in the tool's operator (γ and 0 for
     the paper, σ and σ for the σ-scheme); layer n gets the rest. `centered`: boundary springs,
     dampers and the contact are centred on layer n (second order) rather than on n+½ (the paper's).
-    `flux_form`: the operator `(S·u_x)_x` with cell areas rather than the paper's `q_i` form.
     """
 
     name: str
@@ -38,7 +38,6 @@ class Scheme:
     weight_old: float
     centered: bool
     end_masses: bool
-    flux_form: bool
 
     @property
     def order(self) -> int:
@@ -57,11 +56,11 @@ def make_scheme(name: str, gamma: float = 0.5, sigma: float = 0.25,
     if end_masses is None:
         end_masses = name != "paper"
     if name == "paper":
-        return Scheme(name, gamma, 0.0, centered=False, end_masses=end_masses, flux_form=False)
+        return Scheme(name, gamma, 0.0, centered=False, end_masses=end_masses)
     if name not in SCHEMES:
         raise ValueError(f"unknown scheme {name!r}")
     weight = sigma if name == "sigma" else 0.0
-    return Scheme(name, weight, weight, centered=True, end_masses=end_masses, flux_form=True)
+    return Scheme(name, weight, weight, centered=True, end_masses=end_masses)
 
 
 def scheme_of(numerics: Numerics, name: str | None = None) -> Scheme:

@@ -30,8 +30,7 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     }
 
 
-def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float,
-              max_area_gradient: float) -> list[str]:
+def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float) -> list[str]:
     found = []
     steps = trackers[K.T_MIN_CONTACT_STEPS]
     if math.isfinite(steps) and steps < MIN_STEPS_PER_CONTACT:
@@ -40,12 +39,6 @@ def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float,
             f"a contact interval was resolved by only {steps:.1f} time steps; about 1% accuracy on "
             f"the contact needs at least {MIN_STEPS_PER_CONTACT}: set numerics.time_step ≤ {shorter:.3g} s "
             "or give numerics.tolerance"
-        )
-    if max_area_gradient > 1.0:
-        cells = math.ceil(numerics.cells * max_area_gradient * 1.25)
-        found.append(
-            f"tool.profile changes faster than the grid resolves (|ΔS|/(4S) = {max_area_gradient:.2f} "
-            f"> 1 over two cells): set numerics.cells ≥ {cells}"
         )
     if excess > ENERGY_EXCESS_LIMIT:
         found.append(
@@ -57,7 +50,7 @@ def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float,
 
 def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
                   contacts: np.ndarray, energy: np.ndarray, history: dict[str, np.ndarray],
-                  max_area_gradient: float = 0.0, extra_warnings: list[str] | None = None) -> dict:
+                  extra_warnings: list[str] | None = None) -> dict:
     """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout.
 
     `extra_warnings` (the caller's own, e.g. outputs a model cannot provide) follow the checks'.
@@ -110,6 +103,6 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
             "max_excess_fraction": float(excess),
         },
         "force_history": _downsample(history),
-        "warnings": (_warnings(case, numerics, trackers, excess, max_area_gradient)
+        "warnings": (_warnings(case, numerics, trackers, excess)
                      + list(extra_warnings or [])),
     }
