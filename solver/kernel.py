@@ -400,17 +400,33 @@ def advance(
             if balance > trackers[T_ENERGY_EXCESS]:
                 trackers[T_ENERGY_EXCESS] = balance
 
-            # Stress extremes along the tool.
-            for i in range(n + 1):
+            # Stress extremes along the tool: the layer's extreme nodes, then, inside the tool, the
+            # vertex of the parabola through each and its neighbours, so that a peak between two
+            # nodes is not missed by up to σ''·h²/8.
+            lowest, highest = 0, 0
+            s_low, s_high = s0, s0
+            for i in range(1, n + 1):
                 s = node_stress(un, i, n, e_over_h, s0, sn)
-                if -s > trackers[T_MAX_COMPRESSION]:
-                    trackers[T_MAX_COMPRESSION] = -s
-                    trackers[T_MAX_COMPRESSION_X] = i * h
-                    trackers[T_MAX_COMPRESSION_TIME] = t
-                if s > trackers[T_MAX_TENSION]:
-                    trackers[T_MAX_TENSION] = s
-                    trackers[T_MAX_TENSION_X] = i * h
-                    trackers[T_MAX_TENSION_TIME] = t
+                if s < s_low:
+                    s_low, lowest = s, i
+                if s > s_high:
+                    s_high, highest = s, i
+            for sign, node, value, slot in ((-1.0, lowest, s_low, T_MAX_COMPRESSION),
+                                            (1.0, highest, s_high, T_MAX_TENSION)):
+                x_peak = node * h
+                peak = sign * value
+                if 0 < node < n:
+                    left = sign * node_stress(un, node - 1, n, e_over_h, s0, sn)
+                    right = sign * node_stress(un, node + 1, n, e_over_h, s0, sn)
+                    curvature = 2.0 * peak - left - right
+                    if curvature > 0.0:
+                        offset = 0.5 * (right - left) / curvature
+                        peak += 0.25 * (right - left) * offset
+                        x_peak += offset * h
+                if peak > trackers[slot]:
+                    trackers[slot] = peak
+                    trackers[slot + 1] = x_peak
+                    trackers[slot + 2] = t
             if contact_force > trackers[T_PEAK_FORCE]:
                 trackers[T_PEAK_FORCE] = contact_force
                 trackers[T_PEAK_FORCE_TIME] = t

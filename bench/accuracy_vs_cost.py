@@ -1,0 +1,208 @@
+"""The speed/accuracy trade, measured: each scheme over a ladder of grids on three presets, against
+a converged reference, and the tolerance-driven runs against the cheapest fixed grid.
+
+    .venv/bin/python bench/accuracy_vs_cost.py [--write]
+
+For each preset (Fig. 3: uniform tool and medium; Fig. 5: short hard contact; Fig. 9: conical tool,
+abs-sine force, repeated contacts) the case's own numerics are replaced by:
+
+- a reference: the explicit scheme at Courant number 1 on two very fine grids, Richardson-
+  extrapolated at order 2 (its uncertainty, a third of their difference, is printed);
+- a ladder for each scheme (paper γ = 0.5, sigma σ = 1/4, explicit; all at Courant number 1) of
+  cells 2^(k/2)·10; the error of a run is the largest relative error of co-impact time, peak
+  contact force and maximum stress; its cost the best of three CPU times of `simulate`;
+- `numerics.tolerance` = 1e-2, 1e-3, 1e-4: true error, estimate, cost, and the ratio of that cost
+  to the cheapest fixed grid (any scheme) whose true error meets the tolerance.
+
+`--write` writes `docs/accuracy_vs_cost.md` and `docs/accuracy_vs_cost.png`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from solver import parse_case
+from solver.adaptive import QUANTITIES, quantities
+from solver.controller import warm_up
+from solver.grid import wave_speed
+from solver.simulate import simulate
+
+ROOT = Path(__file__).resolve().parents[1]
+PRESETS = {"fig3": 1600, "fig5": 800, "fig9": 800}  # reference grids: N and 2N cells
+SCHEMES = ("paper", "sigma", "explicit")
+LADDER = [round(10 * 2 ** (k / 2)) for k in range(13)]  # 10 … 640 cells
+TOLERANCES = (1e-2, 1e-3, 1e-4)
+TARGETS = (1e-2, 1e-3, 1e-4)
+
+
+def preset(name: str) -> dict:
+    case = json.loads((ROOT / "examples" / f"{name}.json").read_text())
+    case["numerics"] = {"duration": case["numerics"]["duration"]}
+    case["outputs"] = {}
+    return case
+
+
+def with_numerics(case: dict, **numerics) -> dict:
+    return {**case, "numerics": {"duration": case["numerics"]["duration"], **numerics}}
+
+
+def courant_one(case: dict, cells: int) -> float:
+    tool = parse_case(case).tool
+    return (1.0 - 1e-9) * tool.length / cells / wave_speed(tool)
+
+
+def timed(case: dict, repeat: int = 3) -> tuple[dict, float]:
+    """The summary and the best CPU time of `repeat` runs from the validated case."""
+    parsed = parse_case(case)
+    best, summary = math.inf, None
+    for _ in range(repeat):
+        start = time.process_time()
+        summary = simulate(parsed).summary
+        best = min(best, time.process_time() - start)
+    return summary, best
+
+
+def reference(case: dict, cells: int) -> tuple[dict[str, float], float]:
+    runs = [quantities(simulate(parse_case(with_numerics(
+        case, scheme="explicit", cells=n, time_step=courant_one(case, n)))).summary)
+        for n in (cells, 2 * cells)]
+    ref, uncertainty = {}, 0.0
+    for q in QUANTITIES:
+        if runs[1][q] is None:
+            continue
+        ref[q] = runs[1][q] + (runs[1][q] - runs[0][q]) / 3.0
+        uncertainty = max(uncertainty, abs(runs[1][q] - runs[0][q]) / 3.0 / abs(ref[q]))
+    return ref, uncertainty
+
+
+def error(summary: dict, ref: dict[str, float]) -> float:
+    found = quantities(summary)
+    return max(abs(found[q] / ref[q] - 1.0) for q in ref)
+
+
+def measure(name: str) -> dict:
+    case = preset(name)
+    ref, uncertainty = reference(case, PRESETS[name])
+    print(f"\n{name}: reference {ref} (uncertainty {uncertainty:.1e})")
+    ladder = {}
+    for scheme in SCHEMES:
+        rows = []
+        for cells in LADDER:
+            summary, cpu = timed(with_numerics(case, scheme=scheme, cells=cells,
+                                               time_step=courant_one(case, cells)))
+            rows.append((cells, summary["numerics"]["steps"], cpu, error(summary, ref)))
+            print(f"  {scheme:8s} {cells:5d} cells {rows[-1][1]:7d} steps {cpu * 1e3:9.2f} ms  "
+                  f"error {rows[-1][3]:.2e}")
+        ladder[scheme] = rows
+    tolerance = []
+    for tol in TOLERANCES:
+        summary, cpu = timed(with_numerics(case, tolerance=tol))
+        fixed = [(row[2], scheme, row[0]) for scheme, rows in ladder.items() for row in rows
+                 if row[3] <= tol]
+        cheapest = min(fixed) if fixed else (math.nan, "none", 0)
+        row = {"tol": tol, "error": error(summary, ref), "estimate": summary["error_estimate"]["worst"],
+               "cpu": cpu, "model": summary["model"], "scheme": summary["scheme"],
+               "cells": summary["runs"][-1]["cells"], "runs": len(summary["runs"]),
+               "cheapest": cheapest, "ratio": cpu / cheapest[0]}
+        tolerance.append(row)
+        print(f"  tolerance {tol:g}: error {row['error']:.2e} (estimate {row['estimate']:.2e}), "
+              f"{cpu * 1e3:.2f} ms in {row['runs']} runs; cheapest fixed grid meeting it: "
+              f"{cheapest[1]} {cheapest[2]} cells, {cheapest[0] * 1e3:.2f} ms → {row['ratio']:.2f}×")
+    return {"ref": ref, "uncertainty": uncertainty, "ladder": ladder, "tolerance": tolerance}
+
+
+def cheapest_for(rows, target) -> str:
+    hits = [(cpu, cells) for cells, _, cpu, err in rows if err <= target]
+    if not hits:
+        return "—"
+    cpu, cells = min(hits)
+    return f"{cpu * 1e3:.2f} ms ({cells})"
+
+
+def write(results: dict) -> None:
+    lines = [
+        "# Speed against accuracy",
+        "",
+        "Written by `bench/accuracy_vs_cost.py --write` (rerun it to check). Error: the largest "
+        "relative error of co-impact time, peak contact force and maximum stress against a "
+        "reference (the explicit scheme at Courant number 1 on two fine grids, Richardson-"
+        "extrapolated). Cost: CPU time of one `simulate` call on one core, best of three, after "
+        "compilation. All schemes at Courant number 1.",
+        "",
+        "## Cheapest run that reaches an accuracy (CPU time, and cells)",
+        "",
+        "| preset | scheme | error ≤ 1e-2 | error ≤ 1e-3 | error ≤ 1e-4 |",
+        "|---|---|---|---|---|",
+    ]
+    for name, r in results.items():
+        for scheme, rows in r["ladder"].items():
+            lines.append(f"| {name} | {scheme} | " + " | ".join(cheapest_for(rows, t) for t in TARGETS) + " |")
+    lines += [
+        "",
+        "## Tolerance-driven runs (`numerics.tolerance`)",
+        "",
+        "| preset | tolerance | true error | estimate | chosen | runs | CPU | cheapest fixed grid meeting it | ratio |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, r in results.items():
+        for t in r["tolerance"]:
+            cpu, scheme, cells = t["cheapest"]
+            lines.append(
+                f"| {name} | {t['tol']:g} | {t['error']:.1e} | {t['estimate']:.1e} | {t['model']}, "
+                f"{t['scheme']}, {t['cells']} cells | {t['runs']} | {t['cpu'] * 1e3:.2f} ms | "
+                f"{scheme} {cells} cells, {cpu * 1e3:.2f} ms | {t['ratio']:.2f}× |")
+    lines += [
+        "",
+        "Reference uncertainty: " + ", ".join(f"{n} {r['uncertainty']:.0e}" for n, r in results.items())
+        + ". Errors far below it are not meaningful.",
+        "",
+        "![error against CPU time](accuracy_vs_cost.png)",
+        "",
+    ]
+    (ROOT / "docs" / "accuracy_vs_cost.md").write_text("\n".join(lines))
+    plot(results)
+
+
+def plot(results: dict) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, len(results), figsize=(5 * len(results), 4.2), sharey=True)
+    for ax, (name, r) in zip(axes, results.items()):
+        for scheme, rows in r["ladder"].items():
+            rows = np.array(rows)
+            ax.loglog(rows[:, 2] * 1e3, rows[:, 3], "o-", ms=3, label=scheme)
+        t = r["tolerance"]
+        ax.loglog([x["cpu"] * 1e3 for x in t], [x["error"] for x in t], "k*", ms=10,
+                  label="numerics.tolerance")
+        for x in t:
+            ax.axhline(x["tol"], color="0.85", lw=0.8, zorder=0)
+        ax.set_title(name)
+        ax.set_xlabel("CPU time per run (ms)")
+        ax.grid(True, which="major", alpha=0.3)
+    axes[0].set_ylabel("largest relative error")
+    axes[0].legend()
+    fig.tight_layout()
+    fig.savefig(ROOT / "docs" / "accuracy_vs_cost.png", dpi=120)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--write", action="store_true", help="write docs/accuracy_vs_cost.{md,png}")
+    args = parser.parse_args()
+    warm_up()
+    results = {name: measure(name) for name in PRESETS}
+    if args.write:
+        write(results)
+
+
+if __name__ == "__main__":
+    main()
