@@ -56,3 +56,19 @@ def test_probe_at_a_node_and_at_the_ends_match_the_field():
     # At the struck end the stress is the contact force over the area (boundary row (9)).
     np.testing.assert_allclose(result.fields.stress[2:, 0],
                                -result.history["contact/force"][2:] / 0.014209, rtol=1e-6, atol=1e3)
+
+
+def test_a_summary_only_run_allocates_nothing_of_size_cells_times_steps():
+    import tracemalloc
+
+    case = parse_case(merge(CASE, {"numerics": {"cells": 2000, "time_step": 1e-8, "duration": 5e-5,
+                                                "scheme": "explicit"},
+                                   "outputs": {"probes": [], "fields": False}}))
+    simulate_rod(case)  # compiled and loaded before measuring
+    tracemalloc.start()
+    result = simulate_rod(case)
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    cells, steps = result.numerics.cells, result.numerics.steps
+    print(f"{cells} cells × {steps} steps: peak {peak / 1e6:.2f} MB traced")
+    assert peak < 0.05 * 8 * cells * steps  # a field of N·M doubles would be 80 MB

@@ -61,6 +61,19 @@ def test_a_preset_runs_to_the_same_summary_as_the_solver(stack, preset):
         assert f.attrs["format"] == "percussim-result"
 
 
+def test_a_tolerance_job_runs_the_ladder_and_reports_its_estimate(stack):
+    case = merge(preset_json("fig9"), {"numerics": {"time_step": None, "cells": None, "gamma": None,
+                                                    "tolerance": 1e-3}})
+    job = _submit(stack, case)
+    record = stack.wait_status(job["id"], ("succeeded", "failed"))
+    assert record["status"] == "succeeded", (record, stack.logs())
+    summary = stack.client.get(f"/v1/jobs/{job['id']}/summary").json()
+    assert summary["error_estimate"]["worst"] <= 1e-3 and len(summary["runs"]) >= 2
+    assert summary["scheme"] == "explicit" and summary["why"]
+    with h5py.File(io.BytesIO(stack.client.get(f"/v1/jobs/{job['id']}/result.h5").content)) as f:
+        assert f["probes/stress"].shape[1] == 4  # the finest run kept the outputs asked
+
+
 def test_an_invalid_case_gets_422_naming_the_field(stack):
     answer = stack.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"contact": {"exponent": 0.9}}))
     assert answer.status_code == 422

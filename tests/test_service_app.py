@@ -57,6 +57,14 @@ PROFILE = {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.01, 0.01, 
     ({"numerics": {"cells": 10.5}}, "numerics.cells", "must be a whole number"),
     ({"outputs": {"probes": [0.1, 2.0]}}, "outputs.probes[1]",
      "must lie on the tool, 0 ≤ x ≤ tool.length = 1.2 m"),
+    ({"numerics": {"scheme": "implicit"}}, "numerics.scheme",
+     "Input should be 'paper', 'sigma' or 'explicit'"),
+    ({"numerics": {"tolerance": 1e-3}}, "numerics.tolerance",
+     "cannot be combined with numerics.time_step: under a tolerance the solver chooses the grid; "
+     "give one or the other"),
+    ({"numerics": {"scheme": "explicit", "time_step": 1e-5}}, "numerics.time_step",
+     "the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = 1e-05 s on 100 cells gives "
+     "4.324: set numerics.time_step ≤ 2.313e-06 s, use fewer cells, or numerics.scheme = 'sigma'"),
 ])
 def test_an_invalid_case_gets_422_naming_the_field(client, changes, field, message):
     answer = client.post("/v1/jobs", json=merge(BASE_CASE, changes))
