@@ -14,7 +14,8 @@ abs-sine force, repeated contacts) the case's own numerics are replaced by:
 - `numerics.tolerance` = 1e-2, 1e-3, 1e-4: true error, estimate, cost, and the ratio of that cost
   to the cheapest fixed grid (any scheme) whose true error meets the tolerance.
 
-`--write` writes `docs/accuracy_vs_cost.md` and `docs/accuracy_vs_cost.png`.
+`--write` writes `docs/accuracy_vs_cost.md`, `docs/accuracy_vs_cost.png` and the tables quoted in
+README.md (between its `accuracy_vs_cost` markers).
 """
 
 from __future__ import annotations
@@ -137,12 +138,13 @@ def write(results: dict) -> None:
         "",
         "## Cheapest run that reaches an accuracy (CPU time, and cells)",
         "",
-        "| preset | scheme | error ≤ 1e-2 | error ≤ 1e-3 | error ≤ 1e-4 |",
-        "|---|---|---|---|---|",
+        f"| preset | scheme | error ≤ 1e-2 | error ≤ 1e-3 | error ≤ 1e-4 | error at {LADDER[-1]} cells |",
+        "|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         for scheme, rows in r["ladder"].items():
-            lines.append(f"| {name} | {scheme} | " + " | ".join(cheapest_for(rows, t) for t in TARGETS) + " |")
+            lines.append(f"| {name} | {scheme} | " + " | ".join(cheapest_for(rows, t) for t in TARGETS)
+                         + f" | {rows[-1][3]:.1e} |")
     lines += [
         "",
         "## Tolerance-driven runs (`numerics.tolerance`)",
@@ -166,7 +168,20 @@ def write(results: dict) -> None:
         "",
     ]
     (ROOT / "docs" / "accuracy_vs_cost.md").write_text("\n".join(lines))
+    quote_in_readme(lines)
     plot(results)
+
+
+def quote_in_readme(lines: list[str]) -> None:
+    """Replace what stands between the README's markers with the two tables."""
+    tables = "\n".join(("##" + line) if line.startswith("## ") else line for line in lines
+                       if not line.startswith(("# ", "Written by", "![")))
+    readme = ROOT / "README.md"
+    text = readme.read_text()
+    start = text.index("<!-- accuracy_vs_cost")
+    start = text.index("\n", start) + 1
+    end = text.index("<!-- /accuracy_vs_cost -->")
+    readme.write_text(text[:start] + tables.strip() + "\n" + text[end:])
 
 
 def plot(results: dict) -> None:

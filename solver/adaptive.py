@@ -34,7 +34,7 @@ from .schemes import make_scheme
 
 QUANTITIES = ("co_impact_time", "peak_contact_force", "max_stress")
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.6)
-START_POINTS = 20  # the first grid resolves the estimated contact by this many steps and cells
+START_POINTS = 14  # the first grid resolves the estimated contact by this many steps
 SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
 # The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
 # error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.

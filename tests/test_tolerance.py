@@ -47,10 +47,10 @@ def reference_truth(ref: LinearImpact) -> dict[str, float]:
             "max_stress": ref.peak_force / ref.area}
 
 
-@pytest.mark.parametrize("tol, work_bound", [(1e-2, 6.0), (1e-3, 3.0), (1e-4, 3.0)])
-def test_closed_form_is_met_within_the_tolerance_at_a_cost_near_the_cheapest_grid(tol, work_bound):
-    """The work bound is the issue's 3× where it holds. At 1e-2 the cheapest fixed grid (known only
-    in hindsight) has 19 cells, and the two grids any error estimate needs cost up to 6× that."""
+@pytest.mark.parametrize("tol", [1e-2, 1e-3, 1e-4])
+def test_closed_form_is_met_within_the_tolerance_at_a_cost_near_the_cheapest_grid(tol):
+    """The cheapest fixed grid is known only in hindsight; the tolerance run has to find its grid
+    and estimate its error, and may spend 3× that work doing it."""
     ref = LinearImpact()
     case = merge(ref.case(10), {"numerics": {"cells": None, "time_step": None, "tolerance": tol}})
     summary = simulate(parse_case(case)).summary
@@ -62,7 +62,7 @@ def test_closed_form_is_met_within_the_tolerance_at_a_cost_near_the_cheapest_gri
           f"{work / cheapest:.2f}×")
     assert max(errors.values()) <= tol
     assert summary["error_estimate"]["worst"] <= tol
-    assert work <= work_bound * cheapest
+    assert work <= 3 * cheapest
     assert summary["model"] == "rod" and summary["scheme"] == "explicit"
     assert "Courant number 1" in summary["why"] and summary["tolerance"] == tol
 
