@@ -85,6 +85,7 @@ def boundary_weights(weight_new, centered, end_masses, tau):
     return end_weight, 1.0, 1.0 / tau, 1
 
 
+@njit(cache=True)
 def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_stiffness,
                      medium_damping, r, tau, density, h, weight_new, centered, end_masses):
     """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the coefficient of `Q_{i+1}`.

@@ -22,7 +22,8 @@ def _number(value: float) -> float | None:
 
 def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     time = history["time"]
-    pick = np.unique(np.linspace(0, len(time) - 1, min(len(time), FORCE_HISTORY_POINTS)).astype(int))
+    # Spacing ≥ 1, so the truncated indices are distinct and increasing.
+    pick = np.linspace(0, len(time) - 1, min(len(time), FORCE_HISTORY_POINTS)).astype(int)
     return {
         "time": time[pick].tolist(),
         "contact": history["contact/force"][pick].tolist(),
