@@ -75,11 +75,6 @@ class ResolvedNumerics:
     def weights(self) -> Scheme:
         return make_scheme(self.scheme, self.gamma, self.sigma, self.end_masses)
 
-    @property
-    def node_steps(self) -> float:
-        """The work of a rod run: nodes × steps."""
-        return float(self.cells + 1) * (self.steps + 1)
-
 
 def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = None,
                      cells: int | None = None, time_step: float | None = None) -> ResolvedNumerics:

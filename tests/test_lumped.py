@@ -1,6 +1,5 @@
 """The lumped model problem (21)–(25): closed form, energy closure, and the rod's rigid-tool limit."""
 
-import copy
 import math
 
 import numpy as np
