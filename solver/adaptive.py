@@ -24,6 +24,7 @@ maximum stress), a run goes:
 from __future__ import annotations
 
 import math
+
 import numpy as np
 
 from .case import Case, CaseError, FieldError, Outputs
