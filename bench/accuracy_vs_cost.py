@@ -9,10 +9,14 @@ abs-sine force, repeated contacts) the case's own numerics are replaced by:
 - a reference: the explicit scheme at Courant number 1 on two very fine grids, Richardson-
   extrapolated at order 2 (its uncertainty, a third of their difference, is printed);
 - a ladder for each scheme (paper γ = 0.5, sigma σ = 1/4, explicit; all at Courant number 1) of
-  cells 2^(k/2)·10; the error of a run is the largest relative error of co-impact time, peak
-  contact force and maximum stress; its cost the best of three CPU times of `simulate`;
+  cells 2^(k/4)·10; the error of a run is the largest relative error of co-impact time, peak
+  contact force and maximum stress; its cost the least CPU time of `simulate` over repeats;
 - `numerics.tolerance` = 1e-2, 1e-3, 1e-4: true error, estimate, cost, and the ratio of that cost
-  to the cheapest fixed grid (any scheme) whose true error meets the tolerance.
+  to the cheapest fixed grid (any scheme) that meets the tolerance. A grid meets it when it and
+  every finer grid of its scheme's ladder do: where the error still jumps about with the grid
+  (Fig. 5 below about 90 cells, where the sequence of repeated impacts changes from grid to grid)
+  a coarse grid can hit the tolerance by luck, which no one choosing a grid could rely on. Those
+  lucky grids are listed too.
 
 `--write` writes `docs/accuracy_vs_cost.md`, `docs/accuracy_vs_cost.png` and the tables quoted in
 README.md (between its `accuracy_vs_cost` markers).
@@ -37,7 +41,7 @@ from solver.simulate import simulate
 ROOT = Path(__file__).resolve().parents[1]
 PRESETS = {"fig3": 1600, "fig5": 800, "fig9": 800}  # reference grids: N and 2N cells
 SCHEMES = ("paper", "sigma", "explicit")
-LADDER = [round(10 * 2 ** (k / 2)) for k in range(13)]  # 10 … 640 cells
+LADDER = [round(10 * 2 ** (k / 4)) for k in range(25)]  # 10 … 640 cells
 TOLERANCES = (1e-2, 1e-3, 1e-4)
 TARGETS = (1e-2, 1e-3, 1e-4)
 
@@ -58,14 +62,16 @@ def courant_one(case: dict, cells: int) -> float:
     return (1.0 - 1e-9) * tool.length / cells / wave_speed(tool)
 
 
-def timed(case: dict, repeat: int = 3) -> tuple[dict, float]:
-    """The summary and the best CPU time of `repeat` runs from the validated case."""
+def timed(case: dict, repeat: int = 3, budget: float = 0.05) -> tuple[dict, float]:
+    """The summary and the least CPU time of at least `repeat` runs of the validated case, repeated
+    until they took `budget` seconds (sub-millisecond runs need many to time)."""
     parsed = parse_case(case)
-    best, summary = math.inf, None
-    for _ in range(repeat):
+    best, summary, spent, runs = math.inf, None, 0.0, 0
+    while runs < repeat or spent < budget:
         start = time.process_time()
         summary = simulate(parsed).summary
-        best = min(best, time.process_time() - start)
+        took = time.process_time() - start
+        best, spent, runs = min(best, took), spent + took, runs + 1
     return summary, best
 
 
@@ -104,25 +110,47 @@ def measure(name: str) -> dict:
     tolerance = []
     for tol in TOLERANCES:
         summary, cpu = timed(with_numerics(case, tolerance=tol))
-        fixed = [(row[2], scheme, row[0]) for scheme, rows in ladder.items() for row in rows
-                 if row[3] <= tol]
-        cheapest = min(fixed) if fixed else (math.nan, "none", 0)
+        cheapest = min(meeting(ladder, tol), default=(math.nan, "none", 0))
+        lucky = [f"{scheme} {cells}" for cpu_, scheme, cells in lucky_hits(ladder, tol)
+                 if cpu_ < cheapest[0]]
         row = {"tol": tol, "error": error(summary, ref), "estimate": summary["error_estimate"]["worst"],
                "cpu": cpu, "model": summary["model"], "scheme": summary["scheme"],
                "cells": summary["runs"][-1]["cells"], "runs": len(summary["runs"]),
-               "cheapest": cheapest, "ratio": cpu / cheapest[0]}
+               "cheapest": cheapest, "ratio": cpu / cheapest[0], "lucky": lucky}
         tolerance.append(row)
         print(f"  tolerance {tol:g}: error {row['error']:.2e} (estimate {row['estimate']:.2e}), "
               f"{cpu * 1e3:.2f} ms in {row['runs']} runs; cheapest fixed grid meeting it: "
-              f"{cheapest[1]} {cheapest[2]} cells, {cheapest[0] * 1e3:.2f} ms → {row['ratio']:.2f}×")
+              f"{cheapest[1]} {cheapest[2]} cells, {cheapest[0] * 1e3:.2f} ms → {row['ratio']:.2f}×"
+              + (f"; coarser grids meeting it by luck: {', '.join(lucky)}" if lucky else ""))
     return {"ref": ref, "uncertainty": uncertainty, "ladder": ladder, "tolerance": tolerance}
 
 
-def cheapest_for(rows, target) -> str:
-    hits = [(cpu, cells) for cells, _, cpu, err in rows if err <= target]
+def meeting(ladder: dict, tol: float) -> list[tuple[float, str, int]]:
+    """(CPU, scheme, cells) of each scheme's coarsest grid from which every finer grid meets `tol`."""
+    found = []
+    for scheme, rows in ladder.items():
+        settled = None
+        for cells, _, cpu, err in reversed(rows):
+            if err > tol:
+                break
+            settled = (cpu, scheme, cells)
+        if settled:
+            found.append(settled)
+    return found
+
+
+def lucky_hits(ladder: dict, tol: float) -> list[tuple[float, str, int]]:
+    """Grids meeting `tol` although a finer grid of the same scheme does not."""
+    settled = {scheme: cells for _, scheme, cells in meeting(ladder, tol)}
+    return [(cpu, scheme, cells) for scheme, rows in ladder.items() for cells, _, cpu, err in rows
+            if err <= tol and cells < settled.get(scheme, math.inf)]
+
+
+def cheapest_for(scheme: str, rows, target) -> str:
+    hits = meeting({scheme: rows}, target)
     if not hits:
         return "—"
-    cpu, cells = min(hits)
+    cpu, _, cells = hits[0]
     return f"{cpu * 1e3:.2f} ms ({cells})"
 
 
@@ -133,8 +161,9 @@ def write(results: dict) -> None:
         "Written by `bench/accuracy_vs_cost.py --write` (rerun it to check). Error: the largest "
         "relative error of co-impact time, peak contact force and maximum stress against a "
         "reference (the explicit scheme at Courant number 1 on two fine grids, Richardson-"
-        "extrapolated). Cost: CPU time of one `simulate` call on one core, best of three, after "
-        "compilation. All schemes at Courant number 1.",
+        "extrapolated). Cost: CPU time of one `simulate` call on one core, the least over repeats, "
+        "after compilation. All schemes at Courant number 1, on ladders of cells 2^(k/4)·10. A grid "
+        "meets an accuracy when it and every finer grid of its ladder do.",
         "",
         "## Cheapest run that reaches an accuracy (CPU time, and cells)",
         "",
@@ -143,14 +172,14 @@ def write(results: dict) -> None:
     ]
     for name, r in results.items():
         for scheme, rows in r["ladder"].items():
-            lines.append(f"| {name} | {scheme} | " + " | ".join(cheapest_for(rows, t) for t in TARGETS)
+            lines.append(f"| {name} | {scheme} | " + " | ".join(cheapest_for(scheme, rows, t) for t in TARGETS)
                          + f" | {rows[-1][3]:.1e} |")
     lines += [
         "",
         "## Tolerance-driven runs (`numerics.tolerance`)",
         "",
-        "| preset | tolerance | true error | estimate | chosen | runs | CPU | cheapest fixed grid meeting it | ratio |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| preset | tolerance | true error | estimate | chosen | runs | CPU | cheapest fixed grid meeting it | ratio | coarser grids meeting it by luck |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         for t in r["tolerance"]:
@@ -158,7 +187,8 @@ def write(results: dict) -> None:
             lines.append(
                 f"| {name} | {t['tol']:g} | {t['error']:.1e} | {t['estimate']:.1e} | {t['model']}, "
                 f"{t['scheme']}, {t['cells']} cells | {t['runs']} | {t['cpu'] * 1e3:.2f} ms | "
-                f"{scheme} {cells} cells, {cpu * 1e3:.2f} ms | {t['ratio']:.2f}× |")
+                f"{scheme} {cells} cells, {cpu * 1e3:.2f} ms | {t['ratio']:.2f}× | "
+                f"{', '.join(t['lucky']) or '—'} |")
     lines += [
         "",
         "Reference uncertainty: " + ", ".join(f"{n} {r['uncertainty']:.0e}" for n, r in results.items())

@@ -13,11 +13,14 @@ maximum stress), a run goes:
 2. **Otherwise the rod with the explicit scheme at Courant number 1** (second order and
    energy-conserving; at Courant 1 a wave crosses a uniform tool without dispersion, so the stress
    maxima converge at second order too, where the σ-scheme's dispersion overshoot converges at
-   about 1.4), on a ladder of grids refined in h and τ together: a coarse grid resolving the
-   estimated contact by `START_POINTS` steps, then twice as fine, then as fine as the observed
-   difference says is needed, at most 3× finer a step (Richardson: the finer grid's error is
-   `|Q_f − Q_c|/(r^p − 1)`, which holds only when both grids are near the asymptotic range, so it
-   is taken 1.5× larger).
+   about 1.4), on a ladder of grids refined in h and τ together. The first pair of grids is placed
+   from an a-priori error model, `ERROR_CONSTANT·n^−p` with n the time steps per estimated
+   contact, so that the finer one would just meet the tolerance: half as fine, then that grid.
+   Each later grid is as fine as the last pair's difference says is needed, at least 1.5× and at
+   most 3× finer (Richardson: the finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only
+   when both grids are near the asymptotic range, so it is taken 1.5× larger). Two grids that see
+   a different number of contacts are not compared at all (the coarse one has the sequence of
+   impacts wrong, and any difference between them says nothing of the error): the next is 2× finer.
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
 """
 
@@ -36,7 +39,11 @@ from .schemes import make_scheme
 
 QUANTITIES = ("co_impact_time", "peak_contact_force", "max_stress")
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
-START_POINTS = 14  # the first grid resolves the estimated contact by this many steps
+# A second-order run's relative error is about this × n^−2, n its time steps per estimated contact
+# (fitted on the ladders of bench/accuracy_vs_cost.py: 3.4 closed form, 5–10 Fig. 3, 5.5 Fig. 5 once
+# converging, 1–6 Fig. 9).
+ERROR_CONSTANT = 6.0
+MIN_START_POINTS = 6  # the coarsest first grid, in time steps per estimated contact
 SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
 # The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
 # error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.
@@ -123,10 +130,12 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     period = contact_time_estimate(case)
     a, length = wave_speed(case.tool), case.tool.length
 
-    runs: list[tuple[ResolvedNumerics, dict]] = []
+    runs: list[tuple[ResolvedNumerics, dict, int]] = []
     factor = 1.0
+    worst = math.inf
+    start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
-        tau = period / (START_POINTS * factor)
+        tau = period / (start * factor)
         cells = max(math.ceil(MIN_CELLS * factor), math.ceil(length / (a * tau)))
         numerics = resolve_numerics(case, model="rod", scheme=scheme, cells=cells,
                                     time_step=min(COURANT * length / cells / a, tau))
@@ -141,11 +150,11 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                         f"{numerics.steps} steps, beyond this service's limits ({error}): loosen it")]) from None
         result = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
                               cancelled=cancelled)
-        runs.append((numerics, quantities(result.summary)))
-        if stage == 0:
+        runs.append((numerics, quantities(result.summary), result.summary["contacts_total"]))
+        if stage == 0 or runs[-1][2] != runs[-2][2]:  # nothing to compare with, or not comparable
             factor *= 2.0
             continue
-        (previous, coarse), (_, fine) = runs[-2], runs[-1]
+        (previous, coarse, _), (_, fine, _) = runs[-2], runs[-1]
         ratio = math.sqrt((previous.time_step / numerics.time_step) * (numerics.cells / previous.cells))
         estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
         worst = max(estimate.values(), default=0.0)
@@ -157,12 +166,13 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                    if case.numerics.scheme is None else
                    f"numerics.scheme = '{scheme}' as asked, on grids refined until the estimated error "
                    "is within the tolerance")
-            return _annotated(result, tol, estimate, runs=[n for n, _ in runs], why=why)
+            return _annotated(result, tol, estimate, runs=[n for n, _, _ in runs], why=why)
         needed = (worst / (SAFETY * tol)) ** (1.0 / order)
         factor *= min(max(needed, MIN_REFINEMENT), MAX_REFINEMENT)
     raise CaseError([FieldError(
         field="numerics.tolerance",
-        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}): "
+        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}; "
+                f"contacts seen: {', '.join(str(c) for _, _, c in runs)}): "
                 "loosen it or give numerics.cells and numerics.time_step")])
 
 
