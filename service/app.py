@@ -15,6 +15,7 @@ from worker.store import WorkerRegistry
 from . import errors, presets
 from .jobs import jobs_router
 from .queue import JobQueue
+from .sweeps import sweeps_router
 
 READY_WITHIN = 15.0  # seconds: three missed worker heartbeats (every 5 s) and a worker is gone
 
@@ -32,6 +33,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     )
     errors.install(app)
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()))
+    app.include_router(sweeps_router(settings, queue))
     app.include_router(presets.router)
 
     @app.get("/healthz", tags=["health"])

@@ -13,8 +13,8 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel
 
-from solver.case import CaseError, FieldError, field_path, parse_case
-from worker.store import UnknownJob
+from solver.case import CaseError, FieldError, describe, field_path
+from worker.store import UnknownJob, UnknownSweep
 
 
 class FieldErrors(BaseModel):
@@ -30,17 +30,10 @@ class Problem(BaseModel):
 
 
 def _body_errors(body: Any, errors: list[dict]) -> list[FieldError]:
-    """The body's errors, as the case model itself words them."""
+    """The body's errors, in the words of `percussim run`."""
     if not isinstance(body, dict):
-        return [FieldError(field="body", message="must be a JSON object (the impact case), "
-                                                 "sent as application/json")]
-    # Validating the case again gives exactly the paths and words of `percussim run`; it only
-    # runs for a request already refused.
-    try:
-        parse_case(body)
-    except CaseError as error:
-        return error.errors
-    return [FieldError(field=field_path(tuple(e["loc"])[1:]), message=e["msg"]) for e in errors]
+        return [FieldError(field="body", message="must be a JSON object, sent as application/json")]
+    return describe([e | {"loc": tuple(e["loc"])[1:]} for e in errors])
 
 
 def request_errors(exc: RequestValidationError) -> list[FieldError]:
@@ -77,8 +70,13 @@ async def _unknown_job(request: Request, exc: UnknownJob) -> JSONResponse:
     return JSONResponse(status_code=404, content={"detail": f"no job with id {exc.args[0]!r}"})
 
 
+async def _unknown_sweep(request: Request, exc: UnknownSweep) -> JSONResponse:
+    return JSONResponse(status_code=404, content={"detail": f"no sweep with id {exc.args[0]!r}"})
+
+
 def install(app: FastAPI) -> None:
     """Register the handlers on `app`; FastAPI's own 404 and 405 answers are left as they are."""
     app.add_exception_handler(RequestValidationError, _invalid_request)
     app.add_exception_handler(CaseError, _invalid_case)
     app.add_exception_handler(UnknownJob, _unknown_job)
+    app.add_exception_handler(UnknownSweep, _unknown_sweep)

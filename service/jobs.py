@@ -82,6 +82,30 @@ def _download_name(record: dict) -> str:
     return f"{name}-{record['id']}.h5"
 
 
+def cancel(jobs: JobStore, job_id: str) -> dict:
+    """Cancel a job that has not finished: a queued one at once, a running one by its worker."""
+    # The marker first: a worker taking the job from now on sees it and does not run it.
+    jobs.request_cancel(job_id)
+    record = jobs.get(job_id)
+    if record["status"] == QUEUED:
+        record = jobs.update(job_id, status=CANCELLED, finished=now())
+    return record
+
+
+def queue_jobs(jobs: JobStore, queue: JobQueue, job_ids: list[str]) -> None:
+    """Publish the jobs; if the broker cannot take them, record why in each and answer 503."""
+    try:
+        queue.enqueue(*job_ids)
+    except BROKER_ERRORS as error:
+        # The jobs would never run: say so in their records rather than leave them queued.
+        for job_id in job_ids:
+            jobs.update(job_id, status=FAILED, finished=now(), error=f"the job could not be queued: {error}")
+        raise HTTPException(
+            status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
+            detail=f"the job queue is unavailable ({queue.describe()}: {error}); "
+                   "nothing was queued: submit again later") from None
+
+
 def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | None) -> APIRouter:
     """The job routes for the results store and broker of `settings`."""
     router = APIRouter(prefix="/v1/jobs", tags=["jobs"])
@@ -100,16 +124,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         check_limits(case, resolve_numerics(case), settings.limits())
         jobs = store()
         record = jobs.create(case.model_dump(mode="json", exclude_none=True))
-        try:
-            queue.enqueue(record["id"])
-        except BROKER_ERRORS as error:
-            # The job would never run: say so in its record rather than leave it queued.
-            jobs.update(record["id"], status=FAILED, finished=now(),
-                        error=f"the job could not be queued: {error}")
-            raise HTTPException(
-                status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
-                detail=f"the job queue is unavailable ({queue.describe()}: {error}); "
-                       f"the case was not queued, submit it again later") from None
+        queue_jobs(jobs, queue, [record["id"]])
         view = _view(request, record)
         response.headers["Location"] = view["links"]["self"]
         return view
@@ -151,15 +166,10 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         409: {"model": Problem, "description": "the job has already finished"}})
     def cancel_job(request: Request, job_id: str) -> dict:
         """Cancel a job: a queued one at once, a running one between two chunks of its run."""
-        jobs = store()
-        record = jobs.get(job_id)
+        record = store().get(job_id)
         if record["status"] in FINISHED:
             raise HTTPException(status_code=409,
                                 detail=f"job {job_id} has already finished: it is {record['status']}")
-        # The marker first: a worker taking the job from now on sees it and does not run it.
-        jobs.request_cancel(job_id)
-        if record["status"] == QUEUED:
-            record = jobs.update(job_id, status=CANCELLED, finished=now())
-        return _view(request, record)
+        return _view(request, cancel(store(), job_id))
 
     return router

@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 
 import redis.exceptions
-from celery import Celery
+from celery import Celery, group
 from kombu.exceptions import OperationalError
 from kombu.utils.url import maybe_sanitize_url
 
@@ -43,12 +43,14 @@ class JobQueue:
             return f"embedded (filesystem broker in {self.settings.broker_folder})"
         return maybe_sanitize_url(self.settings.broker_url)
 
-    def enqueue(self, job_id: str) -> None:
-        """Publish job `job_id`; raises one of `BROKER_ERRORS` if the broker cannot take it."""
+    def enqueue(self, *job_ids: str) -> None:
+        """Publish the jobs, fanned out over the workers as one Celery group; raises one of
+        `BROKER_ERRORS` if the broker cannot take them."""
         if self.settings.embedded:
             # The worker creates the folder too; the API may be up before any worker is.
             self.queue_folder.mkdir(parents=True, exist_ok=True)
-        self.app.send_task(RUN_JOB, args=[job_id], ignore_result=True)
+        group(self.app.signature(RUN_JOB, args=[job_id], ignore_result=True)
+              for job_id in job_ids).apply_async()
 
     def problem(self) -> str | None:
         """Why the broker cannot be reached now, or None if it can."""

@@ -298,8 +298,14 @@ def field_path(loc: tuple) -> str:
 
 def describe_errors(error: ValidationError) -> list[FieldError]:
     """Pydantic's errors as field paths and reasons an engineer reads."""
+    return describe(error.errors(include_url=False))
+
+
+def describe(errors: list[dict]) -> list[FieldError]:
+    """Pydantic's error entries (`type`, `loc` below the model, `msg`, `ctx`) as field paths and
+    reasons an engineer reads."""
     described = []
-    for e in error.errors(include_url=False):
+    for e in errors:
         template = _MESSAGES.get(e["type"])
         message = template.format(**e.get("ctx", {})) if template else e["msg"]
         # A discriminated union adds the chosen kind to the path ("force.pulse.duration").

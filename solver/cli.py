@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import csv
 import json
 import sys
 from pathlib import Path
@@ -40,6 +41,54 @@ def _run(args: argparse.Namespace) -> int:
         print(f"percussim: warning: {warning}", file=sys.stderr)
     print(text)
     return 0
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    from .case import CaseError, load_case
+    from .sweep import Sweep, run_sweep
+
+    try:
+        sweep = Sweep(case=load_case(args.case), parameters=dict(args.vary))
+        rows = run_sweep(sweep, processes=args.processes, progress=lambda done, total: print(
+            f"\rpercussim: {done}/{total} variants", end="", file=sys.stderr, flush=True))
+    except FileNotFoundError:
+        print(f"percussim: no such case file: {args.case}", file=sys.stderr)
+        return EXIT_INVALID
+    except CaseError as error:
+        print(f"percussim: invalid sweep of {args.case}:", file=sys.stderr)
+        for e in error.errors:
+            print(f"  {e.field}: {e.message}", file=sys.stderr)
+        return EXIT_INVALID
+    print(file=sys.stderr)
+    columns = list(dict.fromkeys(key for row in rows for key in row))
+    if args.csv:
+        with open(args.csv, "w", newline="") as f:
+            writer = csv.DictWriter(f, fieldnames=columns)
+            writer.writeheader()
+            writer.writerows(rows)
+    print("\t".join(columns))
+    for row in rows:
+        print("\t".join(_cell(row.get(c)) for c in columns))
+    return EXIT_FAILED if any("error" in r for r in rows) else 0
+
+
+def _cell(value) -> str:
+    return f"{value:.6g}" if isinstance(value, float) else "" if value is None else str(value)
+
+
+def _parameter(text: str) -> tuple[str, list]:
+    """`path=v1,v2,...`: each value as JSON (numbers, true, "text") or else as a string."""
+    path, sep, values = text.partition("=")
+    if not (sep and path and values):
+        raise argparse.ArgumentTypeError(f"expected FIELD=V1,V2,... (e.g. striker.velocity=3,5,7), not {text!r}")
+
+    def value(item: str):
+        try:
+            return json.loads(item)
+        except ValueError:
+            return item
+
+    return path, [value(v) for v in values.split(",")]
 
 
 def _warmup(args: argparse.Namespace) -> int:
@@ -80,6 +129,13 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--model", choices=["rod", "lumped"],
                      help="override numerics.model: the elastic rod or the two-mass model problem")
     run.set_defaults(handler=_run)
+    sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every core")
+    sweep.add_argument("case", help="the base impact case JSON")
+    sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
+                       help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7")
+    sweep.add_argument("--processes", type=_count, help="processes (default: one a core)")
+    sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
+    sweep.set_defaults(handler=_sweep)
     warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
     warm.set_defaults(handler=_warmup)
     work = commands.add_parser("worker", help="run a queue worker (PERCUSSIM_BROKER_URL; none: embedded)")

@@ -27,7 +27,7 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def wait_for(check, timeout: float, what: str):
+def wait_for(check, timeout: float, what: str, interval: float = 0.1):
     deadline = time.monotonic() + timeout
     while time.monotonic() < deadline:
         try:
@@ -36,7 +36,7 @@ def wait_for(check, timeout: float, what: str):
                 return value
         except (httpx.HTTPError, redis.RedisError, OSError):
             pass
-        time.sleep(0.1)
+        time.sleep(interval)
     raise TimeoutError(f"{what} not ready within {timeout} s")
 
 

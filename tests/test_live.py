@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 
 from conftest import merge
-from live_stack import Stack, redis_server
+from live_stack import Stack, redis_server, wait_for
+from solver import parse_case
 from solver.presets import load_preset, preset_json
 from solver.simulate import simulate
 
@@ -72,6 +73,28 @@ def test_a_tolerance_job_runs_the_ladder_and_reports_its_estimate(stack):
     assert summary["scheme"] == "explicit" and summary["why"]
     with h5py.File(io.BytesIO(stack.client.get(f"/v1/jobs/{job['id']}/result.h5").content)) as f:
         assert f["probes/stress"].shape[1] == 4  # the finest run kept the outputs asked
+
+
+def test_a_sweep_fans_out_over_two_workers_into_one_table(redis_url, tmp_path):
+    s = Stack(tmp_path, redis_url, workers=2)
+    try:
+        parameters = {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}
+        answer = s.client.post("/v1/sweeps", json={"case": preset_json("fig5"), "parameters": parameters})
+        assert answer.status_code == 202, answer.text
+        sweep = wait_for(lambda: (v := s.client.get(f"/v1/sweeps/{answer.json()['id']}").json())["finished"]
+                         and v, 60, "the sweep")
+        assert sweep["counts"] == {"succeeded": 6}, (sweep, s.logs())
+        workers = {s.client.get(f"/v1/jobs/{row['job']}").json()["worker"] for row in sweep["rows"]}
+        print(f"sweep: 6 variants on workers {sorted(workers)}")
+        assert len(workers) == 2, "both workers took variants"
+        for row in sweep["rows"]:
+            direct = simulate(parse_case(merge(preset_json("fig5"), {
+                "striker": {"velocity": row["values"]["striker.velocity"]},
+                "contact": {"stiffness": row["values"]["contact.stiffness"]}}))).summary
+            assert row["peak_contact_force"] == direct["peak_contact_force"]["value"]
+            assert row["co_impact_time"] == direct["co_impact_time"]
+    finally:
+        s.stop()
 
 
 def test_an_invalid_case_gets_422_naming_the_field(stack):

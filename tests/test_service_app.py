@@ -253,8 +253,79 @@ def test_an_unreachable_broker_is_503_and_the_job_is_marked_failed(tmp_path):
     answer = client.post("/v1/jobs", json=BASE_CASE)
     assert answer.status_code == 503
     assert answer.headers["retry-after"].isdigit()
-    assert "secret" not in answer.text and "not queued" in answer.json()["detail"]
+    assert "secret" not in answer.text and "nothing was queued" in answer.json()["detail"]
     [job] = client.get("/v1/jobs").json()["jobs"]
     assert job["status"] == "failed" and "could not be queued" in job["error"]
     ready = client.get("/readyz")
     assert ready.status_code == 503 and "unreachable" in ready.json()["reason"]
+
+
+SWEEP = {"case": preset_json("fig5"),
+         "parameters": {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}}
+
+
+def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
+    answer = client.post("/v1/sweeps", json=SWEEP)
+    assert answer.status_code == 202, answer.text
+    sweep = answer.json()
+    assert answer.headers["location"] == f"/v1/sweeps/{sweep['id']}"
+    assert sweep["total"] == 6 and sweep["counts"] == {"queued": 6} and not sweep["finished"]
+    assert [r["values"] for r in sweep["rows"]][:2] == [
+        {"striker.velocity": 3.0, "contact.stiffness": 4e11}, {"striker.velocity": 3.0, "contact.stiffness": 8e11}]
+    jobs = JobStore(tmp_path)
+    assert jobs.case(sweep["rows"][5]["job"])["striker"]["velocity"] == 7.0
+    assert len(list((tmp_path / "broker" / "queue").iterdir())) == 6, "one message a variant"
+    # A variant that succeeded fills its row from its summary.
+    first = sweep["rows"][0]["job"]
+    jobs.write_summary(first, {"co_impact_time": 2e-4, "peak_contact_force": {"value": 4e5},
+                               "max_compressive_stress": {"value": 5e7}, "max_tensile_stress": {"value": 1e7},
+                               "striker_rebound_velocity": -0.4, "energy": {"to_medium": 1.7},
+                               "contacts_total": 5, "warnings": []})
+    jobs.update(first, status=SUCCEEDED, progress=1.0, finished=now())
+    row = client.get(f"/v1/sweeps/{sweep['id']}").json()["rows"][0]
+    assert row["status"] == "succeeded" and row["peak_contact_force"] == 4e5 and row["contacts"] == 5
+
+
+def test_a_sweep_with_a_bad_variant_is_refused_naming_the_parameter_and_queues_nothing(client, tmp_path):
+    bad = merge(SWEEP, {"parameters": {"tool.area": [0.01, -1.0]}})
+    answer = client.post("/v1/sweeps", json=bad)
+    assert answer.status_code == 422
+    assert answer.json()["detail"] == [{"field": "parameters['tool.area'][1]", "message": "tool.area: must be > 0.0"}]
+    assert client.get("/v1/jobs").json()["total"] == 0
+
+
+@pytest.mark.parametrize("body, field, message", [
+    ({"case": merge(BASE_CASE, {"striker": {"mass": -1}}), "parameters": {"striker.velocity": [1.0]}},
+     "case.striker.mass", "must be > 0"),
+    ({"case": BASE_CASE}, "parameters", "is required"),
+    ({"case": BASE_CASE, "parameters": {}}, "parameters", "at least 1"),
+])
+def test_a_malformed_sweep_names_the_field(client, body, field, message):
+    answer = client.post("/v1/sweeps", json=body)
+    assert answer.status_code == 422
+    [e] = answer.json()["detail"]
+    assert e["field"] == field and message in e["message"], e
+
+
+def test_a_sweep_over_the_variant_limit_is_refused_naming_it(tmp_path):
+    client = _client(tmp_path, max_sweep_variants=4)
+    answer = client.post("/v1/sweeps", json=SWEEP)
+    assert answer.status_code == 422
+    [e] = answer.json()["detail"]
+    assert e["field"] == "parameters" and "6 variants (3 × 2) exceed the limit of 4" in e["message"]
+
+
+def test_cancelling_a_sweep_cancels_its_queued_variants(client):
+    sweep = client.post("/v1/sweeps", json=SWEEP).json()
+    answer = client.delete(f"/v1/sweeps/{sweep['id']}")
+    assert answer.status_code == 202
+    assert answer.json()["counts"] == {"cancelled": 6} and answer.json()["finished"]
+    assert client.get("/v1/sweeps/not-a-sweep-id-at-all00").status_code == 404
+
+
+def test_an_unreachable_broker_fails_every_variant_with_503(tmp_path):
+    client = _client(tmp_path, broker_url="redis://127.0.0.1:1/0")
+    answer = client.post("/v1/sweeps", json=SWEEP)
+    assert answer.status_code == 503 and answer.headers["retry-after"].isdigit()
+    jobs = client.get("/v1/jobs").json()["jobs"]
+    assert len(jobs) == 6 and all(j["status"] == "failed" for j in jobs)

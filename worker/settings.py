@@ -26,6 +26,7 @@ class Settings(BaseSettings):
     max_steps: int = Limits.max_steps
     max_node_steps: float = Limits.max_node_steps
     max_output_values: float = Limits.max_output_values
+    max_sweep_variants: int = Field(default=1000, ge=1, description="variants one sweep may queue")
 
     @property
     def embedded(self) -> bool:

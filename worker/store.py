@@ -5,6 +5,7 @@
     jobs/<id>/summary.json  the pulse summary, once succeeded
     jobs/<id>/result.h5     the HDF5 result, once succeeded
     jobs/<id>/cancel        present once a cancel was asked for
+    sweeps/<id>.json        a sweep: its parameters and, per variant, the values and the job id
 
 Every write goes to a temporary name and is renamed, so a reader never sees half a file and a
 job delivered twice writes the same files again instead of twice. Job ids are random and
@@ -106,6 +107,33 @@ class JobStore:
                 continue  # a folder being created
         records.sort(key=lambda r: r["created"], reverse=True)
         return len(records), records[offset:offset + limit]
+
+
+class UnknownSweep(KeyError):
+    """No sweep has this id."""
+
+
+class SweepStore:
+    """Sweeps: each variant is an ordinary job; the sweep record says which job has which values."""
+
+    def __init__(self, root: Path):
+        self.folder = Path(root) / "sweeps"
+        self.folder.mkdir(parents=True, exist_ok=True)
+
+    def create(self, name: str | None, parameters: list[str], variants: list[dict]) -> dict:
+        """A new sweep of `variants` (each `{"values": {...}, "job": id}`); returns its record."""
+        record = {"id": secrets.token_urlsafe(16), "name": name, "created": now(),
+                  "parameters": parameters, "variants": variants}
+        write_atomic(self.folder / f"{record['id']}.json", json.dumps(record).encode())
+        return record
+
+    def get(self, sweep_id: str) -> dict:
+        if not isinstance(sweep_id, str) or not _ID.fullmatch(sweep_id):
+            raise UnknownSweep(sweep_id)
+        try:
+            return json.loads((self.folder / f"{sweep_id}.json").read_text())
+        except FileNotFoundError:
+            raise UnknownSweep(sweep_id) from None
 
 
 class WorkerRegistry:

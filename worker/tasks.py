@@ -34,7 +34,7 @@ def run_job(job_id: str) -> str:
         store.update(job_id, status=CANCELLED, finished=now())
         return CANCELLED
     store.update(job_id, status=RUNNING, started=now(), attempts=record["attempts"] + 1,
-                 worker=socket.gethostname(), progress=0.0)
+                 worker=run_job.request.hostname or socket.gethostname(), progress=0.0)
     start = time.monotonic()
     last_write = 0.0
 

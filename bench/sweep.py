@@ -1,0 +1,85 @@
+"""Sweeps of the Fig. 5 preset: variants per second on one core, on every core, and through the
+service (Redis and 2 workers), side by side.
+
+    .venv/bin/python bench/sweep.py [--variants 400]
+
+The sweep is striker velocity × contact stiffness over the Fig. 5 preset (20 ms of repeated
+impacts), run twice: with the preset's own numerics (the paper's 5 cells and τ = 2e-5 s: about
+0.1 ms a variant, where the per-variant cost is all overhead) and with `numerics.tolerance` =
+1e-2 (the solver's own ladder to 1% accuracy: tens of milliseconds a variant). Times are wall
+clock from the call to the last row; the service's from the POST to the GET that shows the sweep
+finished (polled every 20 ms), with every variant a job that writes its HDF5 result.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from conftest import merge  # noqa: E402
+from live_stack import Stack, redis_server, wait_for  # noqa: E402
+from solver.controller import warm_up  # noqa: E402
+from solver.presets import preset_json  # noqa: E402
+from solver.sweep import Sweep, run_sweep  # noqa: E402
+
+CASES = {
+    "preset numerics": preset_json("fig5"),
+    "tolerance 1e-2": merge(preset_json("fig5"), {"numerics": {"cells": None, "time_step": None,
+                                                              "gamma": None, "tolerance": 1e-2}}),
+}
+
+
+def parameters(variants: int) -> dict[str, list[float]]:
+    side = round(math.sqrt(variants))
+    return {"striker.velocity": [2.0 + 8.0 * k / (side - 1) for k in range(side)],
+            "contact.stiffness": [1e11 * 16 ** (k / (side - 1)) for k in range(side)]}
+
+
+def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], float]:
+    start = time.perf_counter()
+    answer = stack.client.post("/v1/sweeps", json={"case": case, "parameters": grid})
+    assert answer.status_code == 202, answer.text
+    url = f"/v1/sweeps/{answer.json()['id']}"
+    sweep = wait_for(lambda: (v := stack.client.get(url).json())["finished"] and v, 600, "the sweep",
+                     interval=0.02)
+    return sweep["rows"], time.perf_counter() - start
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--variants", type=int, default=400, help="about this many (a square grid)")
+    args = parser.parse_args()
+    warm_up()
+    grid = parameters(args.variants)
+    with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
+        stack = Stack(Path(tmp), url, workers=2)
+        try:
+            for label, case in CASES.items():
+                sweep = Sweep(case=case, parameters=grid)
+                figures = {}
+                for processes in (1, 2):
+                    start = time.perf_counter()
+                    rows = run_sweep(sweep, processes=processes)
+                    figures[f"run_sweep, {processes} process{'es' if processes > 1 else ''}"] = (
+                        rows, time.perf_counter() - start)
+                figures["service, Redis, 2 workers"] = through_service(stack, case, grid)
+                print(f"\nFig. 5, {label}:")
+                for how, (rows, seconds) in figures.items():
+                    failed = [r for r in rows if r.get("error")]
+                    print(f"  {how:28s} {len(rows):5d} variants in {seconds:7.2f} s: "
+                          f"{len(rows) / seconds:8.1f} variants/s, {len(failed)} failed")
+                    for row in failed[:3]:
+                        print(f"    {row.get('values', row)}: {row['error']}")
+        finally:
+            stack.stop()
+
+
+if __name__ == "__main__":
+    main()

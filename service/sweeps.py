@@ -1,0 +1,104 @@
+"""`/v1/sweeps`: a parameter study fanned out over the workers, read back as one table.
+
+Each variant is an ordinary job (its own record, summary and HDF5 result); the sweep's record says
+which job has which parameter values, and the table is read from the jobs' summaries.
+"""
+
+from collections import Counter
+from typing import Annotated, Any
+
+from fastapi import APIRouter, Body, Request, Response
+from pydantic import BaseModel
+
+from solver.presets import preset_json, preset_names
+from solver.sweep import COLUMNS, Sweep, table_row, variants
+from worker.settings import Settings
+from worker.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
+
+from .errors import FieldErrors, Problem
+from .jobs import cancel, queue_jobs
+from .queue import JobQueue
+
+
+class SweepView(BaseModel):
+    """A sweep: how far it is, and a row per variant (parameter values, status, results)."""
+
+    id: str
+    name: str | None
+    created: str
+    parameters: list[str]
+    total: int
+    counts: dict[str, int]
+    progress: float
+    finished: bool
+    columns: list[str]
+    rows: list[dict[str, Any]]
+
+
+def _example() -> dict | None:
+    if "fig5" not in preset_names():
+        return None
+    return {"fig5-velocity-stiffness": {
+        "summary": "Fig. 5: striker velocity × contact stiffness (6 variants)",
+        "value": {"case": preset_json("fig5"),
+                  "parameters": {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}}}}
+
+
+def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
+    """The sweep routes for the results store and broker of `settings`."""
+    router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
+    not_found = {404: {"model": Problem, "description": "no sweep with this id"}}
+
+    def view(request: Request, record: dict) -> dict:
+        jobs = JobStore(settings.results_dir)
+        rows, counts, progress = [], Counter(), 0.0
+        for variant in record["variants"]:
+            job = jobs.get(variant["job"])
+            counts[job["status"]] += 1
+            progress += 1.0 if job["status"] in FINISHED else job["progress"]
+            row = {"job": job["id"], "values": variant["values"], "status": job["status"]}
+            if job["status"] == SUCCEEDED:
+                row |= table_row(jobs.summary(job["id"]))
+            elif job["status"] == FAILED:
+                row["error"] = job["error"]
+            rows.append(row)
+        total = len(rows)
+        return {**{k: record[k] for k in ("id", "name", "created", "parameters")},
+                "total": total, "counts": dict(counts), "progress": progress / total,
+                "finished": sum(counts[s] for s in FINISHED) == total,
+                "columns": [name for name, _ in COLUMNS] + ["warnings"], "rows": rows}
+
+    @router.post("", status_code=202, response_model=SweepView, responses={
+        422: {"model": FieldErrors, "description": "a variant is invalid or exceeds a limit"},
+        503: {"model": Problem, "description": "the broker is unreachable; retry later"}})
+    def submit_sweep(request: Request, response: Response,
+                     sweep: Annotated[Sweep, Body(openapi_examples=_example())]) -> dict:
+        """Queue every combination of the parameters' values as a job of its own, at once over
+        all workers. Every variant is validated and checked against the limits first: one bad
+        variant refuses the sweep, naming the parameter value it came from."""
+        found = variants(sweep, max_variants=settings.max_sweep_variants, limits=settings.limits())
+        jobs = JobStore(settings.results_dir)
+        ids = [jobs.create(case.model_dump(mode="json", exclude_none=True))["id"] for _, case in found]
+        record = SweepStore(settings.results_dir).create(
+            sweep.case.name, list(sweep.parameters),
+            [{"values": values, "job": job_id} for (values, _), job_id in zip(found, ids)])
+        queue_jobs(jobs, queue, ids)
+        response.headers["Location"] = request.app.url_path_for("get_sweep", sweep_id=record["id"])
+        return view(request, record)
+
+    @router.get("/{sweep_id}", response_model=SweepView, responses=not_found)
+    def get_sweep(request: Request, sweep_id: str) -> dict:
+        """The sweep's progress and its table: a row per variant, filled in as its job succeeds."""
+        return view(request, SweepStore(settings.results_dir).get(sweep_id))
+
+    @router.delete("/{sweep_id}", status_code=202, response_model=SweepView, responses=not_found)
+    def cancel_sweep(request: Request, sweep_id: str) -> dict:
+        """Cancel every variant that has not finished."""
+        record = SweepStore(settings.results_dir).get(sweep_id)
+        jobs = JobStore(settings.results_dir)
+        for variant in record["variants"]:
+            if jobs.get(variant["job"])["status"] not in FINISHED:
+                cancel(jobs, variant["job"])
+        return view(request, record)
+
+    return router

@@ -1,0 +1,149 @@
+"""Parameter sweeps: a base case, the values to give some of its fields, one row of results each.
+
+Every combination of the values is one variant (a full factorial grid). `variants` validates them
+all before anything runs, naming the parameter and value a bad variant came from; `run_sweep`
+solves them on every core (one process a core: the kernel is serial and each process loads it from
+Numba's cache) and returns one table.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import copy
+import functools
+import itertools
+import math
+import os
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any, Callable
+
+from pydantic import BaseModel, ConfigDict, Field
+
+from .case import Case, CaseError, FieldError, Outputs, parse_case
+from .controller import NumericalFailure
+from .grid import resolve_numerics
+from .limits import Limits, check_limits
+from .simulate import simulate
+
+MAX_VARIANTS = 10_000
+MAX_ERRORS = 20  # bad variants named before giving up
+# A table row needs only the summary's trackers: no fields, no probes, no history beyond step 0.
+TABLE_OUTPUTS = Outputs(history_stride=2**62)
+
+# The table's columns after the parameters: (name, where in the summary).
+COLUMNS = (
+    ("co_impact_time", ("co_impact_time",)),
+    ("peak_contact_force", ("peak_contact_force", "value")),
+    ("max_compressive_stress", ("max_compressive_stress", "value")),
+    ("max_tensile_stress", ("max_tensile_stress", "value")),
+    ("striker_rebound_velocity", ("striker_rebound_velocity",)),
+    ("energy_to_medium", ("energy", "to_medium")),
+    ("contacts", ("contacts_total",)),
+)
+
+
+class Sweep(BaseModel):
+    """A base case and, per field path (`striker.velocity`, `tool.profile.area.2`), its values."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    case: Case
+    parameters: dict[str, list[Any]] = Field(
+        min_length=1, description="dotted field path → the values it takes; every combination runs")
+
+
+def _set(tree: dict, path: str, value: Any) -> None:
+    """Set `path` (dots; list items by their index) in the case JSON `tree`. A path the case does
+    not have is created, so that validation names it as an unknown field."""
+    *parents, leaf = path.split(".")
+    node: Any = tree
+    for key in parents:
+        node = node[int(key)] if isinstance(node, list) else node.setdefault(key, {})
+    if isinstance(node, list):
+        node[int(leaf)] = value
+    elif isinstance(node, dict):
+        node[leaf] = value
+    else:
+        raise TypeError(f"{path}: {node!r} has no fields")
+
+
+def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
+             limits: Limits = Limits()) -> list[tuple[dict[str, Any], Case]]:
+    """Every (parameter values, validated case) of the sweep, or `CaseError` naming, for each bad
+    variant (invalid, or over a size limit), the parameter value it came from and what it breaks."""
+    names = list(sweep.parameters)
+    for name, values in sweep.parameters.items():
+        if not values:
+            raise CaseError([FieldError(field=f"parameters[{name!r}]", message="give at least one value")])
+    count = math.prod(len(v) for v in sweep.parameters.values())
+    if count > max_variants:
+        raise CaseError([FieldError(field="parameters", message=(
+            f"{count} variants ({' × '.join(str(len(sweep.parameters[n])) for n in names)}) exceed "
+            f"the limit of {max_variants}: sweep fewer values"))])
+    base = sweep.case.model_dump(mode="json", exclude_none=True)
+    found, errors = [], {}
+    for picks in itertools.product(*(enumerate(sweep.parameters[n]) for n in names)):
+        tree = copy.deepcopy(base)
+        values = {name: value for name, (_, value) in zip(names, picks)}
+        try:
+            for name, (k, value) in zip(names, picks):
+                where = f"parameters[{name!r}][{k}]"
+                _set(tree, name, value)
+            case = parse_case(tree)
+            check_limits(case, resolve_numerics(case), limits)
+            found.append((values, case))
+        except CaseError as error:
+            for e in error.errors:
+                # The parameter whose path the broken field starts with, else the whole variant.
+                culprit = next((f"parameters[{n!r}][{k}]" for n, (k, _) in zip(names, picks)
+                                if e.field == n or e.field.startswith(n + ".")),
+                               "parameters (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")")
+                errors.setdefault(culprit, FieldError(field=culprit, message=f"{e.field}: {e.message}"))
+        except (IndexError, ValueError, TypeError) as error:
+            errors[where] = FieldError(field=where, message=f"cannot be set: {error}")
+        if len(errors) >= MAX_ERRORS:
+            break
+    if errors:
+        raise CaseError(list(errors.values()))
+    return found
+
+
+def table_row(summary: dict) -> dict[str, Any]:
+    """The sweep table's columns from one variant's summary."""
+    row = {}
+    for column, path in COLUMNS:
+        value: Any = summary
+        for key in path:
+            value = value[key]
+        row[column] = value
+    row["warnings"] = len(summary["warnings"])
+    return row
+
+
+def _solve(case: Case, limits: Limits) -> dict[str, Any]:
+    try:
+        return table_row(simulate(case, limits=limits).summary)
+    except (NumericalFailure, CaseError) as error:  # this variant fails, the sweep goes on
+        return {"error": str(error)}
+
+
+def run_sweep(sweep: Sweep, processes: int | None = None,
+              progress: Callable[[int, int], None] | None = None,
+              limits: Limits = Limits()) -> list[dict[str, Any]]:
+    """Solve every variant, `processes` at once (default: one a core); one row each, in the order
+    of `variants`: the parameter values, then the summary's columns (or `error`)."""
+    table_only = sweep.case.model_copy(update={"outputs": TABLE_OUTPUTS})
+    found = variants(sweep.model_copy(update={"case": table_only}), limits=limits)
+    processes = processes or os.cpu_count() or 1
+    cases = [case for _, case in found]
+    solve = functools.partial(_solve, limits=limits)
+    rows = []
+    with ProcessPoolExecutor(processes) if processes > 1 else contextlib.nullcontext() as pool:
+        # Batches large enough to hide the pipe, small enough to keep every process busy.
+        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (8 * processes)))
+                  if pool else map(solve, cases))
+        for (values, _), row in zip(found, solved):
+            rows.append(values | row)
+            if progress is not None:
+                progress(len(rows), len(found))
+    return rows

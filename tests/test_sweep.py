@@ -1,0 +1,99 @@
+"""Parameter sweeps: every variant validated up front naming its parameter, one table from every
+core that matches solving each variant alone, and the CLI that prints it."""
+
+from __future__ import annotations
+
+import csv
+import json
+
+import pytest
+
+from conftest import merge
+from solver import CaseError
+from solver.cli import main
+from solver.limits import Limits
+from solver.presets import preset_json
+from solver.simulate import simulate
+from solver.sweep import Sweep, run_sweep, variants
+
+FIG5 = preset_json("fig5")
+GRID = {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}
+
+
+def test_every_combination_is_a_variant_in_order():
+    found = variants(Sweep(case=FIG5, parameters=GRID))
+    assert [values for values, _ in found] == [
+        {"striker.velocity": v, "contact.stiffness": k} for v in GRID["striker.velocity"]
+        for k in GRID["contact.stiffness"]]
+    values, case = found[3]
+    assert case.striker.velocity == values["striker.velocity"] == 5.0
+    assert case.contact.stiffness == values["contact.stiffness"] == 8e11
+
+
+@pytest.mark.parametrize("parameters, field, message", [
+    ({"striker.velocity": [3.0, "fast"]}, "parameters['striker.velocity'][1]", "striker.velocity: must be a number"),
+    ({"tool.area": [0.01, -1.0]}, "parameters['tool.area'][1]", "tool.area: must be > 0"),
+    ({"striker.speed": [3.0]}, "parameters['striker.speed'][0]", "striker.speed: is not a known field"),
+    ({"striker.mass.value": [3.0]}, "parameters['striker.mass.value'][0]", "cannot be set"),
+    ({"striker.velocity": []}, "parameters['striker.velocity']", "give at least one value"),
+    ({"numerics.cells": [10, 200_000]}, "parameters['numerics.cells'][1]", "exceed the limit of 100000"),
+])
+def test_a_bad_variant_is_refused_naming_the_parameter_value(parameters, field, message):
+    with pytest.raises(CaseError) as error:
+        variants(Sweep(case=FIG5, parameters=parameters))
+    [e] = error.value.errors
+    assert e.field == field and message in e.message
+
+
+def test_too_many_variants_are_refused_before_any_is_built():
+    with pytest.raises(CaseError) as error:
+        variants(Sweep(case=FIG5, parameters={"striker.velocity": list(range(1, 101)),
+                                              "striker.mass": list(range(1, 101))}), max_variants=1000)
+    [e] = error.value.errors
+    assert e.field == "parameters" and "10000 variants (100 × 100) exceed the limit of 1000" in e.message
+
+
+def test_the_table_on_two_processes_is_each_variant_solved_alone():
+    sweep = Sweep(case=FIG5, parameters=GRID)
+    rows = run_sweep(sweep, processes=2)
+    assert rows == run_sweep(sweep, processes=1)
+    for row, (values, case) in zip(rows, variants(sweep)):
+        alone = simulate(case).summary
+        assert row["striker.velocity"] == values["striker.velocity"]
+        assert row["co_impact_time"] == alone["co_impact_time"]
+        assert row["peak_contact_force"] == alone["peak_contact_force"]["value"]
+        assert row["max_compressive_stress"] == alone["max_compressive_stress"]["value"]
+    # Faster strikers hit harder.
+    forces = [r["peak_contact_force"] for r in rows if r["contact.stiffness"] == 8e11]
+    assert forces == sorted(forces) and forces[0] < forces[-1]
+
+
+def test_a_variant_that_fails_is_a_row_with_its_error():
+    # A tolerance the limits cannot meet is found only by running the variant.
+    case = merge(FIG5, {"numerics": {"cells": None, "time_step": None, "gamma": None}})
+    sweep = Sweep(case=case, parameters={"numerics.tolerance": [1e-2, 1e-5]})
+    rows = run_sweep(sweep, processes=1, limits=Limits(max_node_steps=3e7))
+    assert "error" not in rows[0] and rows[0]["co_impact_time"] > 0
+    assert "numerics.tolerance" in rows[1]["error"] and "co_impact_time" not in rows[1]
+
+
+def test_the_cli_prints_and_writes_the_table(tmp_path, capsys):
+    case = tmp_path / "fig5.json"
+    case.write_text(json.dumps(FIG5))
+    out = tmp_path / "table.csv"
+    code = main(["sweep", str(case), "--vary", "striker.velocity=3,5", "--vary", "contact.stiffness=8e11",
+                 "--processes", "2", "--csv", str(out)])
+    assert code == 0
+    printed = capsys.readouterr()
+    assert printed.out.splitlines()[0].startswith("striker.velocity\tcontact.stiffness\tco_impact_time")
+    assert "2/2 variants" in printed.err
+    rows = list(csv.DictReader(out.open()))
+    assert [r["striker.velocity"] for r in rows] == ["3", "5"]
+    assert float(rows[1]["peak_contact_force"]) > float(rows[0]["peak_contact_force"])
+
+
+def test_the_cli_names_a_bad_parameter(tmp_path, capsys):
+    case = tmp_path / "fig5.json"
+    case.write_text(json.dumps(FIG5))
+    assert main(["sweep", str(case), "--vary", "striker.velocity=3,fast"]) == 2
+    assert "parameters['striker.velocity'][1]: striker.velocity: must be a number" in capsys.readouterr().err
