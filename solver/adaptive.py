@@ -19,8 +19,8 @@ maximum stress), a run goes:
    Each later grid is as fine as the last pair's difference says is needed, at least 1.5× and at
    most 3× finer (Richardson: the finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only
    when both grids are near the asymptotic range, so it is taken 1.5× larger). Two grids that see
-   a different number of contacts are not compared at all (the coarse one has the sequence of
-   impacts wrong, and any difference between them says nothing of the error): the next is 2× finer.
+   a different number of contacts never end the ladder, however close their quantities (the
+   coarse one has the sequence of impacts wrong, so their difference says little of the error).
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
 """
 
@@ -132,7 +132,6 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
 
     runs: list[tuple[ResolvedNumerics, dict, int]] = []
     factor = 1.0
-    worst = math.inf
     start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
         tau = period / (start * factor)
@@ -151,14 +150,14 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         result = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
                               cancelled=cancelled)
         runs.append((numerics, quantities(result.summary), result.summary["contacts_total"]))
-        if stage == 0 or runs[-1][2] != runs[-2][2]:  # nothing to compare with, or not comparable
+        if stage == 0:
             factor *= 2.0
             continue
-        (previous, coarse, _), (_, fine, _) = runs[-2], runs[-1]
+        (previous, coarse, seen_coarse), (_, fine, seen_fine) = runs[-2], runs[-1]
         ratio = math.sqrt((previous.time_step / numerics.time_step) * (numerics.cells / previous.cells))
         estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
         worst = max(estimate.values(), default=0.0)
-        if worst <= tol:
+        if worst <= tol and seen_fine == seen_coarse:
             why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
                    f"free of dispersion along a uniform tool there) on grids refined until the "
                    f"estimated error is within the tolerance; the lumped model was not enough "
@@ -172,7 +171,8 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     raise CaseError([FieldError(
         field="numerics.tolerance",
         message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}; "
-                f"contacts seen: {', '.join(str(c) for _, _, c in runs)}): "
+                f"contacts seen by each grid: {', '.join(str(c) for _, _, c in runs)}; two grids in a row "
+                "must see as many): "
                 "loosen it or give numerics.cells and numerics.time_step")])
 
 
