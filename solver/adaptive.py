@@ -22,6 +22,7 @@ maximum stress), a run goes:
    a different number of contacts never end the ladder, however close their quantities (the
    coarse one has the sequence of impacts wrong, so their difference says little of the error).
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
+   Only the first run keeps nothing but what its summary needs: any later one may be the result.
 """
 
 from __future__ import annotations
@@ -31,7 +32,7 @@ import math
 import numpy as np
 
 from .case import Case, CaseError, FieldError, Outputs
-from .controller import CancelCheck, ProgressCallback, Result, simulate_rod
+from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
 from .limits import Limits, check_limits
 from .lumped import simulate_lumped
@@ -109,8 +110,14 @@ def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
 
 
 def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
-                       cancelled: CancelCheck | None = None, limits: Limits = Limits()) -> Result:
-    """Meet `case.numerics.tolerance`; the summary reports the estimate, the runs and the choice."""
+                       cancelled: CancelCheck | None = None, limits: Limits = Limits(),
+                       recorder: Recorder | None = None) -> Result:
+    """Meet `case.numerics.tolerance`; the summary reports the estimate, the runs and the choice.
+
+    With a `recorder`, every rod run that may be the result records its outputs there, each
+    starting it again, so that it holds the result's when this returns (then `streamed`); a
+    lumped result is returned held in memory, as it is small.
+    """
     tol = case.numerics.tolerance
     model = case.numerics.model
     eps = rigidity(case)
@@ -148,7 +155,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                 message=f"a tolerance of {tol:g} needs about {numerics.cells} cells and "
                         f"{numerics.steps} steps, beyond this service's limits ({error}): loosen it")]) from None
         result = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
-                              cancelled=cancelled)
+                              cancelled=cancelled, recorder=recorder if final_candidate else None)
         runs.append((numerics, quantities(result.summary), result.summary["contacts_total"]))
         if stage == 0:
             factor *= 2.0

@@ -14,12 +14,12 @@ EXIT_FAILED, EXIT_INVALID = 1, 2
 def _run(args: argparse.Namespace) -> int:
     from .case import CaseError, load_case
     from .controller import NumericalFailure
-    from .io import write_result
     from .simulate import simulate
 
     try:
         case = load_case(args.case)
-        result = simulate(case, model=args.model)
+        # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
+        result = simulate(case, model=args.model, result_path=args.output)
     except FileNotFoundError:
         print(f"percussim: no such case file: {args.case}", file=sys.stderr)
         return EXIT_INVALID
@@ -31,12 +31,10 @@ def _run(args: argparse.Namespace) -> int:
     except NumericalFailure as error:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
-    # Files first: a closed stdout (`| head`) must not lose the result.
+    # Files first: a closed stdout (`| head`) must not lose the summary.
     text = json.dumps(result.summary, indent=2)
     if args.summary:
         Path(args.summary).write_text(text + "\n")
-    if args.output:
-        write_result(result, args.output)
     for warning in result.summary["warnings"]:
         print(f"percussim: warning: {warning}", file=sys.stderr)
     print(text)

@@ -1,20 +1,21 @@
 """Runs a case: the kernel in chunks of steps, with progress, cancellation, probes and sampling.
 
 Between chunks the controller reports progress and checks for cancellation; each chunk's kept
-layers go to a `Recorder`. Memory is O(N) for the state plus what the outputs ask for.
+layers go to a `Recorder`: held in memory (`MemoryRecorder`), or streamed to an HDF5 file
+(`solver.io.ResultWriter`), in which case memory is O(N) whatever the outputs ask for.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Callable
+from dataclasses import dataclass
+from typing import Callable, Protocol
 
 import numpy as np
 
 from . import kernel as K
 from .case import Case
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics
-from .summary import build_summary
+from .summary import FORCE_HISTORY_POINTS, build_summary
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
@@ -42,6 +43,7 @@ HISTORY_PATHS = {
     "energy/contact_potential": K.H_CONTACT_POTENTIAL,
     "energy/medium_potential": K.H_MEDIUM_POTENTIAL,
 }
+FIELD_NAMES = ("x", "time", "displacement", "stress")  # stored as fields/<name>
 
 
 class Cancelled(Exception):
@@ -72,7 +74,12 @@ class Fields:
 
 @dataclass
 class Result:
-    """A finished run: the case, the numerics used, histories, probes, fields, summary."""
+    """A finished run: the case, the numerics used, histories, probes, fields, summary.
+
+    A run streamed to a file (`streamed`) carries its case, numerics, probe stations and summary
+    only: `history` is empty, `probe_stress` has no rows and `fields` is None; the arrays are in
+    the file (`solver.io.read_result`).
+    """
 
     case: Case
     numerics: ResolvedNumerics
@@ -81,31 +88,77 @@ class Result:
     probe_stress: np.ndarray  # (samples, probes)
     fields: Fields | None
     summary: dict
+    streamed: bool = False
+
+    @classmethod
+    def from_arrays(cls, case: Case, numerics: ResolvedNumerics, arrays: dict[str, np.ndarray],
+                    summary: dict) -> Result:
+        """The result from its arrays under their HDF5 names; all but probes and fields are history."""
+        history = dict(arrays)
+        fields = (Fields(*(history.pop(f"fields/{k}") for k in FIELD_NAMES))
+                  if "fields/x" in history else None)
+        probe_x, probe_stress = history.pop("probes/x"), history.pop("probes/stress")
+        return cls(case=case, numerics=numerics, history=history, probe_x=probe_x,
+                   probe_stress=probe_stress, fields=fields, summary=summary)
+
+    def arrays(self) -> dict[str, np.ndarray]:
+        """The arrays under their HDF5 names (the inverse of `from_arrays`)."""
+        arrays = {**self.history, "probes/x": self.probe_x, "probes/stress": self.probe_stress}
+        if self.fields is not None:
+            arrays.update({f"fields/{k}": getattr(self.fields, k) for k in FIELD_NAMES})
+        return arrays
 
 
-@dataclass
-class Recorder:
-    """Keeps the sampled history, probe and field blocks of each chunk."""
+class Recorder(Protocol):
+    """Where a run's outputs go, under their HDF5 names.
 
-    history: list[np.ndarray] = field(default_factory=list)
-    probes: list[np.ndarray] = field(default_factory=list)
-    field_time: list[np.ndarray] = field(default_factory=list)
-    field_u: list[np.ndarray] = field(default_factory=list)
-    field_stress: list[np.ndarray] = field(default_factory=list)
+    `start` begins a run (anything recorded before is dropped), `create` makes a dataset at its
+    final shape, and `append` fills it with its next rows.
+    """
 
-    def add(self, history, probes, field_time, field_u, field_stress) -> None:
-        if len(history):
-            self.history.append(history.copy())
-            self.probes.append(probes.copy())
-        if len(field_u):
-            self.field_time.append(field_time.copy())
-            self.field_u.append(field_u.copy())
-            self.field_stress.append(field_stress.copy())
+    def start(self) -> None: ...
+
+    def create(self, name: str, shape: tuple[int, ...], dtype: np.dtype = np.dtype(float)) -> None: ...
+
+    def append(self, name: str, rows: np.ndarray) -> None: ...
+
+    def held(self) -> dict[str, np.ndarray] | None:
+        """The datasets when held in memory; None when they went elsewhere."""
+
+
+class MemoryRecorder:
+    """Holds every dataset in memory, allocated at its final shape."""
+
+    def __init__(self) -> None:
+        self.start()
+
+    def start(self) -> None:
+        self.arrays: dict[str, np.ndarray] = {}
+        self.filled: dict[str, int] = {}
+
+    def create(self, name: str, shape: tuple[int, ...], dtype: np.dtype = np.dtype(float)) -> None:
+        self.arrays[name] = np.empty(shape, dtype)
+        self.filled[name] = 0
+
+    def append(self, name: str, rows: np.ndarray) -> None:
+        first = self.filled[name]
+        self.arrays[name][first:first + len(rows)] = rows
+        self.filled[name] = first + len(rows)
+
+    def held(self) -> dict[str, np.ndarray]:
+        return self.arrays
 
 
 def _kept(first: int, last: int, stride: int) -> int:
     """How many layers in [first, last] are multiples of `stride`."""
     return last // stride - (first - 1) // stride if stride > 0 else 0
+
+
+def _summary_rows(rows: int) -> np.ndarray:
+    """The rows of a history of `rows` the summary's force history keeps, picked as
+    `summary.build_summary` picks them; gathered during the run so that the summary never needs
+    the whole history (given only these, it keeps them all)."""
+    return np.linspace(0, rows - 1, min(rows, FORCE_HISTORY_POINTS)).astype(int)
 
 
 def _probe_nodes(grid: Grid, probes: list[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -131,8 +184,13 @@ def simulate_rod(
     numerics: ResolvedNumerics | None = None,
     progress: ProgressCallback | None = None,
     cancelled: CancelCheck | None = None,
+    recorder: Recorder | None = None,
 ) -> Result:
-    """Solve the case with the tool as an elastic rod (the paper's scheme (8)–(13))."""
+    """Solve the case with the tool as an elastic rod (the paper's scheme (8)–(13)).
+
+    The outputs go to `recorder`, by default a `MemoryRecorder` whose arrays the result carries;
+    with any other the result is `streamed` and carries the summary only.
+    """
     num = numerics or resolve_numerics(case, model="rod")
     scheme = num.weights()
     grid = make_grid(case.tool, num.cells, scheme.end_masses)
@@ -155,7 +213,26 @@ def simulate_rod(
     trackers = K.new_trackers()
     energy = np.zeros(K.ENERGY_SLOTS)
     contacts = np.zeros((MAX_CONTACTS, 2))
-    recorder = Recorder()
+
+    recorder = MemoryRecorder() if recorder is None else recorder
+    recorder.start()
+    total_rows = _kept(0, num.steps, out.history_stride)
+    total_frames = _kept(0, num.steps, field_stride)
+    probe_x = np.asarray(out.probes, float)
+    for path in HISTORY_PATHS:
+        recorder.create(path, (total_rows,))
+    recorder.create("probes/x", probe_x.shape)
+    recorder.append("probes/x", probe_x)
+    recorder.create("probes/stress", (total_rows, len(probe_x)))
+    if out.fields:
+        recorder.create("fields/x", grid.x.shape)
+        recorder.append("fields/x", grid.x)
+        recorder.create("fields/time", (total_frames,))
+        recorder.create("fields/displacement", (total_frames, n + 1))
+        recorder.create("fields/stress", (total_frames, n + 1))
+    summary_rows = _summary_rows(total_rows)
+    summary_table = []  # the history at `summary_rows`, chunk by chunk
+    row = 0  # history rows kept before this chunk
 
     chunk = max(1, CHUNK_NODE_STEPS // (n + 1))
     first = 0
@@ -182,34 +259,34 @@ def simulate_rod(
         )
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(trackers[K.T_FAILED_TIME], num)
-        field_time = (np.arange(-(-first // field_stride) * field_stride, last + 1, field_stride)
-                      * tau if field_stride else np.empty(0))
-        recorder.add(history[:n_hist], probes[:n_hist], field_time, field_u[:n_field],
-                     field_stress[:n_field])
+        for path, column in HISTORY_PATHS.items():
+            recorder.append(path, history[:n_hist, column])
+        recorder.append("probes/stress", probes[:n_hist])
+        low, high = np.searchsorted(summary_rows, (row, row + n_hist))
+        summary_table.append(history[summary_rows[low:high] - row])
+        row += n_hist
+        if n_field:
+            recorder.append("fields/time", np.arange(-(-first // field_stride) * field_stride,
+                                                     last + 1, field_stride) * tau)
+            recorder.append("fields/displacement", field_u[:n_field])
+            recorder.append("fields/stress", field_stress[:n_field])
         first = last + 1
         if progress is not None:
             progress(min(1.0, first / (num.steps + 1)))
         if cancelled is not None and first <= num.steps and cancelled():
             raise Cancelled(f"cancelled at t = {first * tau:.6g} s")
 
-    table = np.concatenate(recorder.history) if recorder.history else np.empty((0, K.HISTORY_COLUMNS))
-    history = {path: table[:, col].copy() for path, col in HISTORY_PATHS.items()}
-    probe_stress = (np.concatenate(recorder.probes) if recorder.probes
-                    else np.empty((0, len(probe_node))))
-    fields = None
-    if out.fields:
-        fields = Fields(
-            x=grid.x.copy(),
-            time=np.concatenate(recorder.field_time),
-            displacement=np.concatenate(recorder.field_u),
-            stress=np.concatenate(recorder.field_stress),
-        )
+    table = np.concatenate(summary_table)
     summary = build_summary(
         case=case, numerics=num, trackers=trackers, contacts=contacts, energy=energy,
-        history=history,
+        history={path: table[:, column] for path, column in HISTORY_PATHS.items()},
     )
-    return Result(case=case, numerics=num, history=history, probe_x=np.asarray(out.probes, float),
-                  probe_stress=probe_stress, fields=fields, summary=summary)
+    held = recorder.held()
+    if held is None:
+        return Result(case=case, numerics=num, history={}, probe_x=probe_x,
+                      probe_stress=np.empty((0, len(probe_x))), fields=None, summary=summary,
+                      streamed=True)
+    return Result.from_arrays(case, num, held, summary)
 
 
 def warm_up() -> None:

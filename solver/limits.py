@@ -14,7 +14,9 @@ class Limits:
     max_cells: int = 100_000
     max_steps: int = 20_000_000
     max_node_steps: float = 2e10  # cells × steps: about a few minutes of kernel time
-    max_output_values: float = 2e8  # numbers kept in histories, probes and fields (1.6 GB)
+    # Numbers kept in histories, probes and fields: 1.6 GB, on disk when streamed to a result file,
+    # in memory otherwise.
+    max_output_values: float = 2e8
 
 
 def output_values(case: Case, numerics: ResolvedNumerics) -> float:

@@ -23,10 +23,9 @@ import dataclasses
 import math
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
-from scipy.integrate import OdeSolution, solve_ivp
-from scipy.optimize import minimize_scalar
 
 from . import kernel as K
 from .case import Case, Force
@@ -35,6 +34,11 @@ from .controller import (HISTORY_PATHS, MAX_CONTACTS, CancelCheck, Cancelled, Nu
 from .grid import (ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass,
                    tool_mass_ahead)
 from .summary import build_summary
+
+# scipy (about 40 MB resident) is imported where the model runs, so that a process running only
+# the rod, such as a worker, does not carry it.
+if TYPE_CHECKING:
+    from scipy.integrate import OdeSolution
 
 RTOL = 1e-10
 PEAK_SEARCH_POINTS = 4  # points per integrator step scanned for the peak force before refining
@@ -185,6 +189,8 @@ def absolute_tolerance(case: Case, p: Parameters, t_end: float) -> np.ndarray:
 
 def segments(case: Case, p: Parameters, t_end: float) -> Iterator[Segment]:
     """Integrate from 0 to `t_end` segment by segment (see the module's docstring)."""
+    from scipy.integrate import solve_ivp
+
     state = np.zeros(STATES)
     state[V1] = case.striker.velocity
     # δ(0) = 0 is contact in (7); a striker moving away leaves at once (a zero-length segment).
@@ -232,6 +238,8 @@ class ContactLog:
 def segment_peak(seg: Segment, p: Parameters) -> tuple[float, float]:
     """Largest contact force on a segment and its time: scanned on the dense output, then refined
     by a bounded Brent search between the scan's neighbours of the best point."""
+    from scipy.optimize import minimize_scalar
+
     steps = seg.sol.ts
     scan = np.concatenate([np.linspace(a, b, PEAK_SEARCH_POINTS, endpoint=False)
                            for a, b in zip(steps[:-1], steps[1:])] + [steps[-1:]])

@@ -1,4 +1,5 @@
-"""The controller: chunking changes nothing, progress rises, cancellation stops, sampling as asked."""
+"""The controller: chunking changes nothing, progress rises, cancellation stops, sampling as asked,
+and a streamed run's memory stays bounded."""
 
 import numpy as np
 import pytest
@@ -6,6 +7,10 @@ import pytest
 import solver.controller as controller
 from conftest import BASE_CASE, merge
 from solver import Cancelled, parse_case, simulate_rod
+from solver.io import read_result
+from solver.limits import output_values
+from solver.simulate import simulate
+from solver.summary import FORCE_HISTORY_POINTS, _downsample
 
 CASE = merge(BASE_CASE, {"numerics": {"duration": 1e-3},
                          "outputs": {"probes": [0.3], "fields": True, "field_stride": 7}})
@@ -72,3 +77,28 @@ def test_a_summary_only_run_allocates_nothing_of_size_cells_times_steps():
     cells, steps = result.numerics.cells, result.numerics.steps
     print(f"{cells} cells × {steps} steps: peak {peak / 1e6:.2f} MB traced")
     assert peak < 0.05 * 8 * cells * steps  # a field of N·M doubles would be 80 MB
+
+
+def test_the_force_history_is_the_whole_history_downsampled():
+    """The summary's force history is gathered during the run; it is the one the whole history gives."""
+    result = simulate_rod(parse_case(merge(CASE, {"numerics": {"duration": 4e-3}})))
+    assert len(result.history["time"]) > 2 * FORCE_HISTORY_POINTS
+    assert result.summary["force_history"] == _downsample(result.history)
+
+
+def test_a_streamed_run_holds_a_bounded_part_of_its_outputs(tmp_path):
+    import tracemalloc
+
+    case = parse_case(merge(CASE, {"numerics": {"cells": 2000, "time_step": 1e-8, "duration": 2e-4,
+                                                "scheme": "explicit"},
+                                   "outputs": {"probes": [0.3], "fields": True, "field_stride": 10}}))
+    simulate(parse_case(CASE), result_path=tmp_path / "warm.h5")  # compiled and loaded before measuring
+    tracemalloc.start()
+    result = simulate(case, result_path=tmp_path / "r.h5")
+    _, peak = tracemalloc.get_traced_memory()
+    tracemalloc.stop()
+    held = 8 * output_values(case, result.numerics)
+    print(f"{result.numerics.cells} cells × {result.numerics.steps} steps: outputs {held / 1e6:.1f} MB, "
+          f"peak {peak / 1e6:.2f} MB traced")
+    assert held > 60e6 and peak < 0.25 * held  # holding the outputs would take 1×
+    assert len(read_result(tmp_path / "r.h5").history["time"]) == result.numerics.steps + 1

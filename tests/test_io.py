@@ -1,12 +1,15 @@
-"""HDF5 results: the contract's layout, a lossless round trip, atomic writes."""
+"""HDF5 results: the contract's layout, a lossless round trip, atomic writes, streamed runs."""
 
 import h5py
 import numpy as np
 import pytest
 
+import solver.controller as controller
+import solver.io as io
 from conftest import BASE_CASE, merge
-from solver import parse_case, simulate_rod
-from solver.io import read_result, write_result
+from solver import Cancelled, parse_case, simulate_rod
+from solver.io import read_result, remove_partial, write_result
+from solver.simulate import simulate
 
 CASE = merge(BASE_CASE, {"numerics": {"duration": 5e-4},
                          "outputs": {"probes": [0.0, 0.6, 1.2], "fields": True, "field_stride": 25}})
@@ -56,3 +59,85 @@ def test_a_failed_write_leaves_nothing(tmp_path):
     with pytest.raises(KeyError):
         write_result(result, tmp_path / "r.h5")
     assert list(tmp_path.iterdir()) == []
+
+
+def _layout(f: h5py.File) -> dict:
+    """Every dataset's shape, type, storage and attributes, and the file's attributes."""
+    found = {"/": dict(f.attrs)}
+    f.visititems(lambda name, d: found.__setitem__(name, (
+        d.shape, d.dtype, d.chunks, d.compression, d.compression_opts, d.shuffle, dict(d.attrs)))
+        if isinstance(d, h5py.Dataset) else None)
+    return found
+
+
+def _same_files(streamed, held) -> None:
+    with h5py.File(streamed) as s, h5py.File(held) as h:
+        assert _layout(s) == _layout(h)
+        for name in _layout(h):
+            if name != "/":
+                np.testing.assert_array_equal(s[name][()], h[name][()], err_msg=name)
+
+
+def test_a_streamed_result_is_the_file_write_result_makes(tmp_path, monkeypatch):
+    # Chunks of 13 steps and history written 40 rows at a time: every buffer boundary is crossed.
+    monkeypatch.setattr(controller, "CHUNK_NODE_STEPS", 101 * 13)
+    monkeypatch.setattr(io, "HELD_BYTES", 8 * 40)
+    case = parse_case(merge(CASE, {"outputs": {"field_stride": 1}}))
+    held = simulate(case)
+    write_result(held, tmp_path / "held.h5")
+    streamed = simulate(case, result_path=tmp_path / "streamed.h5")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["held.h5", "streamed.h5"]
+    assert streamed.streamed and not held.streamed
+    assert streamed.summary == held.summary and streamed.numerics == held.numerics
+    assert streamed.history == {} and streamed.fields is None and len(streamed.probe_stress) == 0
+    with h5py.File(tmp_path / "held.h5") as f:
+        assert f["fields/stress"].chunks[0] < len(held.fields.time) // 2  # several rows of chunks
+    _same_files(tmp_path / "streamed.h5", tmp_path / "held.h5")
+    back = read_result(tmp_path / "streamed.h5")
+    assert back.summary == held.summary
+    for name, data in held.arrays().items():
+        np.testing.assert_array_equal(back.arrays()[name], data, err_msg=name)
+
+
+def test_a_tolerance_ladder_streams_only_its_result(tmp_path):
+    case = parse_case(merge(CASE, {"numerics": {"duration": 2e-3, "tolerance": 1e-2, "scheme": "explicit",
+                                                "cells": None, "time_step": None}}))
+    held = simulate(case)
+    assert len(held.summary["runs"]) >= 3  # a later run replaced an earlier candidate
+    write_result(held, tmp_path / "held.h5")
+    streamed = simulate(case, result_path=tmp_path / "streamed.h5")
+    assert streamed.summary == held.summary
+    _same_files(tmp_path / "streamed.h5", tmp_path / "held.h5")
+
+
+@pytest.mark.parametrize("stop", [Cancelled, RuntimeError])
+def test_a_streamed_run_stopped_midway_leaves_nothing(tmp_path, monkeypatch, stop):
+    monkeypatch.setattr(controller, "CHUNK_NODE_STEPS", 101 * 50)
+    seen = []
+
+    def progress(fraction):
+        seen.append(fraction)
+        if len(seen) == 5:  # by then the file holds several chunks' rows
+            assert len(list(tmp_path.iterdir())) == 1
+            raise stop("stopped")
+
+    with pytest.raises(stop):
+        simulate(parse_case(CASE), progress=progress, result_path=tmp_path / "r.h5")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_a_stopped_run_leaves_the_previous_file_as_it_was(tmp_path, monkeypatch):
+    monkeypatch.setattr(controller, "CHUNK_NODE_STEPS", 101 * 50)
+    path = write_result(simulate_rod(parse_case(CASE)), tmp_path / "r.h5")
+    before = path.read_bytes()
+    with pytest.raises(Cancelled):
+        simulate(parse_case(CASE), cancelled=lambda: True, result_path=path)
+    assert [p.name for p in tmp_path.iterdir()] == ["r.h5"] and path.read_bytes() == before
+
+
+def test_remove_partial_removes_only_what_dead_writers_left(tmp_path):
+    path = write_result(simulate_rod(parse_case(CASE)), tmp_path / "r.h5")
+    (tmp_path / ".r.h5.x1y2.part").write_bytes(b"half a file")
+    (tmp_path / ".other.h5.x1y2.part").write_bytes(b"another file's")
+    remove_partial(path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".other.h5.x1y2.part", "r.h5"]

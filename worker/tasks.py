@@ -6,7 +6,7 @@ import socket
 import time
 
 from solver import Cancelled, CaseError, NumericalFailure, parse_case
-from solver.io import write_result
+from solver.io import remove_partial
 from solver.simulate import simulate
 
 from .app import app
@@ -49,9 +49,12 @@ def run_job(job_id: str) -> str:
             raise TimeLimitExceeded
         return store.cancel_requested(job_id)
 
+    # A run streams its result to a temporary file renamed when complete; one whose worker died
+    # left its temporary file behind.
+    remove_partial(store.result_path(job_id))
     try:
         result = simulate(parse_case(store.case(job_id)), progress=progress, cancelled=cancelled,
-                          limits=s.limits())
+                          limits=s.limits(), result_path=store.result_path(job_id))
     except Cancelled:
         store.update(job_id, status=CANCELLED, finished=now())
         return CANCELLED
@@ -62,7 +65,6 @@ def run_job(job_id: str) -> str:
         return _fail(store, job_id, "the solver refused the case: " + str(error))
     except NumericalFailure as error:
         return _fail(store, job_id, str(error))
-    write_result(result, store.result_path(job_id))
     store.write_summary(job_id, result.summary)
     store.update(job_id, status=SUCCEEDED, progress=1.0, finished=now())
     return SUCCEEDED
