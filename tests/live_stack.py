@@ -99,7 +99,8 @@ class Stack:
         else:  # embedded: serve starts its own workers
             self.processes.append(Process([*serve, "--workers", str(workers)], self.env, folder / "api.log"))
         self.client = httpx.Client(base_url=self.url, timeout=30)
-        wait_for(lambda: self.client.get("/readyz").status_code == 200, 60, "the API and a worker")
+        wait_for(lambda: len(self.client.get("/readyz").json().get("workers", [])) >= workers, 60,
+                 f"the API and {workers} worker(s)")
 
     def add_worker(self, name: str) -> Process:
         worker = Process([sys.executable, "-m", "solver", "worker", "--name", f"{name}@percussim"],

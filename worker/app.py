@@ -9,7 +9,7 @@ from __future__ import annotations
 import threading
 
 from celery import Celery
-from celery.signals import worker_ready, worker_shutdown
+from celery.signals import worker_init, worker_ready, worker_shutdown
 
 from .broker import broker_config, queue_folder
 from .settings import Settings, settings
@@ -37,6 +37,15 @@ def make_app(s: Settings) -> Celery:
 
 app = make_app(settings())
 _stop = threading.Event()
+
+
+@worker_init.connect
+def _load_kernel(**_):
+    """Load the compiled kernel from Numba's cache in the parent process, before the pool forks:
+    every child starts with it, and a fresh worker's first job pays no loading."""
+    from solver.controller import warm_up
+
+    warm_up()
 
 
 @worker_ready.connect

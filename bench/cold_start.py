@@ -1,0 +1,104 @@
+"""Cold start: how soon a fresh process gives its first result, with the kernel in Numba's cache
+(`percussim warmup`, run by scripts/bootstrap and the image build, puts it there).
+
+    .venv/bin/python bench/cold_start.py [--repeat 5]
+
+1. A fresh `percussim run examples/fig3.json`: wall time of the whole process, and inside a
+   fresh interpreter the time to import the solver, the first run (which loads the kernel from the
+   cache) and a second one.
+2. A fresh `percussim worker` (Redis, the API running): the worker process is started, a Fig. 3
+   job is submitted once the worker is ready, and the job's own record gives the time from the
+   worker taking it to its result being stored; also from the worker's launch to that result.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from datetime import datetime
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from live_stack import Stack, redis_server, wait_for  # noqa: E402
+from solver.controller import warm_up  # noqa: E402
+from solver.presets import preset_json  # noqa: E402
+
+PROBE = """
+import json, time
+start = time.perf_counter()
+from solver.presets import load_preset
+from solver.simulate import simulate
+imported = time.perf_counter()
+case = load_preset("fig3")
+simulate(case)
+first = time.perf_counter()
+simulate(case)
+second = time.perf_counter()
+print(json.dumps({"import": imported - start, "first run": first - imported, "second run": second - first}))
+"""
+
+
+def line(label: str, values: list[float]) -> str:
+    return f"  {label:34s} best {min(values) * 1e3:7.1f} ms   median {statistics.median(values) * 1e3:7.1f} ms"
+
+
+def fresh_process(repeat: int) -> None:
+    walls, phases = [], []
+    for _ in range(repeat):
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-m", "solver", "run", "examples/fig3.json"], cwd=ROOT,
+                       check=True, capture_output=True)
+        walls.append(time.perf_counter() - start)
+        phases.append(json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=ROOT, check=True,
+                                                capture_output=True, text=True).stdout))
+    print("A fresh process (percussim run examples/fig3.json):")
+    print(line("whole process, wall", walls))
+    for phase in phases[0]:
+        print(line(phase, [p[phase] for p in phases]))
+
+
+def fresh_worker(repeat: int) -> None:
+    took, from_launch = [], []
+    with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
+        stack = Stack(Path(tmp), url, workers=1)
+        try:
+            for k in range(repeat):
+                old = stack.processes.pop()
+                old.stop()
+                launched = time.time()
+                stack.add_worker(f"fresh{k}")
+                name = f"fresh{k}@percussim"
+                wait_for(lambda: name in stack.client.get("/readyz").json().get("workers", []), 60,
+                         "the fresh worker", interval=0.02)
+                job = stack.client.post("/v1/jobs", json=preset_json("fig3")).json()
+                record = stack.wait_status(job["id"], ("succeeded", "failed"))
+                assert record["status"] == "succeeded" and record["worker"] == name, record
+                started, finished = (datetime.fromisoformat(record[k]).timestamp()
+                                     for k in ("started", "finished"))
+                took.append(finished - started)
+                from_launch.append(finished - launched)
+        finally:
+            stack.stop()
+    print("A fresh worker (percussim worker, Redis), its first job, Fig. 3:")
+    print(line("taken to stored", took))
+    print(line("worker launched to job stored", from_launch))
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    parser.add_argument("--repeat", type=int, default=5)
+    args = parser.parse_args()
+    warm_up()  # the cache as after install
+    fresh_process(args.repeat)
+    fresh_worker(args.repeat)
+
+
+if __name__ == "__main__":
+    main()
