@@ -4,7 +4,8 @@ Unknowns of layer n+1 are `[y, u_0, …, u_N]` (model.md). The rows `u_1 … u_N
 step to step (only their right-hand sides do), so their elimination, swept from the working end
 toward the struck end as in the paper's (14)–(20), is factored once in `factor_tool_rows`:
 `u_i = P_i·u_{i−1} + Q_i`. A step then computes the `Q_i` (one pass), solves the striker row (11)
-and the struck-end row (9) together, and substitutes forward (one pass).
+and the struck-end row (9) together, and substitutes forward (one pass). The explicit scheme's
+interior rows are uncoupled (`P_i = 0`): its passes have no recurrence and vectorise.
 
 Those two rows are linear but for the contact force. It is the difference quotient of the contact
 potential Φ (`Φ' = G(δ)·δ`) between the new overlap and a reference one (layer n for the paper,
@@ -88,7 +89,8 @@ def boundary_weights(weight_new, centered, end_masses, tau):
 @njit(cache=True)
 def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_stiffness,
                      medium_damping, r, tau, density, h, weight_new, centered, end_masses):
-    """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the coefficient of `Q_{i+1}`.
+    """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the coefficient of `Q_{i+1}` in
+    `Q_i = rhs_i/den_i + coefficient_i·Q_{i+1}`.
 
     Row u_N: `(M_N/τ² + θ·k_N + θ_s·c2 + b2·d)·u_N − θ·k_N·u_{N−1} = rhs`, `k_N = S·E/h`, with
     the weights of `boundary_weights`.
@@ -108,7 +110,7 @@ def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_st
         den = 1.0 + weight_new * r * (grid_lower[i] + grid_upper[i]) - carry[i] * p[i + 1]
         p[i] = weight_new * r * grid_lower[i] / den
         inv_den[i] = 1.0 / den
-    return p, inv_den, carry
+    return p, inv_den, carry * inv_den
 
 
 @njit(cache=True, inline="always")
@@ -228,7 +230,31 @@ def node_stress(u, i, n, e_over_h, struck_end_stress, working_end_stress):
     return 0.5 * e_over_h * (u[i + 1] - u[i - 1])
 
 
-@njit(cache=True)
+@njit(cache=True, fastmath={"contract", "reassoc"})
+def tool_energy(un, uc, node_area, area_mid, strain_sigma):
+    """`Σ S_i·(u_i − uc_i)²` and `Σ S_{i+½}·[σ(e_a² + e_b²) + (1 − 2σ)·e_a·e_b]` over the tool,
+    e the cell strains of `un` and `uc`: twice the kinetic energy times τ²/(ρh), and twice the
+    strain energy times h/E. Sums of N terms may be reordered (`reassoc`), so that they vectorise;
+    that changes them by rounding only."""
+    n = len(un) - 1
+    strain_cross = 1.0 - 2.0 * strain_sigma
+    du = un[0] - uc[0]
+    kinetic = node_area[0] * du * du
+    strain = 0.0
+    for i in range(1, n + 1):
+        du = un[i] - uc[i]
+        kinetic += node_area[i] * du * du
+        ea = un[i] - un[i - 1]
+        eb = uc[i] - uc[i - 1]
+        strain += area_mid[i - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
+    return kinetic, strain
+
+
+# `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
+# CPU has one: each of the two recurrences along the tool then has a single operation a node on its
+# critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
+# non-finite values rely on that.
+@njit(cache=True, fastmath={"contract"})
 def advance(
     first, last,
     u, y, grid_lower, grid_upper, node_area, area_mid, uniform, p, inv_den, carry,
@@ -265,6 +291,7 @@ def advance(
         weight_new, centered, end_masses, tau)
     strain_sigma = weight_new if centered else 0.25  # 0.25: strain energy at the midpoint
     e_over_h = youngs_modulus / h
+    half_e_over_h = 0.5 * e_over_h
     kinetic_factor = 0.5 * density * h * inv_tau2
     initial_energy = 0.5 * striker_mass * striker_velocity * striker_velocity
     n_hist = 0
@@ -308,19 +335,36 @@ def advance(
             if end_masses:
                 rhs -= end_stiffness_n * (v_right - v_mid)
             un[n] = rhs * inv_den[n]  # Q_i is kept in `un` until the forward substitution
-            if uniform:
+            if weight_new == 0.0 and weight_old == 0.0:
+                # Explicit: v = u^n and the interior rows are uncoupled (den_i = 1, nothing
+                # carried), so the Q_i need no recurrence and the loops vectorise.
+                if uniform:
+                    for i in range(1, n):
+                        un[i] = 2.0 * uc[i] - uo[i] + r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1])
+                else:
+                    for i in range(1, n):
+                        un[i] = 2.0 * uc[i] - uo[i] + r * (grid_lower[i] * (uc[i - 1] - uc[i])
+                                                           + grid_upper[i] * (uc[i + 1] - uc[i]))
+                v_right = uc[1]
+                v_mid = uc[0]
+            elif uniform:
+                # Only `q` is carried from node to node: one multiply and one add on the path.
+                q = un[n]
                 for i in range(n - 1, 0, -1):
                     v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
                     rhs = 2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right)
-                    un[i] = (rhs + carry[i] * un[i + 1]) * inv_den[i]
+                    q = rhs * inv_den[i] + carry[i] * q
+                    un[i] = q
                     v_right = v_mid
                     v_mid = v_left
             else:
+                q = un[n]
                 for i in range(n - 1, 0, -1):
                     v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
                     lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
                     rhs = 2.0 * uc[i] - uo[i] + r * lap
-                    un[i] = (rhs + carry[i] * un[i + 1]) * inv_den[i]
+                    q = rhs * inv_den[i] + carry[i] * q
+                    un[i] = q
                     v_right = v_mid
                     v_mid = v_left
             # Striker row (11) and struck-end row (9) with u_1 = P_1·u_0 + Q_1:
@@ -345,9 +389,13 @@ def advance(
                 return STATUS_NON_FINITE, n_hist, n_field
             y[new] = y_new
             un[0] = u0_new
-            for i in range(1, n + 1):
-                un[i] = p[i] * un[i - 1] + un[i]
-
+            if weight_new == 0.0:
+                un[n] = p[n] * un[n - 1] + un[n]  # P_i = 0 but at a massless working end
+            else:
+                prev = u0_new
+                for i in range(1, n + 1):
+                    prev = p[i] * prev + un[i]
+                    un[i] = prev
             # The forces at layer m: the contact law with second-order backward rates.
             delta = y_new - u0_new
             if m == 1:
@@ -366,17 +414,8 @@ def advance(
             # Energy at layer m − ½, in the form each scheme conserves (or dissipates).
             dy = y_new - y_cur
             striker_kinetic = 0.5 * striker_mass * dy * dy * inv_tau2
-            tool_kinetic = 0.0
-            for i in range(n + 1):
-                du = un[i] - uc[i]
-                tool_kinetic += node_area[i] * du * du
+            tool_kinetic, tool_strain = tool_energy(un, uc, node_area, area_mid, strain_sigma)
             tool_kinetic *= kinetic_factor
-            tool_strain = 0.0
-            for i in range(n):
-                ea = un[i + 1] - un[i]
-                eb = uc[i + 1] - uc[i]
-                tool_strain += area_mid[i] * (strain_sigma * (ea * ea + eb * eb)
-                                              + (1.0 - 2.0 * strain_sigma) * ea * eb)
             tool_strain *= 0.5 * e_over_h
             contact_pot = (spring_weight * contact_potential(delta, c1, alpha, c0)
                            + (1.0 - spring_weight) * contact_potential(delta_cur, c1, alpha, c0))
@@ -406,12 +445,16 @@ def advance(
             # nodes is not missed by up to σ''·h²/8.
             lowest, highest = 0, 0
             s_low, s_high = s0, s0
-            for i in range(1, n + 1):
-                s = node_stress(un, i, n, e_over_h, s0, sn)
+            for i in range(1, n):
+                s = half_e_over_h * (un[i + 1] - un[i - 1])
                 if s < s_low:
                     s_low, lowest = s, i
                 if s > s_high:
                     s_high, highest = s, i
+            if sn < s_low:
+                s_low, lowest = sn, n
+            if sn > s_high:
+                s_high, highest = sn, n
             for sign, node, value, slot in ((-1.0, lowest, s_low, T_MAX_COMPRESSION),
                                             (1.0, highest, s_high, T_MAX_TENSION)):
                 x_peak = node * h

@@ -1,0 +1,384 @@
+/* A C yardstick for solver/kernel.py::advance on a uniform tool, summary only.
+
+   The same scheme, contact solve, energy audit and trackers as the Numba kernel (its slot layout
+   for trackers and energy), for a uniform tool with no external force. Written for speed: the tool
+   rows are eliminated once; a step is the Q sweep toward the struck end and the forward
+   substitution (one multiply-add a node on the critical path of each; no recurrence at all for
+   the explicit scheme), the scalar contact solve, and one vectorised pass that sums the energies
+   and finds the stress extremes.
+
+   Built by bench/kernel.py: gcc -O3 -march=native -shared -fPIC. Not used by the product. */
+
+#include <math.h>
+
+#define LANES 8
+
+/* prm[] layout, filled by bench/kernel.py */
+enum {
+    P_H, P_TAU, P_R, P_E, P_RHO, P_AREA, P_WEIGHT_NEW, P_WEIGHT_OLD, P_CENTERED,
+    P_END_MASSES, P_M1, P_W1, P_C1, P_ALPHA, P_C0, P_B1, P_C2, P_B2
+};
+
+/* Tracker and energy slots: the kernel's */
+enum {
+    T_PEAK_FORCE, T_PEAK_FORCE_TIME, T_MAX_COMPRESSION, T_MAX_COMPRESSION_X,
+    T_MAX_COMPRESSION_TIME, T_MAX_TENSION, T_MAX_TENSION_X, T_MAX_TENSION_TIME, T_IN_CONTACT,
+    T_CONTACT_START, T_CONTACTS, T_CO_IMPACT, T_REBOUND_VELOCITY, T_ENERGY_EXCESS, T_FAILED_TIME,
+    T_MIN_CONTACT_STEPS, T_FORCE_BEFORE, T_FORCE_BEFORE_THAT
+};
+enum {
+    E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM, E_STRIKER_KINETIC,
+    E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL
+};
+
+typedef struct { double c1, alpha, c0; } Law;
+
+static inline double potential(double d, const Law *k)
+{
+    return d >= 0.0 ? k->c1 * pow(d, k->alpha + 2.0) / (k->alpha + 2.0) : 0.5 * k->c0 * d * d;
+}
+
+static inline double spring(double d, const Law *k)
+{
+    return d >= 0.0 ? k->c1 * pow(d, k->alpha + 1.0) : k->c0 * d;
+}
+
+static inline double stiffness(double d, const Law *k)
+{
+    if (d < 0.0) return k->c0;
+    return k->alpha == 0.0 ? k->c1 : (k->alpha + 1.0) * k->c1 * pow(d, k->alpha);
+}
+
+/* (Φ(d) − Φ_ref)/(d − ref) and its derivative; midpoint values when d ≈ ref */
+static inline void quotient(double d, double ref, double ref_pot, const Law *k,
+                            double *f, double *df)
+{
+    double diff = d - ref;
+    if (fabs(diff) > 1e-7 * (fabs(d) + fabs(ref))) {
+        *f = (potential(d, k) - ref_pot) / diff;
+        *df = (spring(d, k) - *f) / diff;
+    } else {
+        double mid = 0.5 * (d + ref);
+        *f = spring(mid, k);
+        *df = 0.5 * stiffness(mid, k);
+    }
+}
+
+/* δ + compliance·(quotient(δ) + damper·(δ − ref)) = free: Newton kept inside the bracket */
+static double solve_overlap(double free, double compliance, double ref, double ref_pot,
+                            double guess, const Law *k, double damper)
+{
+    double f, df;
+    quotient(free, ref, ref_pot, k, &f, &df);
+    double other = free - compliance * (f + damper * (free - ref));
+    double lo = fmin(free, other), hi = fmax(free, other);
+    if (lo == hi) return free;
+    double x = fmin(fmax(guess, lo), hi);
+    double scale = 1e-15 * (fabs(lo) + fabs(hi));
+    for (int it = 0; it < 100; it++) {
+        quotient(x, ref, ref_pot, k, &f, &df);
+        double g = x + compliance * (f + damper * (x - ref)) - free;
+        if (g == 0.0) return x;
+        if (g > 0.0) hi = x; else lo = x;
+        double x_new = x - g / (1.0 + compliance * (df + damper));
+        if (!(lo < x_new && x_new < hi)) x_new = 0.5 * (lo + hi);
+        if (fabs(x_new - x) <= scale || hi - lo <= scale) return x_new;
+        x = x_new;
+    }
+    return x;
+}
+
+/* Where in the last step the overlap crossed zero, on the parabola through its last three values */
+static double crossing(double before_that, double before, double now)
+{
+    double linear = before / (before - now);
+    if (isnan(before_that)) return linear;
+    double a = 0.5 * (now + before_that) - before, b = 0.5 * (now - before_that);
+    double disc = b * b - 4.0 * a * before;
+    if (a == 0.0 || disc < 0.0) return linear;
+    double root = sqrt(disc);
+    double x = (-b + root) / (2.0 * a);
+    if (0.0 <= x && x <= 1.0) return x;
+    x = (-b - root) / (2.0 * a);
+    if (0.0 <= x && x <= 1.0) return x;
+    return linear;
+}
+
+/* Refine a stress extreme at interior `node` by the parabola through it and its neighbours */
+static void record_stress(double *trk, int slot, double sign, long node, double value,
+                          const double *un, long n, double half_e_over_h, double s0, double sn,
+                          double h, double t)
+{
+    double x_peak = node * h, peak = sign * value;
+    if (0 < node && node < n) {
+        double left = node - 1 == 0 ? s0 : half_e_over_h * (un[node] - un[node - 2]);
+        double right = node + 1 == n ? sn : half_e_over_h * (un[node + 2] - un[node]);
+        left *= sign;
+        right *= sign;
+        double curvature = 2.0 * peak - left - right;
+        if (curvature > 0.0) {
+            double offset = 0.5 * (right - left) / curvature;
+            peak += 0.25 * (right - left) * offset;
+            x_peak += offset * h;
+        }
+    }
+    if (peak > trk[slot]) {
+        trk[slot] = peak;
+        trk[slot + 1] = x_peak;
+        trk[slot + 2] = t;
+    }
+}
+
+/* Layers 0 … steps of the case in prm[] on n cells. u: 3·(n+1) (layer m in row m % 3), y: 3,
+   work: 2·(n+1), trk/en: the kernel's trackers (from new_trackers()) and energy (zeros),
+   contacts: max_contacts × 2. Returns 0, or 1 on a non-finite value. */
+int run(long n, long steps, const double *prm, double *u, double *y, double *work,
+        double *trk, double *en, double *contacts, long max_contacts)
+{
+    const double h = prm[P_H], tau = prm[P_TAU], r = prm[P_R], area = prm[P_AREA];
+    const double wn = prm[P_WEIGHT_NEW], wo = prm[P_WEIGHT_OLD], wc = 1.0 - wn - wo;
+    const int centered = prm[P_CENTERED] != 0.0, end_masses = prm[P_END_MASSES] != 0.0;
+    const double m1 = prm[P_M1], w1 = prm[P_W1], b1 = prm[P_B1], c2 = prm[P_C2], b2 = prm[P_B2];
+    const Law law = {prm[P_C1], prm[P_ALPHA], prm[P_C0]};
+    const long stride = n + 1;
+    double *p = work, *g = work + stride;
+
+    /* boundary_weights() */
+    const double ew = end_masses ? wn : 1.0;
+    const double sw = centered ? 0.5 : 1.0, df = centered ? 0.5 / tau : 1.0 / tau;
+    const long back = centered ? 2 : 1;
+
+    const double inv_tau2 = 1.0 / (tau * tau), m1_tau2 = m1 * inv_tau2;
+    const double end_area = end_masses ? 0.5 * area : 0.0; /* node_area at both ends */
+    const double mass_end = prm[P_RHO] * h * end_area * inv_tau2;
+    const double k_end = area * prm[P_E] / h, e_over_h = prm[P_E] / h;
+    const double half_e_over_h = 0.5 * e_over_h;
+    const double strain_sigma = centered ? wn : 0.25;
+    const double strain_cross = 1.0 - 2.0 * strain_sigma;
+    const double kinetic_factor = 0.5 * prm[P_RHO] * h * inv_tau2;
+    const double initial_energy = 0.5 * m1 * w1 * w1;
+    const double wr = wn * r;
+
+    /* factor_tool_rows(), Q_i = g_i·rhs_i + P_i·Q_{i+1}: on a uniform tool the coefficient of
+       Q_{i+1} equals P_i */
+    const double diag_n = mass_end + ew * k_end + sw * c2 + b2 * df;
+    p[n] = ew * k_end / diag_n;
+    g[n] = 1.0 / diag_n;
+    for (long i = n - 1; i >= 1; i--) {
+        g[i] = 1.0 / (1.0 + 2.0 * wr - wr * p[i + 1]);
+        p[i] = wr * g[i];
+    }
+    const double a_0 = mass_end + ew * k_end * (1.0 - p[1]);
+
+    /* Layer 0 and layer −1 (row 2) */
+    for (long i = 0; i < stride; i++) u[i] = u[2 * stride + i] = 0.0;
+    y[0] = 0.0;
+    y[2] = -w1 * tau;
+    trk[T_IN_CONTACT] = 1.0;
+    trk[T_CONTACT_START] = 0.0;
+
+    for (long m = 1; m <= steps; m++) {
+        /* rows of layers m, m − 1, m − 2 and the reference layer (C's % keeps the sign) */
+        const long now = m % 3, cur = (m + 2) % 3, old = (m + 1) % 3, ref = (m + 3 - back) % 3;
+        double *un = u + now * stride;
+        const double *uc = u + cur * stride, *uo = u + old * stride, *ur = u + ref * stride;
+        const double t = m * tau;
+        const double y_cur = y[cur], y_old = y[old];
+        const double delta_cur = y_cur - uc[0], delta_old = y_old - uo[0];
+        const double delta_ref = y[ref] - ur[0];
+
+        /* Q sweep toward the struck end; Q_i is kept in un[i] until the substitution */
+        double v_right = wc * uc[n] + wo * uo[n], v_mid = wc * uc[n - 1] + wo * uo[n - 1];
+        double rhs = mass_end * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - sw) * ur[n] + b2 * df * ur[n];
+        if (end_masses) rhs -= k_end * (v_right - v_mid);
+        double qi = rhs * g[n];
+        un[n] = qi;
+        if (wn != 0.0) {
+            for (long i = n - 1; i >= 1; i--) {
+                double v_left = wc * uc[i - 1] + wo * uo[i - 1];
+                double rhs_i = 2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right);
+                qi = fma(p[i], qi, rhs_i * g[i]);  /* the chain: one multiply-add */
+                un[i] = qi;
+                v_right = v_mid;
+                v_mid = v_left;
+            }
+        } else {  /* explicit (σ = 0, v = u^n): uncoupled rows, no recurrence */
+            for (long i = n - 1; i >= 1; i--)
+                un[i] = 2.0 * uc[i] - uo[i] + r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1]);
+            v_right = uc[1];
+            v_mid = uc[0];
+        }
+
+        /* Striker row and struck-end row: one scalar equation in the new overlap */
+        const double b_y = m1_tau2 * (2.0 * y_cur - y_old);
+        double b_0 = mass_end * (2.0 * uc[0] - uo[0]) + ew * k_end * un[1];
+        if (end_masses) b_0 += k_end * (v_right - v_mid);
+        const double ref_pot = m >= back ? potential(delta_ref, &law) : 0.0;
+        double delta = solve_overlap(b_y / m1_tau2 - b_0 / a_0, 1.0 / m1_tau2 + 1.0 / a_0,
+                                     delta_ref, ref_pot, 2.0 * delta_cur - delta_old, &law,
+                                     b1 * df);
+        double f, dfd;
+        quotient(delta, delta_ref, ref_pot, &law, &f, &dfd);
+        const double force = f + b1 * df * (delta - delta_ref);
+        const double y_new = (b_y - force) / m1_tau2, u0 = (b_0 + force) / a_0;
+        if (!(fabs(y_new) < 1e300 && fabs(u0) < 1e300)) {
+            trk[T_FAILED_TIME] = t;
+            return 1;
+        }
+        y[now] = y_new;
+        un[0] = u0;
+        delta = y_new - u0;
+        const double delta_rate = m == 1
+            ? (delta - delta_cur) / tau
+            : (3.0 * delta - 4.0 * delta_cur + delta_old) / (2.0 * tau);
+        const double contact_force = spring(delta, &law) + b1 * delta_rate;
+        const double s0 = -contact_force / area;
+
+        /* Forward substitution: one multiply-add a node on the critical path; none when the
+           interior rows are uncoupled, but at a massless working end */
+        if (wn != 0.0) {
+            double ui = u0;
+            for (long i = 1; i <= n; i++) {
+                ui = fma(p[i], ui, un[i]);
+                un[i] = ui;
+            }
+        } else {
+            un[n] = fma(p[n], un[n - 1], un[n]);
+        }
+
+        /* One pass for the tool's energy and its interior stresses (node i − 1), in LANES
+           independent partial sums and extremes so that it vectorises; the first node of the
+           extreme value is then the one of the lanes' first occurrences with the smallest index */
+        double kin_l[LANES] = {0}, str_l[LANES] = {0}, low_l[LANES], high_l[LANES];
+        long low_i[LANES], high_i[LANES];
+        for (int j = 0; j < LANES; j++) {
+            low_l[j] = high_l[j] = s0;
+            low_i[j] = high_i[j] = 0;
+        }
+        double kinetic = 0.0, strain = 0.0;
+        {
+            double ea = un[1] - u0, eb = uc[1] - uc[0], du = un[1] - uc[1];
+            kinetic += du * du;
+            strain += strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb;
+        }
+        long i = 2;
+        for (; i + LANES <= n + 1; i += LANES) {
+            for (int j = 0; j < LANES; j++) {
+                long k = i + j;
+                double ea = un[k] - un[k - 1], eb = uc[k] - uc[k - 1], du = un[k] - uc[k];
+                kin_l[j] += du * du;
+                str_l[j] += strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb;
+                double s = half_e_over_h * (un[k] - un[k - 2]);
+                low_i[j] = s < low_l[j] ? k - 1 : low_i[j];
+                low_l[j] = s < low_l[j] ? s : low_l[j];
+                high_i[j] = s > high_l[j] ? k - 1 : high_i[j];
+                high_l[j] = s > high_l[j] ? s : high_l[j];
+            }
+        }
+        double s_low = s0, s_high = s0;
+        long lowest = 0, highest = 0;
+        for (int j = 0; j < LANES; j++) {
+            kinetic += kin_l[j];
+            strain += str_l[j];
+            if (low_l[j] < s_low || (low_l[j] == s_low && low_i[j] < lowest)) {
+                s_low = low_l[j];
+                lowest = low_i[j];
+            }
+            if (high_l[j] > s_high || (high_l[j] == s_high && high_i[j] < highest)) {
+                s_high = high_l[j];
+                highest = high_i[j];
+            }
+        }
+        for (; i <= n; i++) {
+            double ea = un[i] - un[i - 1], eb = uc[i] - uc[i - 1], du = un[i] - uc[i];
+            kinetic += du * du;
+            strain += strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb;
+            double s = half_e_over_h * (un[i] - un[i - 2]);
+            if (s < s_low) { s_low = s; lowest = i - 1; }
+            if (s > s_high) { s_high = s; highest = i - 1; }
+        }
+        /* kinetic holds nodes 1 … n at the interior area: put the ends at theirs */
+        const double du_n = un[n] - uc[n], du_0 = u0 - uc[0];
+        const double tool_kinetic = kinetic_factor * (area * kinetic
+                                                      + (end_area - area) * du_n * du_n
+                                                      + end_area * du_0 * du_0);
+        const double tool_strain = 0.5 * e_over_h * area * strain;
+
+        const double end_rate = m == 1 ? (un[n] - uc[n]) / tau
+                                       : (3.0 * un[n] - 4.0 * uc[n] + uo[n]) / (2.0 * tau);
+        const double velocity = m == 1 ? w1 : (3.0 * y_new - 4.0 * y_cur + y_old) / (2.0 * tau);
+        const double medium_force = c2 * un[n] + b2 * end_rate;
+        const double sn = -medium_force / area;
+        if (sn < s_low) { s_low = sn; lowest = n; }
+        if (sn > s_high) { s_high = sn; highest = n; }
+
+        /* Energy at layer m − ½ */
+        const double dy = y_new - y_cur;
+        const double striker_kinetic = 0.5 * m1 * dy * dy * inv_tau2;
+        const double contact_pot = sw * potential(delta, &law)
+                                   + (1.0 - sw) * potential(delta_cur, &law);
+        const double medium_pot = 0.5 * c2 * (sw * un[n] * un[n] + (1.0 - sw) * uc[n] * uc[n]);
+        double rate = df * (delta - delta_ref);
+        en[E_DISSIPATED_CONTACT] += b1 * rate * rate * tau;
+        rate = df * (un[n] - ur[n]);
+        en[E_DISSIPATED_MEDIUM] += b2 * rate * rate * tau;
+        en[E_STRIKER_KINETIC] = striker_kinetic;
+        en[E_TOOL_KINETIC] = tool_kinetic;
+        en[E_TOOL_STRAIN] = tool_strain;
+        en[E_CONTACT_POTENTIAL] = contact_pot;
+        en[E_MEDIUM_POTENTIAL] = medium_pot;
+        const double balance = striker_kinetic + tool_kinetic + tool_strain + contact_pot
+                               + medium_pot + en[E_DISSIPATED_CONTACT] + en[E_DISSIPATED_MEDIUM]
+                               - initial_energy - en[E_EXTERNAL_WORK];
+        if (!(fabs(balance) < 1e300)) {
+            trk[T_FAILED_TIME] = t;
+            return 1;
+        }
+        if (balance > trk[T_ENERGY_EXCESS]) trk[T_ENERGY_EXCESS] = balance;
+
+        /* Stress extremes, peak force, contact intervals */
+        record_stress(trk, T_MAX_COMPRESSION, -1.0, lowest, s_low, un, n, half_e_over_h, s0, sn,
+                      h, t);
+        record_stress(trk, T_MAX_TENSION, 1.0, highest, s_high, un, n, half_e_over_h, s0, sn,
+                      h, t);
+        if (contact_force > trk[T_PEAK_FORCE]) {
+            trk[T_PEAK_FORCE] = contact_force;
+            trk[T_PEAK_FORCE_TIME] = t;
+        }
+        const double f1 = trk[T_FORCE_BEFORE], f2 = trk[T_FORCE_BEFORE_THAT];
+        if (m >= 3 && f1 >= f2 && f1 > contact_force) {
+            double curvature = 2.0 * f1 - f2 - contact_force;
+            double offset = 0.5 * (contact_force - f2) / curvature;
+            double vertex = f1 + 0.25 * (contact_force - f2) * offset;
+            if (vertex > trk[T_PEAK_FORCE]) {
+                trk[T_PEAK_FORCE] = vertex;
+                trk[T_PEAK_FORCE_TIME] = t - tau + offset * tau;
+            }
+        }
+        trk[T_FORCE_BEFORE_THAT] = f1;
+        trk[T_FORCE_BEFORE] = contact_force;
+
+        const int in_contact = trk[T_IN_CONTACT] != 0.0;
+        if (in_contact && delta < 0.0) {
+            double t_cross = t - tau + tau * crossing(m >= 2 ? delta_old : NAN, delta_cur, delta);
+            long k = (long)trk[T_CONTACTS];
+            if (k < max_contacts) {
+                contacts[2 * k] = trk[T_CONTACT_START];
+                contacts[2 * k + 1] = t_cross;
+            }
+            trk[T_CONTACTS] = k + 1;
+            double steps_in = (t_cross - trk[T_CONTACT_START]) / tau;
+            if (steps_in < trk[T_MIN_CONTACT_STEPS]) trk[T_MIN_CONTACT_STEPS] = steps_in;
+            if (k == 0) {
+                trk[T_CO_IMPACT] = t_cross;
+                trk[T_REBOUND_VELOCITY] = velocity;
+            }
+            trk[T_IN_CONTACT] = 0.0;
+        } else if (!in_contact && delta >= 0.0) {
+            trk[T_IN_CONTACT] = 1.0;
+            trk[T_CONTACT_START] = t - tau + tau * crossing(m >= 2 ? delta_old : NAN, delta_cur,
+                                                            delta);
+        }
+    }
+    return 0;
+}
