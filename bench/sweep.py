@@ -76,7 +76,8 @@ def main() -> None:
                     print(f"  {how:28s} {len(rows):5d} variants in {seconds:7.2f} s: "
                           f"{len(rows) / seconds:8.1f} variants/s, {len(failed)} failed")
                     for row in failed[:3]:
-                        print(f"    {row.get('values', row)}: {row['error']}")
+                        values = row.get("values") or {k: row[k] for k in grid}
+                        print(f"    {values}: {row['error']}")
         finally:
             stack.stop()
 

@@ -19,8 +19,10 @@ maximum stress), a run goes:
    Each later grid is as fine as the last pair's difference says is needed, at least 1.5× and at
    most 3× finer (Richardson: the finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only
    when both grids are near the asymptotic range, so it is taken 1.5× larger). Two grids that see
-   a different number of contacts never end the ladder, however close their quantities (the
-   coarse one has the sequence of impacts wrong, so their difference says little of the error).
+   a different number of contacts end the ladder only if the pair before them was within the
+   tolerance too (the coarse one may have the sequence of impacts wrong, so their difference alone
+   says little of the error; grazing re-contacts that come and go from grid to grid need the
+   second pair).
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
    Only the first run keeps nothing but what its summary needs: any later one may be the result.
 """
@@ -139,6 +141,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
 
     runs: list[tuple[ResolvedNumerics, dict, int]] = []
     factor = 1.0
+    worst = math.inf
     start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
         tau = period / (start * factor)
@@ -163,8 +166,9 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         (previous, coarse, seen_coarse), (_, fine, seen_fine) = runs[-2], runs[-1]
         ratio = math.sqrt((previous.time_step / numerics.time_step) * (numerics.cells / previous.cells))
         estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
+        settled = seen_fine == seen_coarse or worst <= tol  # `worst`: the previous pair's, so far
         worst = max(estimate.values(), default=0.0)
-        if worst <= tol and seen_fine == seen_coarse:
+        if worst <= tol and settled:
             why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
                    f"free of dispersion along a uniform tool there) on grids refined until the "
                    f"estimated error is within the tolerance; the lumped model was not enough "
@@ -178,9 +182,10 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     raise CaseError([FieldError(
         field="numerics.tolerance",
         message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}; "
-                f"contacts seen by each grid: {', '.join(str(c) for _, _, c in runs)}; two grids in a row "
-                "must see as many): "
-                "loosen it or give numerics.cells and numerics.time_step")])
+                f"contacts seen by each grid: {', '.join(str(c) for _, _, c in runs)}"
+                + ("; when that number keeps changing, the later impacts depend on the grid itself: "
+                   "shorten numerics.duration to the impacts that matter" if runs[-1][2] != runs[-2][2] else "")
+                + "): loosen it or give numerics.cells and numerics.time_step")])
 
 
 def _annotated(result: Result, tol: float, estimate: dict[str, float],

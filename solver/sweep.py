@@ -140,7 +140,7 @@ def run_sweep(sweep: Sweep, processes: int | None = None,
     rows = []
     with ProcessPoolExecutor(processes) if processes > 1 else contextlib.nullcontext() as pool:
         # Batches large enough to hide the pipe, small enough to keep every process busy.
-        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (8 * processes)))
+        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (64 * processes)))
                   if pool else map(solve, cases))
         for (values, _), row in zip(found, solved):
             rows.append(values | row)
