@@ -7,7 +7,7 @@ layers go to a `Recorder`: held in memory (`MemoryRecorder`), or streamed to an 
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
 import numpy as np
@@ -89,6 +89,7 @@ class Result:
     fields: Fields | None
     summary: dict
     streamed: bool = False
+    summary_json: str | None = field(default=None, repr=False)  # as written to a result file
 
     @classmethod
     def from_arrays(cls, case: Case, numerics: ResolvedNumerics, arrays: dict[str, np.ndarray],

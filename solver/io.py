@@ -145,7 +145,8 @@ class ResultWriter:
         f.attrs["numerics"] = json.dumps(result.numerics.as_dict())
         for key, value in result.numerics.as_dict().items():
             f.attrs[f"numerics.{key}"] = value
-        f.create_dataset("summary", data=json.dumps(result.summary))
+        result.summary_json = json.dumps(result.summary)
+        f.create_dataset("summary", data=result.summary_json)
         for rows in self._rows.values():
             rows.close()
         self._close()

@@ -137,7 +137,7 @@ def test_a_failed_job_names_its_error_in_the_409(client, tmp_path):
 def test_a_succeeded_job_serves_its_summary_and_hdf5_file(client, tmp_path):
     job = _submit(client, merge(BASE_CASE, {"name": "my rod/2"}))
     store = JobStore(tmp_path)
-    store.write_summary(job["id"], {"co_impact_time": 3.35e-4})
+    store.write_summary(job["id"], json.dumps({"co_impact_time": 3.35e-4}))
     store.result_path(job["id"]).write_bytes(b"\x89HDF\r\n\x1a\n fake")
     store.update(job["id"], status=SUCCEEDED, progress=1.0, finished=now())
     assert client.get(f"/v1/jobs/{job['id']}/summary").json() == {"co_impact_time": 3.35e-4}
@@ -277,10 +277,10 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
     assert len(list((tmp_path / "broker" / "queue").iterdir())) == 6, "one message a variant"
     # A variant that succeeded fills its row from its summary.
     first = sweep["rows"][0]["job"]
-    jobs.write_summary(first, {"co_impact_time": 2e-4, "peak_contact_force": {"value": 4e5},
-                               "max_compressive_stress": {"value": 5e7}, "max_tensile_stress": {"value": 1e7},
-                               "striker_rebound_velocity": -0.4, "energy": {"to_medium": 1.7},
-                               "contacts_total": 5, "warnings": []})
+    jobs.write_summary(first, json.dumps({
+        "co_impact_time": 2e-4, "peak_contact_force": {"value": 4e5}, "max_compressive_stress": {"value": 5e7},
+        "max_tensile_stress": {"value": 1e7}, "striker_rebound_velocity": -0.4, "energy": {"to_medium": 1.7},
+        "contacts_total": 5, "warnings": []}))
     jobs.update(first, status=SUCCEEDED, progress=1.0, finished=now())
     row = client.get(f"/v1/sweeps/{sweep['id']}").json()["rows"][0]
     assert row["status"] == "succeeded" and row["peak_contact_force"] == 4e5 and row["contacts"] == 5

@@ -85,8 +85,9 @@ class JobStore:
     def summary(self, job_id: str) -> dict:
         return json.loads((self.folder(job_id) / "summary.json").read_text())
 
-    def write_summary(self, job_id: str, summary: dict) -> None:
-        write_atomic(self.folder(job_id) / "summary.json", json.dumps(summary).encode())
+    def write_summary(self, job_id: str, summary_json: str) -> None:
+        """Store the summary, given as JSON text (the result file's copy: it is encoded once)."""
+        write_atomic(self.folder(job_id) / "summary.json", summary_json.encode())
 
     def result_path(self, job_id: str) -> Path:
         return self.folder(job_id) / "result.h5"

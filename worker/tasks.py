@@ -35,8 +35,7 @@ def run_job(job_id: str) -> str:
         return CANCELLED
     store.update(job_id, status=RUNNING, started=now(), attempts=record["attempts"] + 1,
                  worker=run_job.request.hostname or socket.gethostname(), progress=0.0)
-    start = time.monotonic()
-    last_write = 0.0
+    start = last_write = time.monotonic()  # a job shorter than PROGRESS_SECONDS writes none
 
     def progress(fraction: float) -> None:
         nonlocal last_write
@@ -65,7 +64,7 @@ def run_job(job_id: str) -> str:
         return _fail(store, job_id, "the solver refused the case: " + str(error))
     except NumericalFailure as error:
         return _fail(store, job_id, str(error))
-    store.write_summary(job_id, result.summary)
+    store.write_summary(job_id, result.summary_json)
     store.update(job_id, status=SUCCEEDED, progress=1.0, finished=now())
     return SUCCEEDED
 
