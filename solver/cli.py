@@ -11,6 +11,19 @@ from pathlib import Path
 EXIT_FAILED, EXIT_INVALID = 1, 2
 
 
+def _no_such_file(path: str) -> int:
+    print(f"percussim: no such case file: {path}", file=sys.stderr)
+    return EXIT_INVALID
+
+
+def _refused(what: str, error) -> int:
+    """Name every offending field of a refused case or sweep on stderr."""
+    print(f"percussim: invalid {what}:", file=sys.stderr)
+    for e in error.errors:
+        print(f"  {e.field}: {e.message}", file=sys.stderr)
+    return EXIT_INVALID
+
+
 def _run(args: argparse.Namespace) -> int:
     from .case import CaseError, load_case
     from .controller import NumericalFailure
@@ -21,13 +34,9 @@ def _run(args: argparse.Namespace) -> int:
         # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
         result = simulate(case, model=args.model, result_path=args.output)
     except FileNotFoundError:
-        print(f"percussim: no such case file: {args.case}", file=sys.stderr)
-        return EXIT_INVALID
+        return _no_such_file(args.case)
     except CaseError as error:
-        print(f"percussim: invalid case {args.case}:", file=sys.stderr)
-        for e in error.errors:
-            print(f"  {e.field}: {e.message}", file=sys.stderr)
-        return EXIT_INVALID
+        return _refused(f"case {args.case}", error)
     except NumericalFailure as error:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
@@ -50,13 +59,9 @@ def _sweep(args: argparse.Namespace) -> int:
         rows = run_sweep(sweep, processes=args.processes, progress=lambda done, total: print(
             f"\rpercussim: {done}/{total} variants", end="", file=sys.stderr, flush=True))
     except FileNotFoundError:
-        print(f"percussim: no such case file: {args.case}", file=sys.stderr)
-        return EXIT_INVALID
+        return _no_such_file(args.case)
     except CaseError as error:
-        print(f"percussim: invalid sweep of {args.case}:", file=sys.stderr)
-        for e in error.errors:
-            print(f"  {e.field}: {e.message}", file=sys.stderr)
-        return EXIT_INVALID
+        return _refused(f"sweep of {args.case}", error)
     print(file=sys.stderr)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     if args.csv:
