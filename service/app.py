@@ -14,6 +14,7 @@ from worker.store import WorkerRegistry
 
 from . import errors, presets
 from .jobs import jobs_router
+from .limits import BodySizeLimit
 from .queue import JobQueue
 from .sweeps import sweeps_router
 
@@ -32,6 +33,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         version="1",
     )
     errors.install(app)
+    app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()))
     app.include_router(sweeps_router(settings, queue))
     app.include_router(presets.router)

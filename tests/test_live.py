@@ -97,6 +97,11 @@ def test_a_sweep_fans_out_over_two_workers_into_one_table(redis_url, tmp_path):
         s.stop()
 
 
+def test_an_oversized_body_gets_413_from_the_running_server(stack):
+    answer = stack.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"description": "x" * 3_000_000}))
+    assert answer.status_code == 413 and "limit of 2000000 bytes" in answer.json()["detail"][0]["message"]
+
+
 def test_an_invalid_case_gets_422_naming_the_field(stack):
     answer = stack.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"contact": {"exponent": 0.9}}))
     assert answer.status_code == 422

@@ -329,3 +329,18 @@ def test_an_unreachable_broker_fails_every_variant_with_503(tmp_path):
     assert answer.status_code == 503 and answer.headers["retry-after"].isdigit()
     jobs = client.get("/v1/jobs").json()["jobs"]
     assert len(jobs) == 6 and all(j["status"] == "failed" for j in jobs)
+
+
+def test_an_oversized_body_is_refused_with_413_naming_the_limit(tmp_path):
+    client = _client(tmp_path, max_body_bytes=4096)
+    big = merge(BASE_CASE, {"description": "x" * 5000})
+    answer = client.post("/v1/jobs", json=big)
+    assert answer.status_code == 413
+    assert answer.json()["detail"] == [{"field": "body", "message":
+                                        "is larger than the limit of 4096 bytes (PERCUSSIM_MAX_BODY_BYTES)"}]
+    # Sent in chunks without a Content-Length, the bytes are counted as they come.
+    chunks = (json.dumps(big)[k:k + 1000].encode() for k in range(0, len(json.dumps(big)), 1000))
+    answer = client.post("/v1/jobs", content=chunks, headers={"content-type": "application/json"})
+    assert answer.status_code == 413
+    assert client.get("/v1/jobs").json()["total"] == 0
+    assert client.post("/v1/jobs", json=BASE_CASE).status_code == 202  # under the limit: as before

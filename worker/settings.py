@@ -27,6 +27,7 @@ class Settings(BaseSettings):
     max_node_steps: float = Limits.max_node_steps
     max_output_values: float = Limits.max_output_values
     max_sweep_variants: int = Field(default=1000, ge=1, description="variants one sweep may queue")
+    max_body_bytes: int = Field(default=2_000_000, ge=1024, description="largest request body accepted")
 
     @property
     def embedded(self) -> bool:
