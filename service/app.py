@@ -6,13 +6,15 @@ Creating the app writes nothing: the results store is opened per request, so imp
 
 from __future__ import annotations
 
-from fastapi import FastAPI
+from fastapi import Depends, FastAPI
+from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse
 
 from worker.settings import Settings, settings as env_settings
 from worker.store import WorkerRegistry
 
 from . import errors, presets
+from .auth import authenticate
 from .jobs import jobs_router
 from .limits import BodySizeLimit
 from .queue import JobQueue
@@ -34,9 +36,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     )
     errors.install(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
-    app.include_router(jobs_router(settings, queue, presets.openapi_examples()))
-    app.include_router(sweeps_router(settings, queue))
-    app.include_router(presets.router)
+    if settings.cors_origin_list():
+        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origin_list(),
+                           allow_methods=["GET", "POST", "DELETE"], allow_headers=["Content-Type", "X-API-Key"],
+                           expose_headers=["Location", "Retry-After"])
+    keyed = [Depends(authenticate(settings))]
+    app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
+    app.include_router(sweeps_router(settings, queue), dependencies=keyed)
+    app.include_router(presets.router, dependencies=keyed)
 
     @app.get("/healthz", tags=["health"])
     def healthz() -> dict:

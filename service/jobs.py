@@ -112,8 +112,8 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     not_found = {404: {"model": Problem, "description": "no job with this id"}}
     not_ready = {409: {"model": Problem, "description": "the job has not succeeded"}}
 
-    def store() -> JobStore:
-        return JobStore(settings.results_dir)
+    def store(request: Request) -> JobStore:
+        return JobStore(settings.results_dir, owner=request.state.owner)
 
     @router.post("", status_code=202, response_model=Job, responses={
         422: {"model": FieldErrors, "description": "the case is invalid or exceeds a limit"},
@@ -122,7 +122,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
                case: Annotated[Case, Body(openapi_examples=examples)]) -> dict:
         """Queue an impact case. A case over the size limits is refused here, naming the limit."""
         check_limits(case, resolve_numerics(case), settings.limits())
-        jobs = store()
+        jobs = store(request)
         record = jobs.create(case.model_dump(mode="json", exclude_none=True))
         queue_jobs(jobs, queue, [record["id"]])
         view = _view(request, record)
@@ -133,19 +133,19 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     def list_jobs(request: Request, offset: Annotated[int, Query(ge=0)] = 0,
                   limit: Annotated[int, Query(ge=1, le=500)] = 50) -> dict:
         """Recent jobs, newest first."""
-        total, records = store().list(offset, limit)
+        total, records = store(request).list(offset, limit)
         return {"total": total, "offset": offset, "limit": limit,
                 "jobs": [_view(request, r) for r in records]}
 
     @router.get("/{job_id}", response_model=Job, responses=not_found)
     def get_job(request: Request, job_id: str) -> dict:
         """A job's status, progress (0..1), timestamps and error."""
-        return _view(request, store().get(job_id))
+        return _view(request, store(request).get(job_id))
 
     @router.get("/{job_id}/summary", responses=not_found | not_ready)
-    def get_summary(job_id: str) -> dict:
+    def get_summary(request: Request, job_id: str) -> dict:
         """The pulse summary of a succeeded job."""
-        jobs = store()
+        jobs = store(request)
         record = jobs.get(job_id)
         if record["status"] != SUCCEEDED:
             raise _not_ready(record, "summary")
@@ -153,9 +153,9 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
 
     @router.get("/{job_id}/result.h5", response_class=FileResponse, responses=not_found | not_ready | {
         200: {"content": {"application/x-hdf5": {}}, "description": "the HDF5 result"}})
-    def get_result(job_id: str) -> FileResponse:
+    def get_result(request: Request, job_id: str) -> FileResponse:
         """The HDF5 result of a succeeded job."""
-        jobs = store()
+        jobs = store(request)
         record = jobs.get(job_id)
         if record["status"] != SUCCEEDED:
             raise _not_ready(record, "result")
@@ -166,10 +166,10 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         409: {"model": Problem, "description": "the job has already finished"}})
     def cancel_job(request: Request, job_id: str) -> dict:
         """Cancel a job: a queued one at once, a running one between two chunks of its run."""
-        record = store().get(job_id)
+        record = store(request).get(job_id)
         if record["status"] in FINISHED:
             raise HTTPException(status_code=409,
                                 detail=f"job {job_id} has already finished: it is {record['status']}")
-        return _view(request, cancel(store(), job_id))
+        return _view(request, cancel(store(request), job_id))
 
     return router

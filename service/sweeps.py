@@ -49,8 +49,12 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
     router = APIRouter(prefix="/v1/sweeps", tags=["sweeps"])
     not_found = {404: {"model": Problem, "description": "no sweep with this id"}}
 
+    def stores(request: Request) -> tuple[JobStore, SweepStore]:
+        owner = request.state.owner
+        return JobStore(settings.results_dir, owner=owner), SweepStore(settings.results_dir, owner=owner)
+
     def view(request: Request, record: dict) -> dict:
-        jobs = JobStore(settings.results_dir)
+        jobs, _ = stores(request)
         rows, counts, progress = [], Counter(), 0.0
         for variant in record["variants"]:
             job = jobs.get(variant["job"])
@@ -77,9 +81,9 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
         all workers. Every variant is validated and checked against the limits first: one bad
         variant refuses the sweep, naming the parameter value it came from."""
         found = variants(sweep, max_variants=settings.max_sweep_variants, limits=settings.limits())
-        jobs = JobStore(settings.results_dir)
+        jobs, sweeps = stores(request)
         ids = [jobs.create(case.model_dump(mode="json", exclude_none=True))["id"] for _, case in found]
-        record = SweepStore(settings.results_dir).create(
+        record = sweeps.create(
             sweep.case.name, list(sweep.parameters),
             [{"values": values, "job": job_id} for (values, _), job_id in zip(found, ids)])
         queue_jobs(jobs, queue, ids)
@@ -89,13 +93,13 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
     @router.get("/{sweep_id}", response_model=SweepView, responses=not_found)
     def get_sweep(request: Request, sweep_id: str) -> dict:
         """The sweep's progress and its table: a row per variant, filled in as its job succeeds."""
-        return view(request, SweepStore(settings.results_dir).get(sweep_id))
+        return view(request, stores(request)[1].get(sweep_id))
 
     @router.delete("/{sweep_id}", status_code=202, response_model=SweepView, responses=not_found)
     def cancel_sweep(request: Request, sweep_id: str) -> dict:
         """Cancel every variant that has not finished."""
-        record = SweepStore(settings.results_dir).get(sweep_id)
-        jobs = JobStore(settings.results_dir)
+        jobs, sweeps = stores(request)
+        record = sweeps.get(sweep_id)
         for variant in record["variants"]:
             if jobs.get(variant["job"])["status"] not in FINISHED:
                 cancel(jobs, variant["job"])

@@ -28,6 +28,8 @@ class Settings(BaseSettings):
     max_output_values: float = Limits.max_output_values
     max_sweep_variants: int = Field(default=1000, ge=1, description="variants one sweep may queue")
     max_body_bytes: int = Field(default=2_000_000, ge=1024, description="largest request body accepted")
+    api_keys: str | None = Field(default=None, description="comma-separated API keys; none: no keys needed")
+    cors_origins: str | None = Field(default=None, description="comma-separated origins browsers may call from")
 
     @property
     def embedded(self) -> bool:
@@ -37,9 +39,19 @@ class Settings(BaseSettings):
     def broker_folder(self) -> Path:
         return self.results_dir / "broker"
 
+    def api_key_list(self) -> list[str]:
+        return _items(self.api_keys)
+
+    def cors_origin_list(self) -> list[str]:
+        return _items(self.cors_origins)
+
     def limits(self) -> Limits:
         return Limits(max_cells=self.max_cells, max_steps=self.max_steps,
                       max_node_steps=self.max_node_steps, max_output_values=self.max_output_values)
+
+
+def _items(text: str | None) -> list[str]:
+    return [item.strip() for item in (text or "").split(",") if item.strip()]
 
 
 @lru_cache

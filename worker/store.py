@@ -47,9 +47,12 @@ def write_atomic(path: Path, data: bytes) -> None:
 
 
 class JobStore:
-    def __init__(self, root: Path):
+    """The jobs; with an `owner` (an API key's id), only that owner's: others' are unknown."""
+
+    def __init__(self, root: Path, owner: str | None = None):
         self.jobs = Path(root) / "jobs"
         self.jobs.mkdir(parents=True, exist_ok=True)
+        self.owner = owner
 
     def folder(self, job_id: str) -> Path:
         if not isinstance(job_id, str) or not _ID.fullmatch(job_id):
@@ -67,12 +70,18 @@ class JobStore:
         write_atomic(folder / "case.json", json.dumps(case).encode())
         record = {"id": job_id, "name": case.get("name"), "status": QUEUED, "progress": 0.0,
                   "created": now(), "started": None, "finished": None, "error": None,
-                  "attempts": 0, "worker": None}
+                  "attempts": 0, "worker": None, "owner": self.owner}
         write_atomic(folder / "job.json", json.dumps(record).encode())
         return record
 
     def get(self, job_id: str) -> dict:
-        return json.loads((self.folder(job_id) / "job.json").read_text())
+        record = json.loads((self.folder(job_id) / "job.json").read_text())
+        if not self._sees(record):
+            raise UnknownJob(job_id)
+        return record
+
+    def _sees(self, record: dict) -> bool:
+        return self.owner is None or record.get("owner") == self.owner
 
     def update(self, job_id: str, **changes) -> dict:
         record = self.get(job_id) | changes
@@ -103,9 +112,11 @@ class JobStore:
         records = []
         for folder in self.jobs.iterdir():
             try:
-                records.append(json.loads((folder / "job.json").read_text()))
+                record = json.loads((folder / "job.json").read_text())
             except (OSError, ValueError):
                 continue  # a folder being created
+            if self._sees(record):
+                records.append(record)
         records.sort(key=lambda r: r["created"], reverse=True)
         return len(records), records[offset:offset + limit]
 
@@ -115,16 +126,18 @@ class UnknownSweep(KeyError):
 
 
 class SweepStore:
-    """Sweeps: each variant is an ordinary job; the sweep record says which job has which values."""
+    """Sweeps: each variant is an ordinary job; the sweep record says which job has which values.
+    With an `owner`, only that owner's sweeps are known."""
 
-    def __init__(self, root: Path):
+    def __init__(self, root: Path, owner: str | None = None):
         self.folder = Path(root) / "sweeps"
         self.folder.mkdir(parents=True, exist_ok=True)
+        self.owner = owner
 
     def create(self, name: str | None, parameters: list[str], variants: list[dict]) -> dict:
         """A new sweep of `variants` (each `{"values": {...}, "job": id}`); returns its record."""
         record = {"id": secrets.token_urlsafe(16), "name": name, "created": now(),
-                  "parameters": parameters, "variants": variants}
+                  "parameters": parameters, "variants": variants, "owner": self.owner}
         write_atomic(self.folder / f"{record['id']}.json", json.dumps(record).encode())
         return record
 
@@ -132,9 +145,12 @@ class SweepStore:
         if not isinstance(sweep_id, str) or not _ID.fullmatch(sweep_id):
             raise UnknownSweep(sweep_id)
         try:
-            return json.loads((self.folder / f"{sweep_id}.json").read_text())
+            record = json.loads((self.folder / f"{sweep_id}.json").read_text())
         except FileNotFoundError:
             raise UnknownSweep(sweep_id) from None
+        if self.owner is not None and record.get("owner") != self.owner:
+            raise UnknownSweep(sweep_id)
+        return record
 
 
 class WorkerRegistry:

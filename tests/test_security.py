@@ -1,0 +1,99 @@
+"""Security of the API: optional keys that see only their own jobs, no secret stored, no path built
+from user input, CORS only where configured."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+from fastapi.testclient import TestClient
+
+from conftest import BASE_CASE
+from service.app import create_app
+from solver.presets import preset_json
+from worker.settings import Settings
+
+ALICE, BOB = "alice-key-0123456789", "bob-key-9876543210"
+
+
+@pytest.fixture(autouse=True)
+def clean_environment(monkeypatch):
+    for name in list(os.environ):
+        if name.startswith("PERCUSSIM_"):
+            monkeypatch.delenv(name)
+
+
+@pytest.fixture
+def keyed(tmp_path) -> TestClient:
+    return TestClient(create_app(Settings(results_dir=tmp_path, api_keys=f"{ALICE}, {BOB}")))
+
+
+def test_without_a_known_key_every_v1_call_is_401(keyed):
+    for method, path in (("post", "/v1/jobs"), ("get", "/v1/jobs"), ("get", "/v1/presets"),
+                         ("post", "/v1/sweeps"), ("get", "/v1/jobs/AAAAAAAAAAAAAAAAAAAAAA")):
+        for headers in ({}, {"X-API-Key": "guess"}):
+            answer = getattr(keyed, method)(path, headers=headers, **({"json": BASE_CASE} if method == "post" else {}))
+            assert answer.status_code == 401, (method, path, headers)
+            assert "X-API-Key" in answer.json()["detail"] and answer.headers["www-authenticate"]
+    # Health and the API's description stay open: probes and clients need them to start.
+    assert keyed.get("/healthz").status_code == 200
+    assert keyed.get("/openapi.json").status_code == 200
+
+
+def test_a_key_sees_only_its_own_jobs_and_sweeps(keyed, tmp_path):
+    alice, bob = {"X-API-Key": ALICE}, {"X-API-Key": BOB}
+    job = keyed.post("/v1/jobs", json=BASE_CASE, headers=alice).json()
+    sweep = keyed.post("/v1/sweeps", headers=alice, json={
+        "case": preset_json("fig5"), "parameters": {"striker.velocity": [3.0, 5.0]}}).json()
+    assert keyed.get(f"/v1/jobs/{job['id']}", headers=alice).status_code == 200
+    for path in (f"/v1/jobs/{job['id']}", f"/v1/jobs/{job['id']}/summary", f"/v1/jobs/{job['id']}/result.h5",
+                 f"/v1/sweeps/{sweep['id']}"):
+        assert keyed.get(path, headers=bob).status_code == 404, path  # as if it did not exist
+    assert keyed.delete(f"/v1/jobs/{job['id']}", headers=bob).status_code == 404
+    assert keyed.delete(f"/v1/sweeps/{sweep['id']}", headers=bob).status_code == 404
+    assert keyed.get("/v1/jobs", headers=bob).json()["total"] == 0
+    assert keyed.get("/v1/jobs", headers=alice).json()["total"] == 3  # the job and two variants
+    # No file of the results store holds a key.
+    for path in tmp_path.rglob("*"):
+        if path.is_file():
+            text = path.read_bytes()
+            assert ALICE.encode() not in text and BOB.encode() not in text, path
+
+
+@pytest.mark.parametrize("keys", [None, "", " , "])  # unset, or empty as docker-compose passes it
+def test_without_keys_configured_the_api_is_open(tmp_path, keys):
+    client = TestClient(create_app(Settings(results_dir=tmp_path, api_keys=keys)))
+    assert client.post("/v1/jobs", json=BASE_CASE).status_code == 202
+
+
+@pytest.mark.parametrize("path", [
+    "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", "/v1/jobs/../../etc/passwd", "/v1/jobs/%2e%2e/summary",
+    "/v1/jobs/..%2Fjobs/result.h5", "/v1/presets/..%2F..%2Fpyproject", "/v1/presets/%2Fetc%2Fpasswd",
+    "/v1/sweeps/..%2F..%2Fjobs", "/v1/jobs/" + "A" * 21 + "%00",
+])
+def test_no_path_is_built_from_user_input(tmp_path, path):
+    client = TestClient(create_app(Settings(results_dir=tmp_path)))
+    (tmp_path / "secret.json").write_text('{"secret": 1}')
+    answer = client.get(path)
+    assert answer.status_code == 404, (path, answer.text)
+    assert "secret" not in answer.text and "root:" not in answer.text
+
+
+def test_a_downloaded_file_name_is_made_from_safe_characters(tmp_path):
+    from service.jobs import _download_name
+
+    assert _download_name({"id": "X", "name": "../../etc/passwd"}) == "etc_passwd-X.h5"
+    assert _download_name({"id": "X", "name": 'a"b\r\nc'}) == "a_b_c-X.h5"
+
+
+def test_cors_answers_only_the_configured_origins(tmp_path):
+    preflight = {"Origin": "https://design.example", "Access-Control-Request-Method": "POST",
+                 "Access-Control-Request-Headers": "content-type,x-api-key"}
+    closed = TestClient(create_app(Settings(results_dir=tmp_path)))
+    assert "access-control-allow-origin" not in closed.options("/v1/jobs", headers=preflight).headers
+    open_ = TestClient(create_app(Settings(results_dir=tmp_path, cors_origins="https://design.example")))
+    answer = open_.options("/v1/jobs", headers=preflight)
+    assert answer.status_code == 200
+    assert answer.headers["access-control-allow-origin"] == "https://design.example"
+    other = open_.options("/v1/jobs", headers=preflight | {"Origin": "https://elsewhere.example"})
+    assert other.headers.get("access-control-allow-origin") != "https://elsewhere.example"
