@@ -9,9 +9,11 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import FastAPI, Request
+from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel
+from starlette.exceptions import HTTPException
 
 from solver.case import CaseError, FieldError, describe, field_path
 from worker.store import UnknownJob, UnknownSweep
@@ -70,6 +72,17 @@ async def _unknown_job(request: Request, exc: UnknownJob) -> JSONResponse:
     return JSONResponse(status_code=404, content={"detail": f"no job with id {exc.args[0]!r}"})
 
 
+async def _http_error(request: Request, exc: HTTPException) -> JSONResponse:
+    # FastAPI answers 400 "There was an error parsing the body" when decoding a body fails other
+    # than as invalid JSON (a body nested deeper than the parser goes): name the body instead.
+    if exc.status_code == 400 and exc.__cause__ is not None:
+        cause = exc.__cause__
+        reason = ("is nested too deeply to read" if isinstance(cause, RecursionError)
+                  else f"could not be read: {type(cause).__name__}")
+        return _field_errors([FieldError(field="body", message=reason)])
+    return await http_exception_handler(request, exc)
+
+
 async def _unknown_sweep(request: Request, exc: UnknownSweep) -> JSONResponse:
     return JSONResponse(status_code=404, content={"detail": f"no sweep with id {exc.args[0]!r}"})
 
@@ -80,3 +93,4 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(CaseError, _invalid_case)
     app.add_exception_handler(UnknownJob, _unknown_job)
     app.add_exception_handler(UnknownSweep, _unknown_sweep)
+    app.add_exception_handler(HTTPException, _http_error)

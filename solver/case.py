@@ -16,6 +16,20 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
+# Upper bounds wide enough for any percussive device, from a dental scaler to a pile hammer, and
+# narrow enough that no combination overflows the solver's arithmetic (fuzzing found where).
+Mass = Annotated[float, Field(gt=0, le=1e9)]
+Speed = Annotated[float, Field(ge=-1e6, le=1e6)]
+Length = Annotated[float, Field(gt=0, le=1e4)]
+Area = Annotated[float, Field(gt=0, le=1e4)]
+Modulus = Annotated[float, Field(ge=1e3, le=1e20)]  # up to far stiffer than steel: rigid-limit studies
+Density = Annotated[float, Field(ge=1e-3, le=1e6)]
+Stiffness = Annotated[float, Field(ge=0, le=1e20)]
+Damping = Annotated[float, Field(ge=0, le=1e15)]
+ForceAmplitude = Annotated[float, Field(ge=-1e12, le=1e12)]
+Frequency = Annotated[float, Field(gt=0, le=1e9)]
+Duration = Annotated[float, Field(gt=0, le=1e4)]
+Instant = Annotated[float, Field(ge=0, le=1e4)]
 
 
 class _Model(BaseModel):
@@ -33,15 +47,15 @@ def _field_error(model: str, loc: tuple, message: str, value: Any) -> Validation
 class Striker(_Model):
     """The lumped striker: mass `m1` (kg) and pre-impact velocity `W1` (m/s, + toward the tool)."""
 
-    mass: Positive
-    velocity: float
+    mass: Mass
+    velocity: Speed
 
 
 class Profile(_Model):
     """Piecewise-linear cross-section `S(x)`: stations `x` (m, from the struck end) and areas (m²)."""
 
     x: list[float] = Field(min_length=2)
-    area: list[Positive] = Field(min_length=2)
+    area: list[Area] = Field(min_length=2)
 
     @field_validator("x")
     @classmethod
@@ -74,10 +88,10 @@ class Tool(_Model):
     Give either a uniform `area` or a piecewise-linear `profile`.
     """
 
-    length: Positive
-    youngs_modulus: Positive
-    density: Positive
-    area: Positive | None = None
+    length: Length
+    youngs_modulus: Modulus
+    density: Density
+    area: Area | None = None
     profile: Profile | None = None
 
     @model_validator(mode="after")
@@ -102,42 +116,42 @@ class Contact(_Model):
     The contact force on the tool is `G(δ)·δ + b1·δ'`; α = 0.5 is Hertz-like (c1 in N/m^1.5).
     """
 
-    stiffness: Positive
+    stiffness: Annotated[Stiffness, Field(gt=0)]
     exponent: float = Field(ge=0.0, le=0.5)
-    tension_stiffness: NonNegative = 0.0
-    damping: NonNegative = 0.0
+    tension_stiffness: Stiffness = 0.0
+    damping: Damping = 0.0
 
 
 class Medium(_Model):
     """Working medium at x = L (4): spring `c2` (N/m) and damper `b2` (N·s/m)."""
 
-    stiffness: NonNegative
-    damping: NonNegative = 0.0
+    stiffness: Stiffness
+    damping: Damping = 0.0
 
 
 class SineForce(_Model):
     """External force on the striker `R(t) = P·sin(ωt)`."""
 
     kind: Literal["sine"]
-    amplitude: float
-    omega: Positive
+    amplitude: ForceAmplitude
+    omega: Frequency
 
 
 class AbsSineForce(_Model):
     """External force on the striker `R(t) = P·|sin(ωt)|`."""
 
     kind: Literal["abs_sine"]
-    amplitude: float
-    omega: Positive
+    amplitude: ForceAmplitude
+    omega: Frequency
 
 
 class PulseForce(_Model):
     """External force on the striker `R(t) = P` for `t1 ≤ t ≤ t1 + Δt`, else 0."""
 
     kind: Literal["pulse"]
-    amplitude: float
-    start: NonNegative = 0.0
-    duration: Positive
+    amplitude: ForceAmplitude
+    start: Instant = 0.0
+    duration: Duration
 
 
 Force = Annotated[Union[SineForce, AbsSineForce, PulseForce], Field(discriminator="kind")]
@@ -147,9 +161,9 @@ class Numerics(_Model):
     """Time span, grid and scheme. `time_step` (τ) and `cells` (N = L/h) default from the case itself;
     with `tolerance` instead, the solver chooses model, scheme and grid to meet it."""
 
-    duration: Positive
-    time_step: Positive | None = None
-    cells: int | None = Field(default=None, ge=1)
+    duration: Duration
+    time_step: Duration | None = None
+    cells: int | None = Field(default=None, ge=1, le=2**31)  # the service limits are far lower
     tolerance: float | None = Field(
         default=None, ge=1e-5, le=0.2,
         description="relative accuracy asked on co-impact time, peak contact force and maximum "

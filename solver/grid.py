@@ -52,7 +52,9 @@ def contact_time_estimate(case: Case) -> float:
     else:
         return case.numerics.duration
     stiffness = c1 * depth**alpha
-    return math.pi * math.sqrt(m1 / stiffness)
+    # A depth that underflowed to 0 (a striker of a few yoctograms) leaves the contact too short
+    # to estimate: 0, which the caller refuses as "no time step can be chosen".
+    return math.pi * math.sqrt(m1 / stiffness) if stiffness > 0 else 0.0
 
 
 @dataclass(frozen=True)
@@ -87,6 +89,13 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
     cells = cells or num.cells or DEFAULT_CELLS
     h = case.tool.length / cells
     a = wave_speed(case.tool)
+    if not (h > 0.0 and 0.0 < a < math.inf and math.isfinite(a / h)):
+        # Extremes that pass each field's own check but leave no grid to compute on.
+        raise CaseError([FieldError(
+            field="tool",
+            message=f"length {case.tool.length:.3g} m on {cells} cells and a wave speed "
+                    f"sqrt(youngs_modulus/density) = {a:.3g} m/s leave no usable grid: give "
+                    "values of a real tool")])
     # The lumped model has no wave to resolve: τ only samples its histories.
     wave_limit = h / a if model == "rod" else math.inf
     tau = time_step or num.time_step or min(wave_limit, contact_time_estimate(case) / STEPS_PER_CONTACT)
