@@ -58,20 +58,38 @@ class Process:
                 pass
 
 
+class RedisServer:
+    """A real redis-server on a loopback port, with append-only persistence in `folder`: stopped
+    and started again on the same port and data, it has every queued message back."""
+
+    def __init__(self, folder: Path):
+        self.binary = shutil.which("redis-server")
+        if self.binary is None:
+            raise RuntimeError("redis-server is not installed: run the tests with scripts/test")
+        self.folder = folder
+        self.folder.mkdir(parents=True, exist_ok=True)
+        self.port = free_port()
+        self.url = f"redis://127.0.0.1:{self.port}/0"
+        self.process: Process | None = None
+
+    def start(self) -> None:
+        self.process = Process([self.binary, "--port", str(self.port), "--bind", "127.0.0.1",
+                                "--dir", str(self.folder), "--appendonly", "yes", "--save", ""],
+                               dict(os.environ), self.folder / "redis.log")
+        wait_for(lambda: redis.Redis.from_url(self.url, socket_timeout=0.5).ping(), 15, "redis-server")
+
+    def stop(self) -> None:
+        if self.process is not None:
+            self.process.stop()  # SIGTERM: redis writes its append-only file out before it exits
+
+
 @contextmanager
 def redis_server(folder: Path):
-    """A real redis-server on a free loopback port, with append-only persistence in `folder`."""
-    binary = shutil.which("redis-server")
-    if binary is None:
-        raise RuntimeError("redis-server is not installed: run the tests with scripts/test")
-    port = free_port()
-    folder.mkdir(parents=True, exist_ok=True)
-    server = Process([binary, "--port", str(port), "--bind", "127.0.0.1", "--dir", str(folder),
-                      "--appendonly", "yes", "--save", ""], dict(os.environ), folder / "redis.log")
-    url = f"redis://127.0.0.1:{port}/0"
+    """A running `RedisServer`'s URL for the block."""
+    server = RedisServer(folder)
+    server.start()
     try:
-        wait_for(lambda: redis.Redis.from_url(url, socket_timeout=0.5).ping(), 15, "redis-server")
-        yield url
+        yield server.url
     finally:
         server.stop()
 
@@ -90,10 +108,11 @@ class Stack:
         self.port = free_port()
         self.url = f"http://127.0.0.1:{self.port}"
         self.processes: list[Process] = []
-        percussim = [sys.executable, "-m", "solver"]
-        serve = [*percussim, "serve", "--port", str(self.port)]
+        self.workers: dict[str, Process] = {}  # by Celery node name
+        serve = [sys.executable, "-m", "solver", "serve", "--port", str(self.port)]
+        self.serve_api = [*serve, "--no-worker"]
         if broker_url:  # the API alone, workers as separate processes
-            self.processes.append(Process([*serve, "--no-worker"], self.env, folder / "api.log"))
+            self.processes.append(Process(self.serve_api, self.env, folder / "api.log"))
             for k in range(workers):
                 self.add_worker(f"w{k}")
         else:  # embedded: serve starts its own workers
@@ -106,7 +125,14 @@ class Stack:
         worker = Process([sys.executable, "-m", "solver", "worker", "--name", f"{name}@percussim"],
                          self.env | self.worker_env, self.folder / f"worker-{name}.log")
         self.processes.append(worker)
+        self.workers[f"{name}@percussim"] = worker
         return worker
+
+    def restart_api(self) -> None:
+        """Stop the API (Redis mode: the first process) and start a new one on the same port."""
+        self.processes[0].stop()
+        self.processes[0] = Process(self.serve_api, self.env, self.folder / "api-restarted.log")
+        wait_for(lambda: self.client.get("/healthz").status_code == 200, 60, "the restarted API")
 
     def wait_status(self, job_id: str, statuses: tuple[str, ...], timeout: float = 120) -> dict:
         def status():

@@ -34,7 +34,10 @@ def broker_config(settings: Settings) -> dict:
     return {
         "broker_url": settings.broker_url,
         "broker_transport_options": {
-            "visibility_timeout": settings.job_time_limit + 120,  # redelivery of a lost job
+            "visibility_timeout": settings.redelivery,  # a lost job is delivered again after this
+            # and found within 5 s of it (kombu's default sweep is every 100 s)
+            "unacked_restore_interval": 5,
+            "unacked_restore_throttle": 1,
             "socket_connect_timeout": CONNECT_TIMEOUT,
             "socket_timeout": CONNECT_TIMEOUT,
         },

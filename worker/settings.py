@@ -10,7 +10,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import Field
+from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from solver.limits import Limits
@@ -22,6 +22,9 @@ class Settings(BaseSettings):
     broker_url: str | None = Field(default=None, description="e.g. redis://redis:6379/0; none: embedded")
     results_dir: Path = Field(default=Path("percussim-data"), description="the shared results store")
     job_time_limit: float = Field(default=900.0, gt=0, description="seconds a job may run")
+    redelivery_seconds: float | None = Field(
+        default=None, gt=0, description="seconds after which a job whose worker died is delivered "
+                                        "again (Redis); default job_time_limit + 120, never less")
     max_cells: int = Limits.max_cells
     max_steps: int = Limits.max_steps
     max_node_steps: float = Limits.max_node_steps
@@ -30,6 +33,18 @@ class Settings(BaseSettings):
     max_body_bytes: int = Field(default=2_000_000, ge=1024, description="largest request body accepted")
     api_keys: str | None = Field(default=None, description="comma-separated API keys; none: no keys needed")
     cors_origins: str | None = Field(default=None, description="comma-separated origins browsers may call from")
+
+    @model_validator(mode="after")
+    def _redelivery_after_the_time_limit(self) -> "Settings":
+        # Sooner, a job still running would be delivered to a second worker.
+        if self.redelivery_seconds is not None and self.redelivery_seconds <= self.job_time_limit:
+            raise ValueError(f"PERCUSSIM_REDELIVERY_SECONDS ({self.redelivery_seconds:g}) must exceed "
+                             f"PERCUSSIM_JOB_TIME_LIMIT ({self.job_time_limit:g})")
+        return self
+
+    @property
+    def redelivery(self) -> float:
+        return self.redelivery_seconds or self.job_time_limit + 120.0
 
     @property
     def embedded(self) -> bool:

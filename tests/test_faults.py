@@ -1,0 +1,136 @@
+"""Faults against the live stack (real redis-server, real workers, the real API): a worker killed
+mid-job, Redis restarted during a burst, the API restarted, a numerical failure, a burst of 1000.
+Each test prints the counts it saw."""
+
+from __future__ import annotations
+
+import signal
+import time
+
+import h5py
+import pytest
+
+from conftest import BASE_CASE, merge
+from live_stack import RedisServer, Stack, wait_for
+from solver.presets import preset_json
+
+FINISHED = ("succeeded", "failed", "cancelled")
+# About 3 s of work: long enough to be killed or cut off in the middle.
+SECONDS_OF_WORK = merge(preset_json("fig3"), {"numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
+                                              "outputs": {"history_stride": 100, "probes": []}})
+
+
+@pytest.fixture
+def redis(tmp_path):
+    server = RedisServer(tmp_path / "redis")
+    server.start()
+    yield server
+    server.stop()
+
+
+def statuses(stack: Stack, ids: list[str]) -> dict[str, int]:
+    counts: dict[str, int] = {}
+    for job_id in ids:
+        status = stack.client.get(f"/v1/jobs/{job_id}").json()["status"]
+        counts[status] = counts.get(status, 0) + 1
+    return counts
+
+
+def wait_all_finished(stack: Stack, ids: list[str], timeout: float) -> dict[str, int]:
+    def finished() -> dict[str, int] | None:
+        counts = statuses(stack, ids)
+        return counts if sum(counts.get(s, 0) for s in FINISHED) == len(ids) else None
+    return wait_for(finished, timeout, f"{len(ids)} jobs finished", interval=0.5)
+
+
+def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path):
+    s = Stack(tmp_path, redis.url, workers=2,
+              worker_env={"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"})
+    try:
+        job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
+        running = s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
+        victim = running["worker"]
+        s.workers[victim].stop(signal.SIGKILL)  # the worker and its pool, no chance to clean up
+        record = s.wait_status(job["id"], FINISHED, timeout=90)
+        print(f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
+              f"after {record['attempts']} attempts")
+        assert record["status"] == "succeeded", (record, s.logs())
+        assert record["worker"] != victim and record["attempts"] == 2
+        folder = tmp_path / "results" / "jobs" / job["id"]
+        assert sorted(p.name for p in folder.iterdir()) == ["case.json", "job.json", "result.h5", "summary.json"]
+        with h5py.File(folder / "result.h5") as f:
+            assert f.attrs["format"] == "percussim-result" and len(f["contact/force"]) > 0
+    finally:
+        s.stop()
+
+
+def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(redis, tmp_path):
+    s = Stack(tmp_path, redis.url, workers=1)
+    try:
+        accepted = [s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()["id"] for _ in range(3)]
+        accepted += [s.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"] for _ in range(20)]
+        redis.stop()
+        refused = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(5)]
+        assert all(a.status_code == 503 and a.headers["retry-after"].isdigit() for a in refused), \
+            [(a.status_code, a.text[:200]) for a in refused]
+        assert s.client.get("/readyz").status_code == 503
+        redis.start()  # the same port and append-only file
+        wait_for(lambda: s.client.get("/readyz").status_code == 200, 60, "readiness after Redis is back")
+        after = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(5)]
+        assert all(a.status_code == 202 for a in after), "the API recovers without a restart"
+        counts = wait_all_finished(s, accepted + [a.json()["id"] for a in after], timeout=180)
+        print(f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
+              f"5 accepted after; outcomes {counts}")
+        assert counts == {"succeeded": len(accepted) + 5}, s.logs()
+    finally:
+        s.stop()
+
+
+def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_path):
+    s = Stack(tmp_path, redis.url, workers=1)
+    try:
+        ids = [s.client.post("/v1/jobs", json=preset_json(name)).json()["id"] for name in ("fig3", "fig9")]
+        wait_all_finished(s, ids, timeout=60)
+        before = {i: (s.client.get(f"/v1/jobs/{i}").json(), s.client.get(f"/v1/jobs/{i}/summary").json(),
+                      s.client.get(f"/v1/jobs/{i}/result.h5").content) for i in ids}
+        s.restart_api()
+        for job_id, (record, summary, result) in before.items():
+            assert s.client.get(f"/v1/jobs/{job_id}").json() == record
+            assert s.client.get(f"/v1/jobs/{job_id}/summary").json() == summary
+            assert s.client.get(f"/v1/jobs/{job_id}/result.h5").content == result
+        assert s.client.get("/v1/jobs").json()["total"] == len(ids)
+        print(f"\nAPI restarted: {len(ids)} records, summaries and results served as before")
+    finally:
+        s.stop()
+
+
+def test_a_numerical_failure_ends_the_job_failed_with_when_and_what_to_change(redis, tmp_path):
+    s = Stack(tmp_path, redis.url, workers=1)
+    try:
+        # A stiff, heavily damped contact the explicit scheme's time step does not resolve.
+        case = merge(BASE_CASE, {"numerics": {"scheme": "explicit", "cells": 10},
+                                 "contact": {"stiffness": 1e20, "exponent": 0.5, "damping": 1e15}})
+        job = s.client.post("/v1/jobs", json=case).json()
+        record = s.wait_status(job["id"], FINISHED, timeout=60)
+        print(f"\nnumerical failure: {record['status']}: {record['error']}")
+        assert record["status"] == "failed"
+        assert "non-finite at t =" in record["error"] and "Reduce numerics.time_step" in record["error"]
+        assert s.client.get(f"/v1/jobs/{job['id']}/summary").status_code == 409
+    finally:
+        s.stop()
+
+
+def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path):
+    s = Stack(tmp_path, redis.url, workers=2)
+    try:
+        start = time.monotonic()
+        answers = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(1000)]
+        assert all(a.status_code == 202 for a in answers), {a.status_code for a in answers}
+        ids = [a.json()["id"] for a in answers]
+        counts = wait_all_finished(s, ids, timeout=600)
+        print(f"\nburst: 1000 submitted, outcomes {counts} after {time.monotonic() - start:.1f} s")
+        assert counts == {"succeeded": 1000}
+        assert s.client.get("/v1/jobs").json()["total"] == 1000
+    finally:
+        s.stop()
