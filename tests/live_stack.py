@@ -98,10 +98,11 @@ class Stack:
     """The API and its workers, sharing one results folder (and a broker, if given)."""
 
     def __init__(self, folder: Path, broker_url: str | None, workers: int = 1,
-                 worker_env: dict | None = None):
+                 worker_env: dict | None = None, env: dict | None = None):
         self.folder = folder
         self.env = {k: v for k, v in os.environ.items() if not k.startswith("PERCUSSIM_")}
         self.env["PERCUSSIM_RESULTS_DIR"] = str(folder / "results")
+        self.env |= env or {}  # for the API and the workers
         self.worker_env = worker_env or {}
         if broker_url:
             self.env["PERCUSSIM_BROKER_URL"] = broker_url

@@ -8,7 +8,7 @@ import os
 import pytest
 from fastapi.testclient import TestClient
 
-from conftest import BASE_CASE
+from conftest import BASE_CASE, merge
 from service.app import create_app
 from solver.presets import preset_json
 from worker.settings import Settings
@@ -97,3 +97,36 @@ def test_cors_answers_only_the_configured_origins(tmp_path):
     assert answer.headers["access-control-allow-origin"] == "https://design.example"
     other = open_.options("/v1/jobs", headers=preflight | {"Origin": "https://elsewhere.example"})
     assert other.headers.get("access-control-allow-origin") != "https://elsewhere.example"
+
+
+def test_keys_logs_and_paths_on_the_live_stack(tmp_path):
+    """The same through the running server and a real worker: the key's job runs, another key
+    cannot see it, no log holds a key, and encoded traversals reach no file."""
+    from live_stack import RedisServer, Stack
+
+    redis = RedisServer(tmp_path / "redis")
+    redis.start()
+    s = Stack(tmp_path, redis.url, env={"PERCUSSIM_API_KEYS": f"{ALICE},{BOB}", "PERCUSSIM_MAX_CELLS": "150"})
+    try:
+        alice, bob = {"X-API-Key": ALICE}, {"X-API-Key": BOB}
+        assert s.client.post("/v1/jobs", json=preset_json("fig3")).status_code == 401
+        job = s.client.post("/v1/jobs", json=preset_json("fig3"), headers=alice).json()
+        s.client.headers.update(alice)
+        assert s.wait_status(job["id"], ("succeeded", "failed"))["status"] == "succeeded"
+        assert s.client.get(f"/v1/jobs/{job['id']}/result.h5", headers=bob).status_code == 404
+        assert s.client.get(f"/v1/jobs/{job['id']}/result.h5").status_code == 200
+        # A case over a configured limit is refused up front, naming it.
+        over = s.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"numerics": {"cells": 200}}))
+        assert over.status_code == 422 and {"field": "numerics.cells",
+                                            "message": "200 cells exceed the limit of 150"} in over.json()["detail"]
+        for path in ("/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", "/v1/jobs/%2E%2E%2Fapi.log/summary",
+                     "/v1/presets/..%2F..%2Fpyproject"):
+            answer = s.client.get(path)
+            assert answer.status_code == 404 and "root:" not in answer.text, path
+        logs = "".join(p.log.read_text(errors="replace") for p in s.processes)
+        assert "GET /v1/jobs" in logs or "POST /v1/jobs" in logs  # the access log is there to search
+        assert ALICE not in logs and BOB not in logs
+        print(f"\nlive security: 401 without a key, 404 for another key, {len(logs)} bytes of logs without a key")
+    finally:
+        s.stop()
+        redis.stop()

@@ -248,9 +248,11 @@ def test_readyz_needs_the_embedded_broker_folder(client, tmp_path):
     assert answer.status_code == 503 and "broker" in answer.json()["reason"]
 
 
-def test_an_unreachable_broker_is_503_and_the_job_is_marked_failed(tmp_path):
+def test_an_unreachable_broker_is_503_and_the_job_is_marked_failed(tmp_path, caplog):
+    caplog.set_level("DEBUG")
     client = _client(tmp_path, broker_url="redis://:secret@127.0.0.1:1/0")  # nothing listens on port 1
     answer = client.post("/v1/jobs", json=BASE_CASE)
+    assert "secret" not in caplog.text, "the broker's password is in a log"
     assert answer.status_code == 503
     assert answer.headers["retry-after"].isdigit()
     assert "secret" not in answer.text and "nothing was queued" in answer.json()["detail"]
