@@ -28,6 +28,12 @@ def redis(tmp_path):
     server.stop()
 
 
+def report(capsys, text: str) -> None:
+    """Print what a test saw past pytest's capture: the suite's output carries the counts."""
+    with capsys.disabled():
+        print(text)
+
+
 def statuses(stack: Stack, ids: list[str]) -> dict[str, int]:
     counts: dict[str, int] = {}
     for job_id in ids:
@@ -43,7 +49,7 @@ def wait_all_finished(stack: Stack, ids: list[str], timeout: float) -> dict[str,
     return wait_for(finished, timeout, f"{len(ids)} jobs finished", interval=0.5)
 
 
-def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path):
+def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=2,
               worker_env={"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"})
     try:
@@ -53,7 +59,7 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         victim = running["worker"]
         s.workers[victim].stop(signal.SIGKILL)  # the worker and its pool, no chance to clean up
         record = s.wait_status(job["id"], FINISHED, timeout=90)
-        print(f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
+        report(capsys, f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
               f"after {record['attempts']} attempts")
         assert record["status"] == "succeeded", (record, s.logs())
         assert record["worker"] != victim and record["attempts"] == 2
@@ -65,7 +71,7 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         s.stop()
 
 
-def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(redis, tmp_path):
+def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         accepted = [s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()["id"] for _ in range(3)]
@@ -80,14 +86,14 @@ def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_
         after = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(5)]
         assert all(a.status_code == 202 for a in after), "the API recovers without a restart"
         counts = wait_all_finished(s, accepted + [a.json()["id"] for a in after], timeout=180)
-        print(f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
+        report(capsys, f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
               f"5 accepted after; outcomes {counts}")
         assert counts == {"succeeded": len(accepted) + 5}, s.logs()
     finally:
         s.stop()
 
 
-def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_path):
+def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         ids = [s.client.post("/v1/jobs", json=preset_json(name)).json()["id"] for name in ("fig3", "fig9")]
@@ -100,12 +106,12 @@ def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_pat
             assert s.client.get(f"/v1/jobs/{job_id}/summary").json() == summary
             assert s.client.get(f"/v1/jobs/{job_id}/result.h5").content == result
         assert s.client.get("/v1/jobs").json()["total"] == len(ids)
-        print(f"\nAPI restarted: {len(ids)} records, summaries and results served as before")
+        report(capsys, f"\nAPI restarted: {len(ids)} records, summaries and results served as before")
     finally:
         s.stop()
 
 
-def test_a_numerical_failure_ends_the_job_failed_with_when_and_what_to_change(redis, tmp_path):
+def test_a_numerical_failure_ends_the_job_failed_with_when_and_what_to_change(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         # A stiff, heavily damped contact the explicit scheme's time step does not resolve.
@@ -113,7 +119,7 @@ def test_a_numerical_failure_ends_the_job_failed_with_when_and_what_to_change(re
                                  "contact": {"stiffness": 1e20, "exponent": 0.5, "damping": 1e15}})
         job = s.client.post("/v1/jobs", json=case).json()
         record = s.wait_status(job["id"], FINISHED, timeout=60)
-        print(f"\nnumerical failure: {record['status']}: {record['error']}")
+        report(capsys, f"\nnumerical failure: {record['status']}: {record['error']}")
         assert record["status"] == "failed"
         assert "non-finite at t =" in record["error"] and "Reduce numerics.time_step" in record["error"]
         assert s.client.get(f"/v1/jobs/{job['id']}/summary").status_code == 409
@@ -121,7 +127,7 @@ def test_a_numerical_failure_ends_the_job_failed_with_when_and_what_to_change(re
         s.stop()
 
 
-def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path):
+def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=2)
     try:
         start = time.monotonic()
@@ -129,7 +135,7 @@ def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path)
         assert all(a.status_code == 202 for a in answers), {a.status_code for a in answers}
         ids = [a.json()["id"] for a in answers]
         counts = wait_all_finished(s, ids, timeout=600)
-        print(f"\nburst: 1000 submitted, outcomes {counts} after {time.monotonic() - start:.1f} s")
+        report(capsys, f"\nburst: 1000 submitted, outcomes {counts} after {time.monotonic() - start:.1f} s")
         assert counts == {"succeeded": 1000}
         assert s.client.get("/v1/jobs").json()["total"] == 1000
     finally:

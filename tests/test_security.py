@@ -130,3 +130,13 @@ def test_keys_logs_and_paths_on_the_live_stack(tmp_path):
     finally:
         s.stop()
         redis.stop()
+
+
+def test_job_ids_are_unguessable(tmp_path):
+    """128 random bits each (secrets.token_urlsafe): distinct, and no two share a long prefix."""
+    client = TestClient(create_app(Settings(results_dir=tmp_path)))
+    ids = [client.post("/v1/jobs", json=BASE_CASE).json()["id"] for _ in range(200)]
+    assert len(set(ids)) == 200
+    assert all(len(i) == 22 and i.replace("-", "").replace("_", "").isalnum() for i in ids)
+    longest_shared = max(len(os.path.commonprefix([a, b])) for a, b in zip(sorted(ids), sorted(ids)[1:]))
+    assert longest_shared <= 4, "ids that share a long prefix are not random"
