@@ -8,6 +8,8 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
+
 
 class LinearImpact:
     """A striker `m1` at `W1` on a steel rod through a linear contact of damping ratio `ζ`."""
@@ -25,11 +27,22 @@ class LinearImpact:
         self.decay = self.zeta * omega
         self.contact_time = math.pi / self.omega_d
         self.peak_time = math.atan2(self.omega_d, self.decay) / self.omega_d
-        self.peak_force = self.force(self.peak_time)
+        self.peak_force = float(self.force(self.peak_time))
 
-    def force(self, t: float) -> float:
-        """Contact force `k·δ(t)` while in contact; the stress is `σ(x, t) = −F(t − x/a)/S`."""
-        return self.k * self.w1 / self.omega_d * math.exp(-self.decay * t) * math.sin(self.omega_d * t)
+    def force(self, t):
+        """Contact force `k·δ(t)` while in contact (t a number or an array)."""
+        return self.k * self.w1 / self.omega_d * np.exp(-self.decay * t) * np.sin(self.omega_d * t)
+
+    def stress(self, t: np.ndarray, x: float) -> np.ndarray:
+        """`σ(x, t) = −F_c(t − x/a)/S`: the contact pulse travelling down the rod, 0 outside it."""
+        delayed = np.asarray(t, dtype=float) - x / self.a
+        inside = (delayed >= 0) & (delayed <= self.contact_time)
+        return np.where(inside, -self.force(delayed) / self.area, 0.0)
+
+    def errors(self, summary: dict) -> tuple[float, float]:
+        """Relative errors of a run's co-impact time and peak contact force."""
+        return (summary["co_impact_time"] / self.contact_time - 1,
+                summary["peak_contact_force"]["value"] / self.peak_force - 1)
 
     def case(self, cells: int, courant: float = 0.5, **outputs) -> dict:
         """The case as JSON-ready dict, on `cells` cells at Courant number `aτ/h`."""

@@ -31,8 +31,7 @@ def reference_errors(request):
         rows = []
         for cells in LADDER:
             s = simulate_rod(parse_case(merge(ref.case(cells), {"numerics": {"scheme": scheme}}))).summary
-            rows.append((s["co_impact_time"] / ref.contact_time - 1,
-                         s["peak_contact_force"]["value"] / ref.peak_force - 1))
+            rows.append(ref.errors(s))
         table[scheme] = np.array(rows)
         print(scheme, ", ".join(f"{c}: {e[0]:+.2e} {e[1]:+.2e}" for c, e in zip(LADDER, rows)))
     return table
