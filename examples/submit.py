@@ -1,42 +1,52 @@
-"""Worked example: submit a preset to a running percussim service and print its pulse summary.
+"""Worked example of the Python client: run a preset on a running percussim service, print its
+pulse summary, read its full histories as arrays and download the HDF5 result.
 
     .venv/bin/python examples/submit.py [--url http://127.0.0.1:8000] [--preset fig3] [--output fig3.h5]
+
+`PERCUSSIM_API_KEY` is sent as the API key when set. The same in a few lines:
+
+    from service.client import Client
+
+    with Client("http://127.0.0.1:8000") as api:
+        summary = api.run(api.preset("fig3"))
 """
 
 from __future__ import annotations
 
 import argparse
 import json
-import time
+import os
 
-import httpx
+from service.client import Client
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__)
+    parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--url", default="http://127.0.0.1:8000")
     parser.add_argument("--preset", default="fig3")
     parser.add_argument("--output", help="also download the HDF5 result here")
     args = parser.parse_args()
 
-    with httpx.Client(base_url=args.url, timeout=30) as api:
-        case = api.get(f"/v1/presets/{args.preset}").raise_for_status().json()
-        job = api.post("/v1/jobs", json=case).raise_for_status().json()
+    with Client(args.url, api_key=os.environ.get("PERCUSSIM_API_KEY")) as api:
+        job = api.submit(api.preset(args.preset))
         print(f"submitted {args.preset} as job {job['id']}")
-        while job["status"] in ("queued", "running"):
-            time.sleep(0.2)
-            job = api.get(f"/v1/jobs/{job['id']}").raise_for_status().json()
-            print(f"  {job['status']:9s} {100 * job['progress']:5.1f} %")
-        if job["status"] != "succeeded":
-            raise SystemExit(f"job {job['status']}: {job['error']}")
-        summary = api.get(f"/v1/jobs/{job['id']}/summary").raise_for_status().json()
+        # Raises JobFailed, with the job's error, if the job fails or is cancelled.
+        api.wait(job["id"], progress=lambda fraction, record: print(
+            f"  {record['status']:9s} {100 * fraction:5.1f} %"))
+        summary = api.summary(job["id"])
         print(json.dumps({k: summary[k] for k in (
             "co_impact_time", "peak_contact_force", "max_compressive_stress", "max_tensile_stress",
             "striker_rebound_velocity", "energy", "warnings")}, indent=2))
+
+        # The full histories, as NumPy arrays under their HDF5 paths: the same Result a local run gives.
+        result = api.result(job["id"])
+        time, force = result.history["time"], result.history["contact/force"]
+        peak = force.argmax()
+        print(f"/contact/force: {len(force)} samples, the largest {force[peak]:.6g} N at t = {time[peak]:.6g} s; "
+              f"the summary's peak, refined between samples: {summary['peak_contact_force']['value']:.6g} N")
+
         if args.output:
-            with open(args.output, "wb") as f:
-                f.write(api.get(f"/v1/jobs/{job['id']}/result.h5").raise_for_status().content)
-            print(f"result written to {args.output}")
+            print(f"result written to {api.download(job['id'], args.output)}")
 
 
 if __name__ == "__main__":

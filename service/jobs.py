@@ -1,4 +1,4 @@
-"""`/v1/jobs`: submit a case, follow its job, fetch its summary and result, cancel it.
+"""`/v1/jobs`: submit a case, follow its job, fetch its summary, result and plots, cancel it.
 
 The routes only validate, publish and read the results store the workers write. No
 `from __future__ import annotations` here: FastAPI must see the request examples, a local of
@@ -16,6 +16,7 @@ from pydantic import BaseModel, ConfigDict
 from solver.case import Case
 from solver.grid import resolve_numerics
 from solver.limits import check_limits
+from solver.plots import FORMATS, PLOTS, NotAvailable, problems, render
 from worker.settings import Settings
 from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
 
@@ -29,6 +30,7 @@ class Links(BaseModel):
     self: str
     summary: str
     result: str
+    plots: str
 
 
 class Job(BaseModel):
@@ -61,6 +63,7 @@ def _view(request: Request, record: dict) -> dict:
         "self": request.app.url_path_for("get_job", job_id=job_id),
         "summary": request.app.url_path_for("get_summary", job_id=job_id),
         "result": request.app.url_path_for("get_result", job_id=job_id),
+        "plots": request.app.url_path_for("list_plots", job_id=job_id),
     }}
 
 
@@ -74,6 +77,25 @@ def _not_ready(record: dict, what: str) -> HTTPException:
     else:
         detail = f"job {record['id']} is {status}: its {what} is ready once it has succeeded"
     return HTTPException(status_code=409, detail=detail)
+
+
+class PlotLinks(BaseModel):
+    png: str
+    svg: str
+
+
+class Plot(BaseModel):
+    """A plot of the result: whether this result can make it, and if not, what to change."""
+
+    name: str
+    title: str
+    available: bool
+    reason: str | None
+    links: PlotLinks
+
+
+class PlotList(BaseModel):
+    plots: list[Plot]
 
 
 def _download_name(record: dict) -> str:
@@ -161,6 +183,48 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
             raise _not_ready(record, "result")
         return FileResponse(jobs.result_path(job_id), media_type="application/x-hdf5",
                             filename=_download_name(record))
+
+    @router.get("/{job_id}/plots", response_model=PlotList, responses=not_found | not_ready)
+    def list_plots(request: Request, job_id: str) -> dict:
+        """The plots of a succeeded job's result: which this result can make, why not the
+        others, and where to get each as PNG or SVG."""
+        jobs = store(request)
+        record = jobs.get(job_id)
+        if record["status"] != SUCCEEDED:
+            raise _not_ready(record, "plots")
+        reasons = problems(jobs.result_path(job_id))
+        return {"plots": [{
+            "name": name, "title": title, "available": reasons[name] is None, "reason": reasons[name],
+            "links": {fmt: request.app.url_path_for("get_plot", job_id=job_id, name=name, fmt=fmt)
+                      for fmt in FORMATS},
+        } for name, title in PLOTS.items()]}
+
+    binary = {"schema": {"type": "string", "format": "binary"}}
+
+    @router.get("/{job_id}/plots/{name}.{fmt}", response_class=FileResponse, responses={
+        200: {"content": {media: binary for media in FORMATS.values()}, "description": "the plot"},
+        404: {"model": Problem, "description": "no job with this id, no plot with this name, or a "
+                                               "plot this result cannot make (the reason says why)"},
+    } | not_ready)
+    def get_plot(request: Request, job_id: str, name: str, fmt: Literal["png", "svg"]) -> FileResponse:
+        """A plot of a succeeded job's result (the names are in `/plots`), drawn once and then kept."""
+        jobs = store(request)
+        record = jobs.get(job_id)
+        # The name is checked before any path is made from it.
+        if name not in PLOTS:
+            raise HTTPException(status_code=404,
+                                detail=f"no plot named {name!r}; the plots are: {', '.join(PLOTS)}")
+        if record["status"] != SUCCEEDED:
+            raise _not_ready(record, "plots")
+        kept, result = jobs.plot_path(job_id, name, fmt), jobs.result_path(job_id)
+        # Kept plots older than the result (a job written again) are drawn again.
+        if not (kept.is_file() and kept.stat().st_mtime >= result.stat().st_mtime):
+            try:
+                jobs.write_plot(job_id, name, fmt, render(result, name, fmt))
+            except NotAvailable as error:
+                raise HTTPException(status_code=404,
+                                    detail=f"job {job_id} has no {name} plot: {error}") from None
+        return FileResponse(kept, media_type=FORMATS[fmt])
 
     @router.delete("/{job_id}", status_code=202, response_model=Job, responses=not_found | {
         409: {"model": Problem, "description": "the job has already finished"}})

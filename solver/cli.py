@@ -5,10 +5,14 @@ from __future__ import annotations
 import argparse
 import csv
 import json
+import os
 import sys
+from contextlib import contextmanager
 from pathlib import Path
+from typing import Callable, Iterator
 
 EXIT_FAILED, EXIT_INVALID = 1, 2
+PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
 
 
 def _no_such_file(path: str) -> int:
@@ -24,6 +28,30 @@ def _refused(what: str, error) -> int:
     return EXIT_INVALID
 
 
+@contextmanager
+def _progress_bar(forced: bool) -> Iterator[Callable[[float], None]]:
+    """A progress bar on stderr, moved by calling it with the fraction done (0..1). Shown only on
+    a terminal and once the run has taken PROGRESS_DELAY, unless `forced`; stdout is left to the summary."""
+    from tqdm import tqdm
+
+    with tqdm(total=1.0, file=sys.stderr, delay=0 if forced else PROGRESS_DELAY,
+              disable=not (forced or sys.stderr.isatty()),
+              bar_format="percussim: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as bar:
+        yield lambda fraction: bar.update(fraction - bar.n)
+
+
+def _print_summary(summary: dict, path: str | None) -> int:
+    """Write the summary to `path` if asked, its warnings to stderr, and print it."""
+    # Files first: a closed stdout (`| head`) must not lose the summary.
+    text = json.dumps(summary, indent=2)
+    if path:
+        Path(path).write_text(text + "\n")
+    for warning in summary["warnings"]:
+        print(f"percussim: warning: {warning}", file=sys.stderr)
+    print(text)
+    return 0
+
+
 def _run(args: argparse.Namespace) -> int:
     from .case import CaseError, load_case
     from .controller import NumericalFailure
@@ -31,8 +59,9 @@ def _run(args: argparse.Namespace) -> int:
 
     try:
         case = load_case(args.case)
-        # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
-        result = simulate(case, model=args.model, result_path=args.output)
+        with _progress_bar(args.progress) as advance:
+            # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
+            result = simulate(case, model=args.model, result_path=args.output, progress=advance)
     except FileNotFoundError:
         return _no_such_file(args.case)
     except CaseError as error:
@@ -40,13 +69,67 @@ def _run(args: argparse.Namespace) -> int:
     except NumericalFailure as error:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
-    # Files first: a closed stdout (`| head`) must not lose the summary.
-    text = json.dumps(result.summary, indent=2)
-    if args.summary:
-        Path(args.summary).write_text(text + "\n")
-    for warning in result.summary["warnings"]:
-        print(f"percussim: warning: {warning}", file=sys.stderr)
-    print(text)
+    return _print_summary(result.summary, args.summary)
+
+
+def _submit(args: argparse.Namespace) -> int:
+    from service.client import Client, Refused, ServiceError
+
+    if args.no_wait and (args.summary or args.output):
+        print("percussim: --no-wait writes no --summary or --output: the job has not run yet", file=sys.stderr)
+        return EXIT_INVALID
+    try:
+        with Client(args.url, api_key=args.api_key) as api:
+            job = api.submit(args.case)
+            if args.no_wait:
+                print(json.dumps(job, indent=2))
+                return 0
+            with _progress_bar(args.progress) as advance:
+                api.wait(job["id"], progress=lambda fraction, record: advance(fraction))
+            if args.output:
+                api.download(job["id"], args.output)
+            summary = api.summary(job["id"])
+    except FileNotFoundError:
+        return _no_such_file(args.case)
+    except Refused as error:
+        return _refused(f"case {args.case}", error)
+    except ServiceError as error:  # a failed or cancelled job, an unreachable service, a bad key
+        print(f"percussim: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    return _print_summary(summary, args.summary)
+
+
+def _presets(args: argparse.Namespace) -> int:
+    from textwrap import shorten
+
+    from .presets import preset_json, preset_names
+
+    def text(name: str) -> str:
+        return json.dumps(preset_json(name), indent=2, ensure_ascii=False) + "\n"
+
+    if args.write:
+        folder = Path(args.write)
+        folder.mkdir(parents=True, exist_ok=True)
+        for name in preset_names():
+            (folder / f"{name}.json").write_text(text(name))
+        return 0
+    if args.name is None:
+        if args.output:
+            print("percussim: -o writes one preset: name it", file=sys.stderr)
+            return EXIT_INVALID
+        width = max(map(len, preset_names()), default=0)
+        for name in preset_names():
+            print(f"{name:<{width}}  {shorten(preset_json(name).get('description', ''), 100, placeholder=' …')}")
+        return 0
+    try:
+        case = text(args.name)
+    except KeyError as error:
+        print(f"percussim: {error.args[0]}", file=sys.stderr)
+        return EXIT_INVALID
+    if args.output:
+        Path(args.output).write_text(case)
+    else:
+        print(case, end="")
     return 0
 
 
@@ -94,6 +177,34 @@ def _parameter(text: str) -> tuple[str, list]:
     return path, [value(v) for v in values.split(",")]
 
 
+def _times(text: str) -> list[float]:
+    """`T1,T2,...`: times in s."""
+    try:
+        return [float(t) for t in text.split(",")]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected times in s, T1,T2,... (e.g. 5e-5,1e-4), not {text!r}") from None
+
+
+def _plots(args: argparse.Namespace) -> int:
+    from .plots import write_plots
+
+    result = Path(args.result)
+    if not result.is_file():
+        print(f"percussim: no such result file: {result}", file=sys.stderr)
+        return EXIT_INVALID
+    try:
+        written, skipped = write_plots(result, args.out or result.with_name(f"{result.stem}-plots"),
+                                       formats=args.format, names=args.only, times=args.times)
+    except ValueError as error:  # not a result, an unknown plot or format, a time outside the run
+        print(f"percussim: {error}", file=sys.stderr)
+        return EXIT_INVALID
+    for name, reason in skipped.items():
+        print(f"percussim: skipped {name}: {reason}", file=sys.stderr)
+    for path in written:
+        print(path)
+    return 0 if written else EXIT_FAILED
+
+
 def _warmup(args: argparse.Namespace) -> int:
     from .controller import warm_up
 
@@ -131,7 +242,20 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("--output", metavar="RESULT.h5", help="write the full result (HDF5) here")
     run.add_argument("--model", choices=["rod", "lumped"],
                      help="override numerics.model: the elastic rod or the two-mass model problem")
+    run.add_argument("--progress", action="store_true",
+                     help="show the progress bar on stderr even when it is not a terminal or the run is short")
     run.set_defaults(handler=_run)
+    submit = commands.add_parser("submit", help="run a case on a percussim service and print its pulse summary")
+    submit.add_argument("case", help="impact case JSON")
+    submit.add_argument("--url", required=True, help="the service, e.g. http://127.0.0.1:8000")
+    submit.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
+                        help="sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+    submit.add_argument("--summary", metavar="OUT.json", help="also write the summary here")
+    submit.add_argument("--output", metavar="RESULT.h5", help="download the full result (HDF5) here")
+    submit.add_argument("--no-wait", action="store_true", help="print the queued job's record and return")
+    submit.add_argument("--progress", action="store_true",
+                        help="show the progress bar on stderr even when it is not a terminal or the job is short")
+    submit.set_defaults(handler=_submit)
     sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every core")
     sweep.add_argument("case", help="the base impact case JSON")
     sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
@@ -139,6 +263,21 @@ def parser() -> argparse.ArgumentParser:
     sweep.add_argument("--processes", type=_count, help="processes (default: one a core)")
     sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
     sweep.set_defaults(handler=_sweep)
+    presets = commands.add_parser("presets", help="list the presets (the paper's cases), or give one's case JSON")
+    which = presets.add_mutually_exclusive_group()
+    which.add_argument("name", nargs="?", help="print this preset's case JSON")
+    which.add_argument("--write", metavar="DIR", help="write every preset's case JSON into DIR as NAME.json")
+    presets.add_argument("-o", "--output", metavar="FILE", help="write the named preset here instead")
+    presets.set_defaults(handler=_presets)
+    plot = commands.add_parser("plot", help="draw the plots of a result file (PNG, SVG)")
+    plot.add_argument("result", help="an HDF5 result of percussim run --output or the service")
+    plot.add_argument("--out", metavar="DIR", help="folder for the plots (default: RESULT-plots next to the file)")
+    plot.add_argument("--format", nargs="+", default=["png", "svg"], metavar="FORMAT", help="png, svg or both")
+    plot.add_argument("--only", nargs="+", metavar="NAME",
+                      help="these plots only: force, displacements, probes, stress_along, spacetime, energy")
+    plot.add_argument("--times", type=_times, metavar="T1,T2,...",
+                      help="times (s) of the stress_along curves (default: over the first contact)")
+    plot.set_defaults(handler=_plots)
     warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
     warm.set_defaults(handler=_warmup)
     work = commands.add_parser("worker", help="run a queue worker (PERCUSSIM_BROKER_URL; none: embedded)")

@@ -12,6 +12,7 @@ import os
 import tempfile
 from math import prod
 from pathlib import Path
+from typing import BinaryIO
 
 import h5py
 import numpy as np
@@ -173,11 +174,11 @@ def remove_partial(path: str | Path) -> None:
         tmp.unlink(missing_ok=True)
 
 
-def read_result(path: str | Path) -> Result:
-    """Read a result file back into a `Result`."""
-    with h5py.File(path, "r") as f:
+def read_result(source: str | Path | BinaryIO) -> Result:
+    """Read a result file, or a binary file object holding one (bytes downloaded), into a `Result`."""
+    with h5py.File(source, "r") as f:
         if f.attrs.get("format") != FORMAT:
-            raise ValueError(f"{path} is not a {FORMAT} file")
+            raise ValueError(f"{source if isinstance(source, (str, Path)) else 'the data'} is not a {FORMAT} file")
         case = Case.model_validate_json(f.attrs["case"])
         numerics = ResolvedNumerics(**json.loads(f.attrs["numerics"]))
         arrays = {}

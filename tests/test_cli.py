@@ -66,3 +66,30 @@ def test_model_lumped_runs_the_model_problem():
     assert summary["scheme"] == "dop853" and "'lumped' as asked" in summary["why"]
     # Its stress is quasi-static: at the struck end the peak force over the area.
     assert summary["max_compressive_stress"]["value"] >= summary["peak_contact_force"]["value"] / 0.01421
+
+
+def test_presets_are_listed_printed_and_written(tmp_path):
+    listed = _percussim("presets", cwd=tmp_path)
+    assert listed.returncode == 0, listed.stderr
+    lines = listed.stdout.splitlines()
+    assert [line.split()[0] for line in lines] == [f"fig{k}" for k in range(3, 10)]
+    assert lines[0].startswith("fig3  Fig. 3 of the paper: a 20-kg striker")
+    assert json.loads(_percussim("presets", "fig9", cwd=tmp_path).stdout) == json.loads(
+        (ROOT / "examples" / "fig9.json").read_text())
+    assert _percussim("presets", "fig3", "-o", "f.json", cwd=tmp_path).returncode == 0
+    assert json.loads((tmp_path / "f.json").read_text())["name"] == "fig3"
+    assert _percussim("presets", "--write", "all", cwd=tmp_path).returncode == 0
+    for path in (ROOT / "examples").glob("*.json"):
+        assert json.loads((tmp_path / "all" / path.name).read_text()) == json.loads(path.read_text())
+    unknown = _percussim("presets", "fig99", cwd=tmp_path)
+    assert unknown.returncode == 2 and "unknown preset 'fig99'" in unknown.stderr
+
+
+def test_run_progress_goes_to_stderr_and_stdout_stays_the_summary(tmp_path):
+    forced = _percussim("run", "examples/fig9.json", "--progress", cwd=ROOT)
+    assert forced.returncode == 0, forced.stderr
+    assert json.loads(forced.stdout)["name"] == "fig9"
+    assert "percussim: 100%|" in forced.stderr
+    # Not a terminal, and short: no bar unless forced.
+    quiet = _percussim("run", "examples/fig9.json", cwd=ROOT)
+    assert "%|" not in quiet.stderr and json.loads(quiet.stdout) == json.loads(forced.stdout)

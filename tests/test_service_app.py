@@ -109,7 +109,8 @@ def test_a_submitted_job_is_queued_with_its_links_and_published(client, tmp_path
     assert job["status"] == "queued" and job["progress"] == 0.0 and job["name"] == "test"
     assert job["started"] is None and job["finished"] is None and job["error"] is None
     assert job["links"] == {"self": f"/v1/jobs/{job['id']}", "summary": f"/v1/jobs/{job['id']}/summary",
-                            "result": f"/v1/jobs/{job['id']}/result.h5"}
+                            "result": f"/v1/jobs/{job['id']}/result.h5",
+                            "plots": f"/v1/jobs/{job['id']}/plots"}
     assert answer.headers["location"] == job["links"]["self"]
     assert client.get(job["links"]["self"]).json() == job
     stored = JobStore(tmp_path).case(job["id"])

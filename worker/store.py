@@ -5,6 +5,7 @@
     jobs/<id>/summary.json  the pulse summary, once succeeded
     jobs/<id>/result.h5     the HDF5 result, once succeeded
     jobs/<id>/cancel        present once a cancel was asked for
+    jobs/<id>/plots/        plots of the result as rendered for the API: <name>.<png|svg>
     sweeps/<id>.json        a sweep: its parameters and, per variant, the values and the job id
 
 Every write goes to a temporary name and is renamed, so a reader never sees half a file and a
@@ -25,6 +26,7 @@ from pathlib import Path
 QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
 FINISHED = (SUCCEEDED, FAILED, CANCELLED)
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
+_PLOT_NAME = re.compile(r"[a-z_]+")
 
 
 class UnknownJob(KeyError):
@@ -100,6 +102,18 @@ class JobStore:
 
     def result_path(self, job_id: str) -> Path:
         return self.folder(job_id) / "result.h5"
+
+    def plot_path(self, job_id: str, name: str, fmt: str) -> Path:
+        """Where plot `name` of the job's result is kept as `fmt`; both are checked, never trusted."""
+        if not (_PLOT_NAME.fullmatch(name) and fmt in ("png", "svg")):
+            raise ValueError(f"not a plot file name: {name!r}.{fmt!r}")
+        return self.folder(job_id) / "plots" / f"{name}.{fmt}"
+
+    def write_plot(self, job_id: str, name: str, fmt: str, data: bytes) -> Path:
+        path = self.plot_path(job_id, name, fmt)
+        path.parent.mkdir(exist_ok=True)
+        write_atomic(path, data)
+        return path
 
     def request_cancel(self, job_id: str) -> None:
         write_atomic(self.folder(job_id) / "cancel", b"")

@@ -1,0 +1,257 @@
+"""A Python client for the percussim HTTP API.
+
+    from service.client import Client
+
+    with Client("http://127.0.0.1:8000") as api:
+        summary = api.run("examples/fig9.json", progress=lambda fraction, record: print(fraction))
+        print(summary["co_impact_time"], summary["peak_contact_force"]["value"])
+
+It needs only httpx: the solver (and so NumPy, h5py and Numba) is imported by `result` alone,
+which reads the HDF5 result into the same `Result` a local run gives.
+
+Every error the service answers is raised as a `ServiceError` that says what went wrong:
+`Refused` (422, 413) lists each offending field, `JobFailed` carries the failed or cancelled
+job's record, `Unauthorized` (401), `NotFound` (404) and `Unavailable` (503, after retrying as
+the service's `Retry-After` asks, `retries` times) name the problem.
+"""
+
+from __future__ import annotations
+
+import io
+import os
+import tempfile
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any, Callable, NamedTuple
+from urllib.parse import quote
+
+import httpx
+
+if TYPE_CHECKING:
+    from solver.case import Case
+    from solver.controller import Result
+
+FINISHED = ("succeeded", "failed", "cancelled")
+
+Progress = Callable[[float, dict], None]  # (fraction done 0..1, the job's record)
+
+
+class FieldError(NamedTuple):
+    """One reason the service refused a request: the field's dotted path and why."""
+
+    field: str
+    message: str
+
+
+class ServiceError(Exception):
+    """The service answered with an error or could not be reached; `status` is the HTTP status
+    (None when there was no answer)."""
+
+    def __init__(self, message: str, status: int | None = None):
+        super().__init__(message)
+        self.status = status
+
+
+class Refused(ServiceError):
+    """The service refused the request (422, or 413 for a body over its size limit); `errors`
+    names each offending field."""
+
+    def __init__(self, errors: list[FieldError], status: int):
+        super().__init__("the service refused the request:\n" +
+                         "\n".join(f"  {e.field}: {e.message}" for e in errors), status)
+        self.errors = errors
+
+
+class Unauthorized(ServiceError):
+    """401: the service needs an API key, or does not know the one given."""
+
+
+class NotFound(ServiceError):
+    """404: no such job or preset (or the job belongs to another API key)."""
+
+
+class Unavailable(ServiceError):
+    """503: the service's job queue stayed unavailable through every retry."""
+
+
+class JobFailed(ServiceError):
+    """The job failed or was cancelled; `record` is its job record (`status`, `error`)."""
+
+    def __init__(self, record: dict):
+        reason = (f"failed: {record.get('error')}" if record["status"] == "failed"
+                  else "was cancelled")
+        super().__init__(f"job {record['id']} {reason}")
+        self.record = record
+
+
+def _error(response: httpx.Response) -> ServiceError:
+    """The exception for an error answer, with the service's own words."""
+    try:
+        detail = response.json()["detail"]
+    except (ValueError, KeyError, TypeError):
+        detail = response.text or response.reason_phrase
+    if isinstance(detail, list) and all(isinstance(d, dict) for d in detail):
+        return Refused([FieldError(d.get("field", "?"), d.get("message", str(d))) for d in detail],
+                       response.status_code)
+    kind = {401: Unauthorized, 404: NotFound, 503: Unavailable}.get(response.status_code, ServiceError)
+    return kind(f"{detail} (HTTP {response.status_code} from {response.request.url})", response.status_code)
+
+
+def _retry_after(response: httpx.Response) -> float:
+    """Seconds to wait before asking again: the service's `Retry-After`, else 1 s."""
+    value = response.headers.get("Retry-After", "")
+    return float(value) if value.isdigit() else 1.0
+
+
+class Client:
+    """A percussim service at `url` (e.g. "http://127.0.0.1:8000"), used as a context manager
+    or closed with `close()`.
+
+    `api_key` is sent as `X-API-Key` (needed when the service sets `PERCUSSIM_API_KEYS`);
+    `timeout` bounds each HTTP call, in seconds; a 503 is retried `retries` times, each after
+    the `Retry-After` the service asks for. `transport` is passed to httpx (for tests, proxies).
+    """
+
+    def __init__(self, url: str, api_key: str | None = None, timeout: float = 30.0, retries: int = 3,
+                 transport: httpx.BaseTransport | None = None):
+        headers = {"X-API-Key": api_key} if api_key else {}
+        self.url = url
+        self.retries = retries
+        self._http = httpx.Client(base_url=url, headers=headers, timeout=timeout, transport=transport)
+
+    def __enter__(self) -> Client:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        self._http.close()
+
+    # -- presets
+
+    def presets(self) -> list[dict]:
+        """The presets, each `{"name", "description"}`."""
+        return self._json("GET", "/v1/presets")
+
+    def preset(self, name: str) -> dict:
+        """Preset `name` as case JSON (a dict), ready for `submit`."""
+        return self._json("GET", f"/v1/presets/{quote(name, safe='')}")
+
+    # -- jobs
+
+    def submit(self, case: dict | str | os.PathLike | Case) -> dict:
+        """Queue `case`: a dict of case JSON, the path of a case JSON file, or a `solver.case.Case`.
+        Returns the new job's record (`id`, `status` "queued", ...); raises `Refused` naming
+        every offending field of an invalid case."""
+        if isinstance(case, dict):
+            return self._json("POST", "/v1/jobs", json=case)
+        # A file is sent as read: the service validates it and names what is wrong, even bad JSON.
+        text = (Path(case).read_bytes() if isinstance(case, (str, os.PathLike))
+                else case.model_dump_json(exclude_none=True))
+        return self._json("POST", "/v1/jobs", content=text, headers={"content-type": "application/json"})
+
+    def job(self, job_id: str) -> dict:
+        """The job's record: `status` (queued, running, succeeded, failed, cancelled),
+        `progress` 0..1, `created`, `started`, `finished`, `error`."""
+        return self._json("GET", self._job_path(job_id))
+
+    def jobs(self, offset: int = 0, limit: int = 50) -> list[dict]:
+        """Records of recent jobs, newest first, from `offset`, at most `limit` (≤ 500)."""
+        return self._json("GET", "/v1/jobs", params={"offset": offset, "limit": limit})["jobs"]
+
+    def wait(self, job_id: str, progress: Progress | None = None, poll: float = 0.2,
+             timeout: float | None = None) -> dict:
+        """Wait for the job to finish, asking every `poll` seconds, and return its record once it
+        has succeeded. `progress(fraction, record)` is called with each record polled. Raises
+        `JobFailed` if the job failed or was cancelled, `TimeoutError` after `timeout` seconds."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            record = self.job(job_id)
+            if progress is not None:
+                progress(record["progress"], record)
+            if record["status"] == "succeeded":
+                return record
+            if record["status"] in FINISHED:
+                raise JobFailed(record)
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"job {job_id} is still {record['status']} after {timeout} s")
+            time.sleep(poll)
+
+    def summary(self, job_id: str) -> dict:
+        """The pulse summary of a succeeded job (a dict, as `percussim run` prints it)."""
+        return self._json("GET", f"{self._job_path(job_id)}/summary")
+
+    def result(self, job_id: str) -> Result:
+        """The succeeded job's HDF5 result, read into memory as a `solver.controller.Result`, the
+        same object a local `simulate` returns: `history` maps dataset paths ("contact/force",
+        "time", "energy/to_medium", ...) to NumPy arrays, with `probe_x`, `probe_stress`,
+        `fields` (None unless asked), `summary`, `case` and `numerics`; `arrays()` gives every
+        array under its HDF5 path. Use `download` for a file too large to hold in memory."""
+        from solver.io import read_result
+
+        return read_result(io.BytesIO(self._send("GET", self._result_path(job_id)).content))
+
+    def download(self, job_id: str, path: str | os.PathLike) -> Path:
+        """Write the succeeded job's HDF5 result to `path`, streamed, under a temporary name
+        renamed when complete (a reader never sees half a file). Returns the path."""
+        path = Path(path)
+        path.parent.mkdir(parents=True, exist_ok=True)
+        answer = self._send("GET", self._result_path(job_id), stream=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+        try:
+            with os.fdopen(fd, "wb") as f:
+                for chunk in answer.iter_bytes():
+                    f.write(chunk)
+            os.replace(tmp, path)
+        finally:
+            answer.close()
+            Path(tmp).unlink(missing_ok=True)
+        return path
+
+    def cancel(self, job_id: str) -> dict:
+        """Cancel an unfinished job: a queued one at once, a running one between two chunks of its
+        run (`wait` then raises `JobFailed`). Returns its record; a finished job raises a 409
+        `ServiceError`."""
+        return self._json("DELETE", self._job_path(job_id))
+
+    def run(self, case: dict | str | os.PathLike | Case, progress: Progress | None = None,
+            timeout: float | None = None) -> dict:
+        """Submit `case`, wait for it (see `wait`) and return its pulse summary."""
+        job_id = self.submit(case)["id"]
+        self.wait(job_id, progress=progress, timeout=timeout)
+        return self.summary(job_id)
+
+    # -- HTTP
+
+    @staticmethod
+    def _job_path(job_id: str) -> str:
+        return f"/v1/jobs/{quote(job_id, safe='')}"
+
+    def _result_path(self, job_id: str) -> str:
+        return f"{self._job_path(job_id)}/result.h5"
+
+    def _json(self, method: str, path: str, **kwargs) -> Any:
+        return self._send(method, path, **kwargs).json()
+
+    def _send(self, method: str, path: str, stream: bool = False, **kwargs) -> httpx.Response:
+        """The answer to a call, once it is not a 503 or has been retried `retries` times;
+        an error answer raised as its `ServiceError`. A streamed answer is the caller's to close."""
+        request = self._http.build_request(method, path, **kwargs)
+        retried = 0
+        while True:
+            try:
+                answer = self._http.send(request, stream=stream)
+            except httpx.TransportError as error:
+                raise ServiceError(f"cannot reach the percussim service at {self.url}: {error}") from None
+            # A 503 from POST /v1/jobs is safe to repeat: the service queued nothing.
+            if answer.status_code == 503 and retried < self.retries:
+                answer.close()
+                time.sleep(_retry_after(answer))
+                retried += 1
+                continue
+            if answer.is_error:
+                answer.read()
+                answer.close()
+                raise _error(answer)
+            return answer

@@ -1,0 +1,379 @@
+"""Plots of one result file: forces, displacements, probe stresses, stress along the tool, its
+space–time map and the energy budget.
+
+Each plot is one drawing function in `_TABLE`, with what it needs from the result. Figures are
+`matplotlib.figure.Figure` on the Agg canvas, never pyplot, whose global figure registry is no
+place for a server's threads. Large datasets are read with strides, so that a plot reads a
+bounded number of values however much the run kept.
+"""
+
+from __future__ import annotations
+
+import io
+import json
+import math
+import threading
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Iterator, Sequence
+
+import h5py
+import numpy as np
+from matplotlib.axes import Axes
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from .io import FORMAT
+
+FORMATS = {"png": "image/png", "svg": "image/svg+xml"}  # format -> media type
+FIGSIZE = (9.0, 5.0)  # inches
+DPI = 120  # a PNG is FIGSIZE × DPI pixels
+MAX_CURVE_POINTS = 20_000  # samples read of a history; the peak force is marked from the summary
+MAX_FILL_POINTS = 2_000  # samples of the stacked energy terms: a fill is never simplified, and an
+                         # SVG of eight fills of 20 000 points each is 5 MB
+MAX_MAP_SIDE = 1000  # times and stations read for the space–time map
+DEFAULT_TIMES = 5  # curves of stress along the tool when no times are given
+ALONG_THE_TOOL = "x along the tool (m), struck end at 0"
+# matplotlib's font cache is shared by every figure and is not thread-safe.
+_DRAWING = threading.Lock()
+
+
+class NotAResult(ValueError):
+    """The file is not a percussim result."""
+
+
+class UnknownPlot(ValueError):
+    """No plot has this name."""
+
+
+class NotAvailable(ValueError):
+    """This result cannot make this plot; the message says what to change."""
+
+
+def _time_unit(end: float) -> tuple[float, str]:
+    """(scale, unit) of times up to `end` (s): µs below 2 ms, so that a scale reads 0 … 2000 at
+    worst, never 0 … 0.002."""
+    return (1e6, "µs") if end < 2e-3 else (1e3, "ms")
+
+
+def _in_unit(t: float, scale: float, unit: str) -> str:
+    """`t` (s) to 3 significant digits, without an exponent: "1000 µs", not "1e+03 µs"."""
+    return f"{np.format_float_positional(t * scale, precision=3, fractional=False, trim='-')} {unit}"
+
+
+@dataclass
+class _Source:
+    """An open result: its datasets, case and summary, and the time unit of its axes."""
+
+    h5: h5py.File
+    case: dict
+    summary: dict
+
+    def __post_init__(self) -> None:
+        self.rows = len(self.h5["time"])
+        self.end = float(self.h5["time"][-1])
+        self.t_scale, self.t_unit = _time_unit(self.end)
+
+    def history(self, path: str, points: int | None = None) -> np.ndarray:
+        """A history read with the stride that keeps about `points` (MAX_CURVE_POINTS) samples,
+        the last one always among them, so that a curve ends where the run does."""
+        points = points or MAX_CURVE_POINTS
+        if self.rows <= points:
+            return self.h5[path][()]
+        return self.h5[path][sorted({*range(0, self.rows, math.ceil(self.rows / points)), self.rows - 1})]
+
+    def time(self, points: int | None = None) -> np.ndarray:
+        return self.history("time", points) * self.t_scale
+
+    def t_label(self) -> str:
+        return f"time t ({self.t_unit})"
+
+    def in_unit(self, t: float) -> str:
+        return _in_unit(t, self.t_scale, self.t_unit)
+
+
+@contextmanager
+def _open(path: str | Path) -> Iterator[_Source]:
+    try:
+        h5 = h5py.File(path, "r")
+    except FileNotFoundError:
+        raise  # a missing file is not a wrong one
+    except OSError as error:
+        raise NotAResult(f"{path} is not a percussim result: not an HDF5 file ({error})") from None
+    with h5:
+        if h5.attrs.get("format") != FORMAT:
+            raise NotAResult(f"{path} is not a percussim result: an HDF5 file without "
+                             f"format = {FORMAT!r}")
+        yield _Source(h5, json.loads(h5.attrs["case"]), json.loads(h5["summary"][()]))
+
+
+def _decorate(ax: Axes, xlabel: str, ylabel: str) -> None:
+    ax.set_xlabel(xlabel)
+    ax.set_ylabel(ylabel)
+    ax.grid(alpha=0.3)
+    ax.margins(x=0)
+
+
+def _force(fig: Figure, src: _Source, times) -> None:
+    """Contact force F_c(t), medium force and external force R(t), contact intervals shaded."""
+    ax = fig.subplots()
+    t = src.time()
+    ax.plot(t, src.history("contact/force") / 1e3, color="C0", lw=1.4, label="contact force")
+    if src.case.get("medium"):
+        ax.plot(t, src.history("medium/force") / 1e3, color="C1", lw=1.1, label="medium force")
+    if src.case.get("force"):
+        ax.plot(t, src.history("external/force") / 1e3, color="C2", lw=1.1, ls="--",
+                label="external force on the striker")
+    spans = [(c["start"] * src.t_scale, ((c["end"] if c["end"] is not None else src.end) - c["start"])
+              * src.t_scale) for c in src.summary["contacts"]]
+    if spans:
+        # One collection for every interval: a run may have thousands.
+        ax.broken_barh(spans, (0, 1), transform=ax.get_xaxis_transform(), color="C0", alpha=0.08,
+                       label="in contact")
+    peak = src.summary["peak_contact_force"]
+    if peak["value"] > 0:
+        ax.plot(peak["time"] * src.t_scale, peak["value"] / 1e3, "o", color="C0", ms=5)
+        ax.annotate(f"peak {peak['value'] / 1e3:.4g} kN at {src.in_unit(peak['time'])}",
+                    (peak["time"] * src.t_scale, peak["value"] / 1e3), xytext=(8, -4),
+                    textcoords="offset points", va="top", fontsize=9)
+    ax.axhline(0, color="0.5", lw=0.6)
+    _decorate(ax, src.t_label(), "force (kN), compression > 0")
+    ax.legend(loc="upper right", fontsize=9)
+
+
+def _displacements(fig: Figure, src: _Source, times) -> None:
+    """Displacements of the striker y(t), the struck end u_0(t) and the working end u_N(t)."""
+    ax = fig.subplots()
+    t = src.time()
+    for path, label, style in (("striker/displacement", "striker", "-"),
+                               ("tool/struck_end_displacement", "struck end of the tool", "--"),
+                               ("tool/working_end_displacement", "working end of the tool", "-.")):
+        ax.plot(t, src.history(path) * 1e3, ls=style, lw=1.3, label=label)
+    _decorate(ax, src.t_label(), "displacement (mm), toward the medium > 0")
+    ax.legend(fontsize=9)
+
+
+def _probes(fig: Figure, src: _Source, times) -> None:
+    """Stress σ(x_k, t) at each probe station x_k."""
+    ax = fig.subplots()
+    t = src.time()
+    stress = src.history("probes/stress") / 1e6
+    for k, x in enumerate(src.h5["probes/x"][()]):
+        ax.plot(t, stress[:, k], lw=1.1, label=f"x = {x:.4g} m")
+    ax.axhline(0, color="0.5", lw=0.6)
+    _decorate(ax, src.t_label(), "stress σ (MPa), compression < 0")
+    ax.legend(title="probe", fontsize=9)
+
+
+def _nearest(frame_times: np.ndarray, times) -> list[int]:
+    """The frames nearest `times`, in order, each once."""
+    return sorted({int(np.abs(frame_times - t).argmin()) for t in times})
+
+
+def _default_frames(src: _Source, frame_times: np.ndarray) -> list[int]:
+    """Frames spread over the first contact and the wave's transit L/a, a = √(E/ρ).
+
+    The frame at the contact's start is left out (the tool is still at rest then). When the
+    frames are too sparse for that, the first frames after the start.
+    """
+    tool = src.case["tool"]
+    transit = tool["length"] / math.sqrt(tool["youngs_modulus"] / tool["density"])
+    contacts = src.summary["contacts"]
+    start = contacts[0]["start"] if contacts else 0.0
+    stop = contacts[0]["end"] if contacts and contacts[0]["end"] is not None else frame_times[-1]
+    span = max(stop - start, transit)
+    after = np.flatnonzero(frame_times > start)
+    if len(after) == 0:
+        return [len(frame_times) - 1]
+    frames = _nearest(frame_times[after], [start + span * k / DEFAULT_TIMES
+                                           for k in range(1, DEFAULT_TIMES + 1)])
+    if len(frames) < min(DEFAULT_TIMES, len(after)):
+        frames = range(min(DEFAULT_TIMES, len(after)))
+    return [int(after[k]) for k in frames]
+
+
+def _frames(src: _Source, times: Sequence[float] | None) -> list[int]:
+    """The stored field frames to draw: nearest `times` (s), or spread over the first wave."""
+    frame_times = src.h5["fields/time"][()]
+    if times is None:
+        return _default_frames(src, frame_times)
+    for t in times:
+        if not frame_times[0] <= t <= frame_times[-1]:
+            raise ValueError(f"time {t:g} s is outside the run's fields "
+                             f"({frame_times[0]:g} … {frame_times[-1]:g} s)")
+    return _nearest(frame_times, times)
+
+
+def _stress_along(fig: Figure, src: _Source, times) -> None:
+    """Stress σ(x, t_j) along the tool at chosen times t_j."""
+    ax = fig.subplots()
+    x = src.h5["fields/x"][()]
+    frames = _frames(src, times)
+    stress = src.h5["fields/stress"][frames] / 1e6
+    shown = src.h5["fields/time"][frames]
+    # The legend's unit is the times' own: the first wave is a few µs into a run of ms.
+    scale, unit = _time_unit(shown[-1])
+    for row, t in zip(stress, shown):
+        ax.plot(x, row, lw=1.3, label=f"t = {_in_unit(t, scale, unit)}")
+    ax.axhline(0, color="0.5", lw=0.6)
+    _decorate(ax, ALONG_THE_TOOL, "stress σ (MPa), compression < 0")
+    ax.legend(fontsize=9)
+
+
+def _spacetime(fig: Figure, src: _Source, times) -> None:
+    """Stress σ(x, t) over the tool and the run, on a colour scale centred on zero."""
+    ax = fig.subplots()
+    stress = src.h5["fields/stress"]
+    rows = max(1, math.ceil(stress.shape[0] / MAX_MAP_SIDE))
+    cols = max(1, math.ceil(stress.shape[1] / MAX_MAP_SIDE))
+    values = stress[::rows, ::cols].T / 1e6  # x upward, t to the right
+    x = src.h5["fields/x"][::cols]
+    t = src.h5["fields/time"][::rows] * src.t_scale
+    bound = float(np.abs(values).max()) or 1.0
+    image = ax.imshow(values, origin="lower", aspect="auto", cmap="RdBu_r", vmin=-bound,
+                      vmax=bound, extent=(t[0], t[-1], x[0], x[-1]), interpolation="nearest")
+    fig.colorbar(image, ax=ax, label="stress σ (MPa), compression < 0")
+    ax.set_xlabel(src.t_label())
+    ax.set_ylabel(ALONG_THE_TOOL)
+
+
+ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked
+    "striker_kinetic": "striker kinetic",
+    "tool_kinetic": "tool kinetic",
+    "tool_strain": "tool strain",
+    "contact_potential": "contact potential",
+    "medium_potential": "medium potential",
+    "dissipated_contact": "dissipated in the contact",
+    "dissipated_medium": "dissipated in the medium",
+}
+
+
+def _energy(fig: Figure, src: _Source, times) -> None:
+    """The energy audit over time: stored and dissipated terms stacked against the input
+    ½·m1·W1² + the external work; what is left is the scheme's own dissipation."""
+    ax = fig.subplots()
+    t = src.time(MAX_FILL_POINTS)
+    striker = src.case["striker"]
+    supplied = (0.5 * striker["mass"] * striker["velocity"] ** 2
+                + src.history("energy/external_work", MAX_FILL_POINTS))
+    terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in ENERGY_TERMS]
+    numerical = supplied - np.sum(terms, axis=0)
+    ax.stackplot(t, *terms, numerical, labels=[*ENERGY_TERMS.values(), "numerical (the scheme)"],
+                 colors=[f"C{k}" for k in range(len(terms) + 1)], alpha=0.85, lw=0)
+    ax.plot(t, supplied, color="black", lw=1.4, ls="--", label="input: initial + external work")
+    _decorate(ax, src.t_label(), "energy (J)")
+    ax.set_ylim(0, 1.06 * supplied.max())  # room above the input line, which tops the stack
+    fig.legend(loc="outside right upper", fontsize=9, frameon=False)
+
+
+@dataclass(frozen=True)
+class _Plot:
+    title: str
+    needs: str | None  # "probes", "fields" or nothing beyond the histories
+    draw: Callable[[Figure, _Source, Sequence[float] | None], None]
+
+
+_TABLE = {
+    "force": _Plot("Contact force", None, _force),
+    "displacements": _Plot("Displacements", None, _displacements),
+    "probes": _Plot("Stress at the probes", "probes", _probes),
+    "stress_along": _Plot("Stress along the tool", "fields", _stress_along),
+    "spacetime": _Plot("Stress in the tool over x and t", "fields", _spacetime),
+    "energy": _Plot("Energy budget", None, _energy),
+}
+PLOTS = {name: plot.title for name, plot in _TABLE.items()}
+
+
+def _plot(name: str) -> _Plot:
+    if name not in _TABLE:
+        raise UnknownPlot(f"unknown plot {name!r}; the plots are: {', '.join(PLOTS)}")
+    return _TABLE[name]
+
+
+def problem(h5: h5py.File, name: str) -> str | None:
+    """Why this result (an open file) cannot make plot `name`, saying what to change; None if it can."""
+    needs = _plot(name).needs
+    if needs == "fields" and "fields/stress" not in h5:
+        if h5.attrs.get("numerics.model") == "lumped":
+            return ("this result is of the lumped model, which has no stress wave in the tool: "
+                    "run the case with numerics.model = \"rod\" and outputs.fields = true")
+        return "this result has no stress fields: run the case with outputs.fields = true"
+    if needs == "probes" and len(h5["probes/x"]) == 0:
+        return ("this result has no probes: run the case with outputs.probes, the stations x (m) "
+                "along the tool, e.g. [0.0, 0.25]")
+    return None
+
+
+def problems(path: str | Path) -> dict[str, str | None]:
+    """Every plot's `problem` for the result at `path`."""
+    with _open(path) as src:
+        return {name: problem(src.h5, name) for name in PLOTS}
+
+
+def _figure(src: _Source, name: str, times: Sequence[float] | None) -> Figure:
+    plot = _plot(name)
+    reason = problem(src.h5, name)
+    if reason:
+        raise NotAvailable(reason)
+    fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
+    FigureCanvasAgg(fig)
+    plot.draw(fig, src, times)
+    fig.suptitle(f"{plot.title} — {src.case.get('name', 'case')}")
+    return fig
+
+
+def figure(path: str | Path, name: str, times: Sequence[float] | None = None) -> Figure:
+    """Plot `name` of the result at `path`; `times` (s) only for `stress_along`."""
+    with _open(path) as src:
+        return _figure(src, name, times)
+
+
+def _check_format(fmt: str) -> None:
+    if fmt not in FORMATS:
+        raise ValueError(f"unknown format {fmt!r}; the formats are: {', '.join(FORMATS)}")
+
+
+def _save(fig: Figure, fmt: str, to) -> None:
+    _check_format(fmt)
+    # No date in an SVG: the same result gives the same file.
+    fig.savefig(to, format=fmt, metadata={"Date": None} if fmt == "svg" else None)
+
+
+def render(path: str | Path, name: str, fmt: str, times: Sequence[float] | None = None) -> bytes:
+    """Plot `name` of the result at `path` as PNG or SVG bytes."""
+    buffer = io.BytesIO()
+    with _DRAWING:
+        _save(figure(path, name, times), fmt, buffer)
+    return buffer.getvalue()
+
+
+def write_plots(path: str | Path, out_dir: str | Path, formats: Sequence[str] = ("png", "svg"),
+                names: Sequence[str] | None = None,
+                times: Sequence[float] | None = None) -> tuple[list[Path], dict[str, str]]:
+    """Write the plots of the result at `path` as `<out_dir>/<name>.<format>`.
+
+    Returns the files written and, for each plot this result cannot make, the reason.
+    """
+    names = list(PLOTS) if names is None else list(names)
+    # An unknown name or format is refused before anything is written.
+    for name in names:
+        _plot(name)
+    for fmt in formats:
+        _check_format(fmt)
+    out_dir = Path(out_dir)
+    written, skipped = [], {}
+    with _open(path) as src:
+        for name in names:
+            reason = problem(src.h5, name)
+            if reason:
+                skipped[name] = reason
+                continue
+            out_dir.mkdir(parents=True, exist_ok=True)
+            with _DRAWING:
+                fig = _figure(src, name, times)
+                for fmt in formats:
+                    target = out_dir / f"{name}.{fmt}"
+                    _save(fig, fmt, target)
+                    written.append(target)
+    return written, skipped

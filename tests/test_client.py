@@ -1,0 +1,183 @@
+"""The Python client and `percussim submit` against the live stack (the real API and a real
+embedded worker), and the client's handling of 401 and 503 against a stand-in transport."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+
+import h5py
+import httpx
+import numpy as np
+import pytest
+
+from conftest import BASE_CASE, merge
+from live_stack import ROOT, Stack
+from service.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
+from solver import load_case
+from solver.io import read_result
+from solver.presets import load_preset, preset_json
+from solver.simulate import simulate
+from test_cli import _percussim
+from test_live import LONG
+
+BAD = {"contact": {"exponent": 0.9}, "striker": {"mass": 0}}
+# A stiff, heavily damped contact the explicit scheme's time step does not resolve: it fails as it runs.
+DIVERGES = merge(BASE_CASE, {"numerics": {"scheme": "explicit", "cells": 10},
+                             "contact": {"stiffness": 1e20, "exponent": 0.5, "damping": 1e15}})
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    s = Stack(tmp_path_factory.mktemp("client"), None, workers=1)
+    yield s
+    s.stop()
+
+
+@pytest.fixture
+def api(stack):
+    with Client(stack.url) as client:
+        yield client
+
+
+def test_a_preset_runs_to_the_local_summary_and_arrays(api, tmp_path):
+    case = api.preset("fig9")
+    assert case == preset_json("fig9")
+    job = api.submit(case)
+    assert job["status"] == "queued" and job["id"] in {j["id"] for j in api.jobs()}
+    seen = []
+    record = api.wait(job["id"], progress=lambda fraction, record: seen.append((fraction, record["status"])))
+    assert record["status"] == "succeeded" and seen[-1] == (1.0, "succeeded")
+    assert [f for f, _ in seen] == sorted(f for f, _ in seen)
+    direct = simulate(load_preset("fig9"))
+    summary = api.summary(job["id"])
+    assert summary["co_impact_time"] == direct.summary["co_impact_time"]
+    assert summary["peak_contact_force"] == direct.summary["peak_contact_force"]
+
+    result = api.result(job["id"])
+    force = result.history["contact/force"]
+    assert force.shape == direct.history["contact/force"].shape == (direct.numerics.steps + 1,)
+    np.testing.assert_array_equal(force, direct.history["contact/force"])
+    np.testing.assert_array_equal(result.probe_stress, direct.probe_stress)
+    # The summary's peak is refined between time steps (a parabola's vertex): a little above the samples'.
+    assert force.max() <= summary["peak_contact_force"]["value"] == pytest.approx(force.max(), rel=1e-4)
+    assert result.summary == summary and result.case == load_preset("fig9")
+
+    path = api.download(job["id"], tmp_path / "out" / "fig9.h5")
+    assert sorted(p.name for p in path.parent.iterdir()) == ["fig9.h5"]  # no partial file left
+    with h5py.File(path) as f:
+        assert f.attrs["format"] == "percussim-result" and f["contact/force"].attrs["units"] == "N"
+    np.testing.assert_array_equal(read_result(path).history["contact/force"], force)
+
+
+def test_a_case_file_and_a_case_object_are_submitted_as_they_are(api, tmp_path):
+    assert api.run(ROOT / "examples" / "fig3.json") == api.run(load_case(ROOT / "examples" / "fig3.json"))
+    broken = tmp_path / "broken.json"
+    broken.write_text("{not json")
+    with pytest.raises(Refused) as refused:
+        api.submit(str(broken))
+    assert refused.value.errors[0].field == "body" and "not valid JSON" in str(refused.value)
+
+
+def test_an_invalid_case_raises_naming_every_field(api):
+    with pytest.raises(Refused) as refused:
+        api.submit(merge(preset_json("fig3"), BAD))
+    assert refused.value.status == 422
+    assert ("contact.exponent", "must be ≤ 0.5") in refused.value.errors
+    assert "contact.exponent: must be ≤ 0.5" in str(refused.value)
+    assert "striker.mass: must be > 0" in str(refused.value)
+
+
+def test_a_failed_job_raises_with_its_reason(api):
+    with pytest.raises(JobFailed) as failed:
+        api.run(DIVERGES)
+    assert failed.value.record["status"] == "failed"
+    assert "non-finite at t =" in str(failed.value) and "Reduce numerics.time_step" in str(failed.value)
+    with pytest.raises(ServiceError, match="failed, so it has no summary: .*non-finite") as conflict:
+        api.summary(failed.value.record["id"])
+    assert conflict.value.status == 409
+    with pytest.raises(NotFound, match="no job with id 'nope'"):
+        api.job("nope")
+    with pytest.raises(NotFound, match="unknown preset 'nope'"):
+        api.preset("nope")
+
+
+def test_a_running_job_reports_its_progress_and_is_cancelled(api):
+    job = api.submit(merge(preset_json("fig3"), LONG))
+    seen, cancels = [], []
+
+    def watch(fraction, record):
+        seen.append(fraction)
+        if record["status"] == "running" and fraction > 0 and not cancels:
+            cancels.append(api.cancel(job["id"]))
+
+    with pytest.raises(JobFailed, match=f"job {job['id']} was cancelled") as cancelled:
+        api.wait(job["id"], progress=watch, poll=0.05, timeout=60)
+    assert cancelled.value.record["status"] == "cancelled"
+    assert seen == sorted(seen) and 0 < seen[-1] < 1, seen
+    with pytest.raises(ServiceError, match="has already finished: it is cancelled"):
+        api.cancel(job["id"])
+
+
+def test_submit_prints_the_summary_and_downloads_the_result(stack, tmp_path):
+    case = tmp_path / "case.json"
+    case.write_text(json.dumps(preset_json("fig3")))
+    done = _percussim("submit", str(case), "--url", stack.url, "--summary", "s.json", "--output", "r.h5",
+                      cwd=tmp_path)
+    assert done.returncode == 0, done.stderr
+    printed = json.loads(done.stdout)
+    assert json.loads((tmp_path / "s.json").read_text()) == printed
+    assert printed["co_impact_time"] == simulate(load_preset("fig3")).summary["co_impact_time"]
+    assert read_result(tmp_path / "r.h5").summary == printed
+    queued = _percussim("submit", str(case), "--url", stack.url, "--no-wait", cwd=tmp_path)
+    assert json.loads(queued.stdout)["status"] == "queued"
+
+
+def test_submit_exits_2_naming_the_field_and_1_with_a_failed_jobs_reason(stack, tmp_path):
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(merge(preset_json("fig3"), BAD)))
+    refused = _percussim("submit", str(bad), "--url", stack.url, cwd=tmp_path)
+    assert refused.returncode == 2 and refused.stdout == ""
+    assert f"percussim: invalid case {bad}:\n" in refused.stderr
+    assert "  contact.exponent: must be ≤ 0.5\n" in refused.stderr
+    diverges = tmp_path / "diverges.json"
+    diverges.write_text(json.dumps(DIVERGES))
+    failed = _percussim("submit", str(diverges), "--url", stack.url, cwd=tmp_path)
+    assert failed.returncode == 1 and failed.stdout == ""
+    assert "failed: " in failed.stderr and "non-finite at t =" in failed.stderr
+
+
+def _stand_in(*answers: httpx.Response) -> tuple[Client, list[httpx.Request]]:
+    """A client whose calls get `answers` in turn, and the requests it made."""
+    requests = []
+
+    def answer(request: httpx.Request) -> httpx.Response:
+        requests.append(request)
+        return answers[len(requests) - 1]
+
+    return Client("http://percussim.test", api_key="k1", retries=2, transport=httpx.MockTransport(answer)), requests
+
+
+def test_a_503_is_retried_after_its_retry_after_a_bounded_number_of_times():
+    down = httpx.Response(503, headers={"Retry-After": "0"}, json={"detail": "the job queue is unavailable"})
+    client, requests = _stand_in(down, down, httpx.Response(202, json={"id": "j1", "status": "queued"}))
+    assert client.submit(preset_json("fig3"))["id"] == "j1"
+    assert len(requests) == 3 and all(json.loads(r.content) == preset_json("fig3") for r in requests)
+    client, requests = _stand_in(down, down, down, down)
+    with pytest.raises(Unavailable, match="the job queue is unavailable"):
+        client.job("j1")
+    assert len(requests) == 3  # the call and its 2 retries
+
+
+def test_the_key_is_sent_and_a_401_says_so():
+    client, requests = _stand_in(httpx.Response(401, json={"detail": "this service needs an API key"}))
+    with pytest.raises(Unauthorized, match="needs an API key") as refused:
+        client.presets()
+    assert refused.value.status == 401 and requests[0].headers["X-API-Key"] == "k1"
+
+
+def test_the_client_imports_without_the_service_or_the_solver():
+    loaded = subprocess.run([sys.executable, "-c", "import sys, service.client; print(*sorted(sys.modules))"],
+                            cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    assert not {"fastapi", "celery", "numba", "numpy", "solver"} & set(loaded)

@@ -1,0 +1,353 @@
+"""Plots of a result: each one drawn from the datasets themselves, refused with what to change
+when the result lacks what it needs, from the command line and over HTTP (cached once drawn)."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import struct
+import xml.etree.ElementTree as ET
+
+import h5py
+import numpy as np
+import pytest
+from fastapi.testclient import TestClient
+
+import solver.plots as plots
+from conftest import BASE_CASE, merge
+from service.app import create_app
+from solver.case import parse_case
+from solver.cli import main
+from solver.io import write_result
+from solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
+from solver.presets import preset_json
+from solver.simulate import simulate
+from worker.settings import Settings
+from worker.store import SUCCEEDED, JobStore, now
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def _result(folder, name: str, changes: dict) -> str:
+    case = merge(preset_json("fig9"), {"numerics": {"cells": 40}, **changes})
+    return str(write_result(simulate(parse_case(case)), folder / f"{name}.h5"))
+
+
+@pytest.fixture(scope="module")
+def results(tmp_path_factory) -> dict[str, str]:
+    """The Fig. 9 preset on 40 cells with fields and probes (`full`), with fields every 125 µs
+    (`sparse`), without fields or probes (`bare`), and as the lumped model with fields asked for
+    (`lumped`)."""
+    folder = tmp_path_factory.mktemp("results")
+    return {
+        "full": _result(folder, "full", {"outputs": {"fields": True, "field_stride": 20}}),
+        "sparse": _result(folder, "sparse", {"outputs": {"fields": True, "field_stride": 400}}),
+        "bare": _result(folder, "bare", {"outputs": None}),
+        "lumped": _result(folder, "lumped", {"numerics": {"model": "lumped"},
+                                             "outputs": {"fields": True, "probes": []}}),
+    }
+
+
+def _strided(dataset: h5py.Dataset, most: int) -> np.ndarray:
+    """Every k-th row, k = ⌈rows / most⌉, and the last."""
+    k = math.ceil(len(dataset) / most)
+    assert (len(dataset) - 1) % k, "the last row is not on the stride: the test would not see it added"
+    return np.concatenate([dataset[::k], dataset[-1:]])
+
+
+def _line(ax, label: str):
+    [line] = [line for line in ax.get_lines() if line.get_label() == label]
+    return line
+
+
+@pytest.mark.parametrize("name", PLOTS)
+def test_every_plot_renders_as_png_and_svg(results, name):
+    png = render(results["full"], name, "png")
+    assert png.startswith(PNG_SIGNATURE)
+    width, height = struct.unpack(">II", png[16:24])  # the IHDR chunk
+    assert (width, height) == (plots.FIGSIZE[0] * plots.DPI, plots.FIGSIZE[1] * plots.DPI)
+    svg = ET.fromstring(render(results["full"], name, "svg"))
+    assert svg.tag == "{http://www.w3.org/2000/svg}svg"
+
+
+@pytest.mark.parametrize("name", PLOTS)
+def test_every_plot_has_labelled_axes_with_data_and_a_title_naming_the_case(results, name):
+    fig = figure(results["full"], name)
+    ax = fig.axes[0]
+    assert ax.get_xlabel() and ax.get_ylabel()
+    assert ax.get_lines() or ax.images
+    assert fig.get_suptitle() == f"{PLOTS[name]} — fig9"
+
+
+def test_the_force_plot_is_the_contact_medium_and_external_force_in_kN(results):
+    ax = figure(results["full"], "force").axes[0]
+    with h5py.File(results["full"]) as f:
+        ms = f["time"][()] * 1e3  # a 4-ms run is drawn in ms
+        for label, path in (("contact force", "contact/force"), ("medium force", "medium/force"),
+                            ("external force on the striker", "external/force")):
+            np.testing.assert_array_equal(_line(ax, label).get_xdata(), ms)
+            np.testing.assert_array_equal(_line(ax, label).get_ydata(), f[path][()] / 1e3)
+        contacts = json.loads(f["summary"][()])["contacts"]
+    [shading] = [c for c in ax.collections if c.get_label() == "in contact"]
+    assert len(shading.get_paths()) == len(contacts) > 1
+    assert ax.get_xlabel() == "time t (ms)" and "kN" in ax.get_ylabel()
+
+
+def test_the_displacements_are_the_striker_and_both_tool_ends_in_mm(results):
+    ax = figure(results["full"], "displacements").axes[0]
+    with h5py.File(results["full"]) as f:
+        for label, path in (("striker", "striker/displacement"),
+                            ("struck end of the tool", "tool/struck_end_displacement"),
+                            ("working end of the tool", "tool/working_end_displacement")):
+            np.testing.assert_array_equal(_line(ax, label).get_ydata(), f[path][()] * 1e3)
+
+
+def test_the_probe_plot_has_a_curve_a_probe_in_MPa_with_its_x(results):
+    ax = figure(results["full"], "probes").axes[0]
+    with h5py.File(results["full"]) as f:
+        stress = f["probes/stress"][()]
+        assert list(f["probes/x"][()]) == [0.01, 0.12, 0.235, 0.485]
+    for k, label in enumerate(["x = 0.01 m", "x = 0.12 m", "x = 0.235 m", "x = 0.485 m"]):
+        np.testing.assert_array_equal(_line(ax, label).get_ydata(), stress[:, k] / 1e6)
+
+
+def test_stress_along_the_tool_at_given_times_is_the_nearest_stored_frames(results):
+    ax = figure(results["full"], "stress_along", times=[1e-4, 2.02e-4]).axes[0]
+    with h5py.File(results["full"]) as f:
+        frame_times, stress, x = f["fields/time"][()], f["fields/stress"][()], f["fields/x"][()]
+    lines = [line for line in ax.get_lines() if line.get_label().startswith("t = ")]
+    assert [line.get_label() for line in lines] == ["t = 100 µs", "t = 200 µs"]  # frames every 6.25 µs
+    for line, t in zip(lines, (1e-4, 2e-4)):
+        frame = int(np.argmin(abs(frame_times - t)))
+        np.testing.assert_array_equal(line.get_xdata(), x)
+        np.testing.assert_array_equal(line.get_ydata(), stress[frame] / 1e6)
+
+
+def test_stress_along_the_tool_by_default_spans_the_first_contact_after_its_start(results):
+    ax = figure(results["full"], "stress_along").axes[0]
+    with h5py.File(results["full"]) as f:
+        first = json.loads(f["summary"][()])["contacts"][0]
+    times = [float(line.get_label().split()[2]) * 1e-6 for line in ax.get_lines()
+             if line.get_label().startswith("t = ")]
+    assert len(times) == plots.DEFAULT_TIMES and times == sorted(times)
+    assert first["start"] < times[0] and times[-1] == pytest.approx(first["end"], abs=7e-6)
+
+
+def test_stress_along_the_tool_from_sparse_fields_takes_the_first_frames_after_the_start(results):
+    ax = figure(results["sparse"], "stress_along").axes[0]
+    labels = [line.get_label() for line in ax.get_lines() if line.get_label().startswith("t = ")]
+    assert labels == ["t = 125 µs", "t = 250 µs", "t = 375 µs", "t = 500 µs", "t = 625 µs"]
+
+
+def test_a_time_outside_the_run_is_refused_naming_the_run(results):
+    with pytest.raises(ValueError, match=r"time 0.5 s is outside the run's fields \(0 … 0.004 s\)"):
+        figure(results["full"], "stress_along", times=[0.5])
+
+
+def test_the_space_time_map_is_read_with_strides_and_centred_on_zero(results, monkeypatch):
+    monkeypatch.setattr(plots, "MAX_MAP_SIDE", 30)
+    fig = figure(results["full"], "spacetime")
+    [image] = fig.axes[0].images
+    with h5py.File(results["full"]) as f:
+        stored = f["fields/stress"]
+        rows, cols = math.ceil(stored.shape[0] / 30), math.ceil(stored.shape[1] / 30)
+        expected = stored[::rows, ::cols].T / 1e6
+    assert max(expected.shape) <= 30
+    np.testing.assert_array_equal(image.get_array(), expected)
+    low, high = image.get_clim()
+    assert low == -high == -np.abs(expected).max()
+    assert "MPa" in fig.axes[1].get_ylabel()  # the colorbar
+
+
+def test_long_histories_are_read_with_a_stride(results, monkeypatch):
+    monkeypatch.setattr(plots, "MAX_CURVE_POINTS", 1000)
+    ax = figure(results["full"], "force").axes[0]
+    with h5py.File(results["full"]) as f:
+        expected = _strided(f["contact/force"], 1000) / 1e3
+        end = f["time"][-1] * 1e3
+    assert len(expected) <= 1001
+    np.testing.assert_array_equal(_line(ax, "contact force").get_ydata(), expected)
+    assert ax.get_xlim() == (0, end)
+
+
+def test_the_energy_budget_stacks_every_term_up_to_the_input(results):
+    ax = figure(results["full"], "energy").axes[0]
+    with h5py.File(results["full"]) as f:
+        case = json.loads(f.attrs["case"])
+        supplied = (0.5 * case["striker"]["mass"] * case["striker"]["velocity"] ** 2
+                    + _strided(f["energy/external_work"], plots.MAX_FILL_POINTS))
+        end = f["time"][-1] * 1e3
+    np.testing.assert_allclose(_line(ax, "input: initial + external work").get_ydata(), supplied)
+    stacked = [c for c in ax.collections if c.get_label()]
+    assert len(stacked) == len(plots.ENERGY_TERMS) + 1  # and what the scheme dissipated
+    top = stacked[-1].get_paths()[0].vertices[:, 1].max()
+    assert top == pytest.approx(supplied.max(), rel=1e-9)
+    assert ax.get_xlim() == (0, end)
+
+
+def test_a_result_without_fields_or_probes_says_what_to_change(results, tmp_path):
+    with h5py.File(results["bare"]) as f:
+        assert problem(f, "spacetime") == ("this result has no stress fields: "
+                                           "run the case with outputs.fields = true")
+        assert problem(f, "stress_along") == problem(f, "spacetime")
+        assert "run the case with outputs.probes" in problem(f, "probes")
+        assert problem(f, "force") is None and problem(f, "energy") is None
+    with h5py.File(results["lumped"]) as f:
+        assert "numerics.model = \"rod\"" in problem(f, "spacetime")
+    with pytest.raises(NotAvailable, match="outputs.fields = true"):
+        figure(results["bare"], "spacetime")
+    written, skipped = write_plots(results["bare"], tmp_path, formats=["png"])
+    assert sorted(skipped) == ["probes", "spacetime", "stress_along"]
+    assert sorted(p.name for p in written) == ["displacements.png", "energy.png", "force.png"]
+
+
+def test_an_unknown_plot_or_a_file_that_is_not_a_result_is_refused(results, tmp_path):
+    with pytest.raises(UnknownPlot, match="the plots are: force, displacements, probes"):
+        figure(results["full"], "forces")
+    with h5py.File(tmp_path / "other.h5", "w") as f:
+        f["time"] = np.zeros(3)
+    (tmp_path / "text.h5").write_text("not HDF5")
+    for name in ("other.h5", "text.h5"):
+        with pytest.raises(NotAResult, match="is not a percussim result"):
+            figure(tmp_path / name, "force")
+
+
+def test_cli_writes_the_plots_next_to_the_result_and_says_what_it_skipped(results, tmp_path, capsys):
+    bare = shutil.copy(results["bare"], tmp_path / "run.h5")
+    assert main(["plot", str(bare)]) == 0
+    out, err = capsys.readouterr()
+    folder = tmp_path / "run-plots"
+    names = {f"{n}.{fmt}" for n in ("force", "displacements", "energy") for fmt in ("png", "svg")}
+    assert {p.name for p in folder.iterdir()} == names
+    assert set(out.split()) == {str(folder / n) for n in names}
+    assert ("skipped spacetime: this result has no stress fields: "
+            "run the case with outputs.fields = true") in err
+    assert "skipped probes" in err
+
+
+def test_cli_plots_chosen_plots_formats_and_times(results, tmp_path, capsys):
+    assert main(["plot", results["full"], "--out", str(tmp_path / "p"), "--only", "stress_along",
+                 "probes", "--format", "png", "--times", "1e-4,2e-4"]) == 0
+    assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["probes.png", "stress_along.png"]
+    assert capsys.readouterr().err == ""
+
+
+@pytest.mark.parametrize("make, message", [
+    (lambda p: None, "no such result file"),
+    (lambda p: p.write_text("not HDF5"), "is not a percussim result"),
+])
+def test_cli_refuses_a_missing_file_or_one_that_is_not_a_result_with_status_2(tmp_path, capsys, make,
+                                                                              message):
+    make(tmp_path / "r.h5")
+    assert main(["plot", str(tmp_path / "r.h5")]) == 2
+    assert message in capsys.readouterr().err
+    assert not (tmp_path / "r-plots").exists()
+
+
+def test_cli_refuses_an_unknown_plot_with_status_2(results, tmp_path, capsys):
+    assert main(["plot", results["full"], "--out", str(tmp_path / "p"), "--only", "forse"]) == 2
+    assert "unknown plot 'forse'" in capsys.readouterr().err
+    assert not (tmp_path / "p").exists()
+
+
+@pytest.fixture
+def store(tmp_path, monkeypatch) -> tuple[TestClient, JobStore]:
+    for name in list(os.environ):
+        if name.startswith("PERCUSSIM_"):
+            monkeypatch.delenv(name)
+    return TestClient(create_app(Settings(results_dir=tmp_path))), JobStore(tmp_path)
+
+
+def _succeeded(client: TestClient, jobs: JobStore, result: str) -> str:
+    """A job submitted, then given `result` as a worker would have written it."""
+    answer = client.post("/v1/jobs", json=BASE_CASE)
+    assert answer.status_code == 202, answer.text
+    job_id = answer.json()["id"]
+    shutil.copy(result, jobs.result_path(job_id))
+    with h5py.File(result) as f:
+        jobs.write_summary(job_id, f["summary"][()].decode())
+    jobs.update(job_id, status=SUCCEEDED, progress=1.0, finished=now())
+    return job_id
+
+
+def test_http_lists_the_plots_with_their_links_and_reasons(results, store):
+    client, jobs = store
+    job_id = _succeeded(client, jobs, results["bare"])
+    assert client.get(f"/v1/jobs/{job_id}").json()["links"]["plots"] == f"/v1/jobs/{job_id}/plots"
+    answer = client.get(f"/v1/jobs/{job_id}/plots")
+    assert answer.status_code == 200
+    listed = {p["name"]: p for p in answer.json()["plots"]}
+    assert list(listed) == list(PLOTS)
+    assert listed["force"] == {"name": "force", "title": "Contact force", "available": True, "reason": None,
+                               "links": {"png": f"/v1/jobs/{job_id}/plots/force.png",
+                                         "svg": f"/v1/jobs/{job_id}/plots/force.svg"}}
+    assert listed["spacetime"]["available"] is False
+    assert "outputs.fields = true" in listed["spacetime"]["reason"]
+
+
+def test_http_serves_a_plot_as_png_and_svg_and_keeps_it(results, store, monkeypatch):
+    client, jobs = store
+    job_id = _succeeded(client, jobs, results["full"])
+    png = client.get(f"/v1/jobs/{job_id}/plots/force.png")
+    assert png.status_code == 200 and png.headers["content-type"] == "image/png"
+    assert png.content.startswith(PNG_SIGNATURE)
+    svg = client.get(f"/v1/jobs/{job_id}/plots/spacetime.svg")
+    assert svg.status_code == 200 and svg.headers["content-type"].startswith("image/svg+xml")
+    ET.fromstring(svg.content)
+    assert jobs.plot_path(job_id, "force", "png").read_bytes() == png.content
+
+    def no_drawing(*args):
+        raise AssertionError("a kept plot was drawn again")
+
+    monkeypatch.setattr("service.jobs.render", no_drawing)
+    again = client.get(f"/v1/jobs/{job_id}/plots/force.png")
+    assert again.status_code == 200 and again.content == png.content
+
+
+def test_http_draws_again_a_plot_older_than_its_result(results, store):
+    client, jobs = store
+    job_id = _succeeded(client, jobs, results["full"])
+    kept = jobs.plot_path(job_id, "force", "png")
+    kept.parent.mkdir()
+    kept.write_bytes(b"stale")
+    result = jobs.result_path(job_id)
+    os.utime(kept, (result.stat().st_mtime - 10,) * 2)
+    answer = client.get(f"/v1/jobs/{job_id}/plots/force.png")
+    assert answer.content.startswith(PNG_SIGNATURE) and kept.read_bytes() == answer.content
+
+
+def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_make(results, store):
+    client, jobs = store
+    job_id = _succeeded(client, jobs, results["bare"])
+    unknown = client.get(f"/v1/jobs/{job_id}/plots/..%2Fresult.png")
+    assert unknown.status_code == 404
+    unknown = client.get(f"/v1/jobs/{job_id}/plots/forces.png")
+    assert unknown.status_code == 404
+    assert unknown.json()["detail"] == ("no plot named 'forces'; the plots are: "
+                                        "force, displacements, probes, stress_along, spacetime, energy")
+    missing = client.get(f"/v1/jobs/{job_id}/plots/probes.svg")
+    assert missing.status_code == 404
+    assert f"job {job_id} has no probes plot: this result has no probes: run the case with outputs.probes" \
+        in missing.json()["detail"]
+    assert not jobs.plot_path(job_id, "probes", "svg").exists()
+    assert client.get(f"/v1/jobs/{job_id}/plots/force.pdf").status_code == 422
+
+
+def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(results, tmp_path, monkeypatch):
+    for name in list(os.environ):
+        if name.startswith("PERCUSSIM_"):
+            monkeypatch.delenv(name)
+    client = TestClient(create_app(Settings(results_dir=tmp_path, api_keys="alice-key,bob-key")))
+    alice, bob = {"X-API-Key": "alice-key"}, {"X-API-Key": "bob-key"}
+    job_id = client.post("/v1/jobs", json=BASE_CASE, headers=alice).json()["id"]
+    for path in ("plots", "plots/force.png"):
+        answer = client.get(f"/v1/jobs/{job_id}/{path}", headers=alice)
+        assert answer.status_code == 409 and "queued" in answer.json()["detail"]
+    jobs = JobStore(tmp_path)
+    shutil.copy(results["full"], jobs.result_path(job_id))
+    jobs.update(job_id, status=SUCCEEDED, finished=now())
+    assert client.get(f"/v1/jobs/{job_id}/plots/force.png", headers=alice).status_code == 200
+    for path in ("plots", "plots/force.png"):
+        assert client.get(f"/v1/jobs/{job_id}/{path}", headers=bob).status_code == 404
