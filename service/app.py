@@ -13,7 +13,7 @@ from fastapi.responses import JSONResponse
 from worker.settings import Settings, settings as env_settings
 from worker.store import WorkerRegistry
 
-from . import errors, presets
+from . import errors, page, presets
 from .auth import authenticate
 from .jobs import jobs_router
 from .limits import BodySizeLimit
@@ -31,7 +31,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="percussim",
         summary="Simulation of percussive impact devices: striker, tool, contact and medium.",
         description="Submit an impact case (SI units) as a job, follow it, then fetch its pulse "
-                    "summary and its HDF5 result. The presets are the paper's cases.",
+                    "summary and its HDF5 result. The presets are the paper's cases. "
+                    "In a browser, [the job page](/) does all of this.",
         version="1",
     )
     errors.install(app)
@@ -44,6 +45,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
     app.include_router(sweeps_router(settings, queue), dependencies=keyed)
     app.include_router(presets.router, dependencies=keyed)
+    app.include_router(page.router)
 
     @app.get("/healthz", tags=["health"])
     def healthz() -> dict:

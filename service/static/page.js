@@ -1,0 +1,496 @@
+"use strict";
+
+const KEY_STORAGE = "percussim.apiKey";
+const POLL_MS = 250;
+const FINISHED = ["succeeded", "failed", "cancelled"];
+const RECENT = 12;
+const $ = (id) => document.getElementById(id);
+
+// An element with attributes and children; strings become text nodes, so nothing from the
+// service is ever parsed as HTML.
+function h(tag, attrs = {}, ...children) {
+  const el = document.createElement(tag);
+  for (const [name, value] of Object.entries(attrs)) {
+    if (value === null || value === undefined || value === false) continue;
+    if (name.startsWith("on")) el.addEventListener(name.slice(2), value);
+    else el.setAttribute(name, value);
+  }
+  el.append(...children.flat(Infinity).filter((c) => c !== null && c !== undefined && c !== false));
+  return el;
+}
+
+// `digits` significant digits: 484.0, 179.9, 12345, 0.9335; an exponent only below 0.001
+// (4.682e-13), where fixed decimals would run off the table.
+function fmt(value, digits = 4) {
+  if (typeof value !== "number" || !Number.isFinite(value)) return "—";
+  if (value === 0) return "0";
+  if (Math.abs(value) < 1e-3) return value.toExponential(digits - 1);
+  const decimals = digits - 1 - Math.floor(Math.log10(Math.abs(value)));
+  return value.toFixed(Math.max(decimals, 0));
+}
+
+const clock = (iso) => (iso ? new Date(iso).toLocaleTimeString("en-GB") : "");
+
+function seconds(fromIso, toIso) {
+  return fromIso && toIso ? (new Date(toIso) - new Date(fromIso)) / 1000 : null;
+}
+
+// ---------------------------------------------------------------------------------------------
+// The API: every call carries the key, and a 401 anywhere asks the user for one.
+
+class ApiError extends Error {
+  constructor(status, detail, retryAfter) {
+    super(typeof detail === "string" ? detail : `the service answered ${status}`);
+    this.status = status;
+    this.detail = detail;
+    this.retryAfter = retryAfter;
+  }
+}
+
+async function api(path, options = {}) {
+  const headers = new Headers(options.headers || {});
+  const key = localStorage.getItem(KEY_STORAGE);
+  if (key) headers.set("X-API-Key", key);
+  const response = await fetch(path, { ...options, headers });
+  if (response.ok) return response;
+  const text = await response.text();
+  let detail = text;
+  try { detail = JSON.parse(text).detail ?? text; } catch { /* a plain-text answer */ }
+  if (response.status === 401) askForKey(detail);
+  throw new ApiError(response.status, detail, response.headers.get("Retry-After"));
+}
+
+const getJSON = async (path, options) => (await api(path, options)).json();
+
+function describe(error) {
+  if (!(error instanceof ApiError)) return `the service could not be reached (${error.message})`;
+  if (error.status === 401) return "an API key is needed";
+  const retry = error.retryAfter ? ` Try again in ${error.retryAfter} s.` : "";
+  return `${error.message}${retry}`;
+}
+
+// A blob fetched with the key, as an object URL: an <img> or a link cannot send the header.
+async function objectUrl(path, urls) {
+  const url = URL.createObjectURL(await (await api(path)).blob());
+  urls.push(url);
+  return url;
+}
+
+function askForKey(detail) {
+  const banner = $("key-needed");
+  const reason = typeof detail === "string" && detail ? detail : "this service needs an API key";
+  banner.textContent = `${reason[0].toUpperCase()}${reason.slice(1)}: enter a key above and press Save.`;
+  banner.hidden = false;
+  $("api-key").classList.add("attention");
+  $("api-key").focus();
+}
+
+function saveKey(event) {
+  event.preventDefault();
+  const key = $("api-key").value.trim();
+  if (key) localStorage.setItem(KEY_STORAGE, key);
+  else localStorage.removeItem(KEY_STORAGE);
+  $("key-needed").hidden = true;
+  $("api-key").classList.remove("attention");
+  loadPresets();
+  refreshJobs();
+  if (shown) openJob(shown.id);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The case: a preset or pasted JSON, checked for syntax here and for meaning by the service.
+
+async function loadPresets() {
+  try {
+    const presets = await getJSON("/v1/presets");
+    $("preset").replaceChildren(h("option", { value: "" }, "— choose a preset —"),
+      ...presets.map((p) => h("option", { value: p.name }, p.name)));
+    showCaseErrors(null);
+  } catch (error) {
+    // A missing key has its own banner.
+    if (error.status !== 401) showCaseErrors(`The presets could not be loaded: ${describe(error)}`);
+  }
+}
+
+async function choosePreset() {
+  const name = $("preset").value;
+  if (!name) return;
+  try {
+    const preset = await getJSON(`/v1/presets/${encodeURIComponent(name)}`);
+    $("preset-description").textContent = preset.description || "";
+    // The description last: the physics is what one reads and edits.
+    const { description, ...physics } = preset;
+    $("case-json").value = JSON.stringify({ ...physics, description }, null, 2);
+    showCaseErrors(null);
+  } catch (error) {
+    showCaseErrors(`Preset ${name} could not be loaded: ${describe(error)}`);
+  }
+}
+
+function showCaseErrors(title, problems = [], where = "field") {
+  const box = $("case-errors");
+  box.hidden = !title;
+  box.replaceChildren();
+  if (!title) return;
+  box.append(h("p", { class: "title" }, title));
+  if (problems.length) {
+    box.append(h("table", { class: "problems" },
+      h("thead", {}, h("tr", {}, h("th", {}, where), h("th", {}, "problem"))),
+      h("tbody", {}, problems.map((p) =>
+        h("tr", {}, h("td", { class: "field" }, p.field), h("td", { class: "message" }, p.message))))));
+  }
+}
+
+// V8 names a syntax error's character position; the line and column are what a user can find.
+function syntaxProblem(text, error) {
+  const match = /position (\d+)/.exec(error.message);
+  if (!match) return { field: "", message: error.message };
+  const position = Number(match[1]);
+  const before = text.slice(0, position).split("\n");
+  const area = $("case-json");
+  area.focus();
+  area.setSelectionRange(position, position + 1);
+  return { field: `line ${before.length}, column ${before.at(-1).length + 1}`,
+           message: error.message.replace(/ in JSON at position \d+.*$/, "") };
+}
+
+async function submitCase(event) {
+  event.preventDefault();
+  const text = $("case-json").value;
+  if (!text.trim()) {
+    showCaseErrors("Pick a preset or paste a case first.");
+    return;
+  }
+  try {
+    JSON.parse(text);
+  } catch (error) {
+    showCaseErrors("The case is not valid JSON, so it was not sent.", [syntaxProblem(text, error)], "where");
+    return;
+  }
+  const button = $("submit");
+  button.disabled = true;
+  try {
+    const job = await getJSON("/v1/jobs", {
+      method: "POST", headers: { "Content-Type": "application/json" }, body: text });
+    showCaseErrors(null);
+    openJob(job.id);
+    refreshJobs();
+  } catch (error) {
+    if (Array.isArray(error.detail)) {
+      const n = error.detail.length;
+      showCaseErrors(`The service refused the case: ${n} problem${n === 1 ? "" : "s"}.`, error.detail);
+    } else {
+      showCaseErrors(`The case was not submitted: ${describe(error)}`);
+    }
+  } finally {
+    button.disabled = false;
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Recent jobs.
+
+async function refreshJobs() {
+  try {
+    const { jobs } = await getJSON(`/v1/jobs?limit=${RECENT}`);
+    $("jobs").replaceChildren(...jobs.map((job) => h("li", {},
+      h("button", { type: "button", class: "job-link", "data-job": job.id,
+                    "aria-current": shown && shown.id === job.id ? "true" : null,
+                    onclick: () => openJob(job.id) },
+        h("span", { class: "job-name" }, job.name || "(unnamed)"),
+        h("span", { class: `badge ${job.status}` }, job.status),
+        h("span", { class: "muted small" }, clock(job.created))))));
+    if (!jobs.length) $("jobs").replaceChildren(h("li", { class: "muted" }, "none yet"));
+  } catch (error) {
+    $("jobs").replaceChildren(h("li", { class: "muted" }, describe(error)));
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// One job: polled until it finishes, then its summary, plots and result.
+
+let shown = null; // the job on view: {id, timer, urls}; replaced whole when another is opened
+
+function openJob(id) {
+  if (shown) {
+    clearTimeout(shown.timer);
+    shown.urls.forEach((url) => URL.revokeObjectURL(url));
+  }
+  shown = { id, timer: null, urls: [] };
+  history.replaceState(null, "", `#job=${id}`);
+  document.querySelectorAll(".job-link").forEach((b) =>
+    b.toggleAttribute("aria-current", b.dataset.job === id));
+  $("no-job").hidden = true;
+  $("job").hidden = false;
+  $("job-title").textContent = id;
+  $("job-error").hidden = true;
+  $("summary").replaceChildren();
+  $("plots").replaceChildren();
+  poll(shown);
+}
+
+async function poll(view) {
+  let job;
+  try {
+    job = await getJSON(`/v1/jobs/${view.id}`);
+  } catch (error) {
+    if (view !== shown) return;
+    showJobError(describe(error));
+    // A lost connection may come back (an API restart); a missing job or key will not.
+    if (!(error instanceof ApiError) || error.status >= 500) view.timer = setTimeout(() => poll(view), 4 * POLL_MS);
+    return;
+  }
+  if (view !== shown) return;
+  renderJob(job);
+  if (!FINISHED.includes(job.status)) {
+    view.timer = setTimeout(() => poll(view), POLL_MS);
+    return;
+  }
+  refreshJobs();
+  if (job.status === "failed") showJobError(job.error || "the job failed without a reason");
+  if (job.status === "succeeded") {
+    await showSummary(view);
+    await showPlots(view);
+  }
+}
+
+function renderJob(job) {
+  $("job-error").hidden = true;
+  $("job-title").replaceChildren(job.name || "(unnamed)", h("span", { class: "muted small id" }, job.id));
+  const status = $("job-status");
+  status.textContent = job.status;
+  status.className = `badge ${job.status}`;
+  const percent = Math.round(job.progress * 100);
+  const bar = $("progress-bar");
+  bar.style.width = `${percent}%`;
+  bar.className = job.status;
+  bar.textContent = `${percent}%`;
+  $("cancel").hidden = FINISHED.includes(job.status);
+  $("download").hidden = job.status !== "succeeded";
+  const ran = seconds(job.started, job.finished);
+  $("job-times").textContent = [
+    `submitted ${clock(job.created)}`,
+    job.started && `started ${clock(job.started)}`,
+    job.finished && `finished ${clock(job.finished)}`,
+    ran !== null && (ran < 1 ? `ran ${+(ran * 1e3).toPrecision(3)} ms` : `ran ${+ran.toPrecision(3)} s`),
+    job.worker && `on ${job.worker}`,
+  ].filter(Boolean).join(" · ");
+}
+
+function showJobError(message) {
+  const box = $("job-error");
+  box.textContent = message;
+  box.hidden = false;
+}
+
+async function cancelJob() {
+  try {
+    await api(`/v1/jobs/${shown.id}`, { method: "DELETE" });
+  } catch (error) {
+    // 409: it finished meanwhile, which the next poll shows.
+    if (error.status !== 409) showJobError(`Cancel failed: ${describe(error)}`);
+  }
+}
+
+async function downloadResult() {
+  const button = $("download");
+  button.disabled = true;
+  button.textContent = "Downloading…";
+  try {
+    const response = await api(`/v1/jobs/${shown.id}/result.h5`);
+    const disposition = response.headers.get("Content-Disposition") || "";
+    const match = /filename\*=utf-8''([^;]+)/i.exec(disposition) || /filename="?([^";]+)"?/i.exec(disposition);
+    const url = URL.createObjectURL(await response.blob());
+    const link = h("a", { href: url, download: match ? decodeURIComponent(match[1]) : `${shown.id}.h5` });
+    document.body.append(link);
+    link.click();
+    link.remove();
+    setTimeout(() => URL.revokeObjectURL(url), 60_000); // once the browser has taken the file
+  } catch (error) {
+    showJobError(`The HDF5 result could not be downloaded: ${describe(error)}`);
+  } finally {
+    button.disabled = false;
+    button.textContent = "Download HDF5";
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The pulse summary in engineers' units.
+
+const us = (t) => fmt(t * 1e6);
+
+function table(className, head, rows) {
+  return h("table", { class: className },
+    h("thead", {}, h("tr", {}, head.map((cell) => h("th", {}, cell)))),
+    h("tbody", {}, rows));
+}
+
+function card(title, ...content) {
+  return h("section", { class: "card" }, h("h3", {}, title), ...content);
+}
+
+// A row of the pulse table; `quantity` names the summary's key, for whoever reads the page by machine.
+function pulseRow(label, quantity, value, unit, x = "", t = "") {
+  return h("tr", { "data-quantity": quantity },
+    h("th", {}, label), h("td", { class: "num value" }, value), h("td", { class: "unit" }, unit),
+    h("td", { class: "num" }, x), h("td", { class: "num" }, t));
+}
+
+function pulseCard(s) {
+  const peak = s.peak_contact_force;
+  const stress = (key) => (s[key] ? [fmt(s[key].value / 1e6), "MPa", fmt(s[key].x * 1e3), us(s[key].time)]
+                                   : ["—", "MPa"]);
+  const contacts = s.contacts || [];
+  return card("Pulse",
+    table("pulse", ["", "value", "unit", "at x (mm)", "at t (µs)"], [
+      pulseRow("Co-impact time", "co_impact_time", us(s.co_impact_time), "µs"),
+      pulseRow("Peak contact force", "peak_contact_force", fmt(peak.value / 1e3), "kN", "", us(peak.time)),
+      pulseRow("Max compressive stress", "max_compressive_stress", ...stress("max_compressive_stress")),
+      pulseRow("Max tensile stress", "max_tensile_stress", ...stress("max_tensile_stress")),
+      pulseRow("Striker rebound velocity", "striker_rebound_velocity", fmt(s.striker_rebound_velocity), "m/s",
+               "", contacts.length ? us(contacts[0].end) : ""),
+      pulseRow("Contacts", "contacts_total", String(s.contacts_total ?? contacts.length), ""),
+    ]),
+    contacts.length > 1 && h("details", {},
+      h("summary", {}, `All ${contacts.length} contact intervals`),
+      table("contacts", ["#", "start (µs)", "end (µs)", "duration (µs)"], contacts.map((c, i) =>
+        h("tr", {}, h("td", { class: "num" }, String(i + 1)), h("td", { class: "num" }, us(c.start)),
+          h("td", { class: "num" }, us(c.end)), h("td", { class: "num" }, us(c.end - c.start)))))));
+}
+
+const ENERGY_TERMS = [
+  ["striker_kinetic", "Striker, kinetic"],
+  ["tool_kinetic", "Tool, kinetic"],
+  ["tool_strain", "Tool, strain"],
+  ["contact_potential", "Contact, potential"],
+  ["medium_potential", "Medium, potential"],
+  ["dissipated_contact", "Dissipated in the contact"],
+  ["dissipated_medium", "Dissipated in the medium"],
+  ["numerical", "Dissipated by the scheme"],
+];
+
+function energyCard(e) {
+  const input = e.initial + e.external_work;
+  const share = (value) => (input ? ((100 * value) / input).toFixed(1) : "—");
+  const row = (label, key, value, className = null) => h("tr", { "data-energy": key, class: className },
+    h("th", {}, label), h("td", { class: "num value" }, fmt(value)), h("td", { class: "num" }, share(value)));
+  const residual = input - ENERGY_TERMS.reduce((sum, [key]) => sum + e[key], 0);
+  const tiny = Math.abs(residual) < 1e-9 * Math.max(Math.abs(input), 1);
+  return card("Energy audit",
+    table("energy", ["", "J", "% of input"], [
+      row("Striker at impact", "initial", e.initial),
+      row("External force's work", "external_work", e.external_work),
+      row("Input", "input", input, "total"),
+      row("To the medium", "to_medium", e.to_medium, "highlight"),
+      h("tr", { class: "group" }, h("th", { colspan: 3 }, "At the end of the run")),
+      ENERGY_TERMS.map(([key, label]) => row(label, key, e[key])),
+      h("tr", { class: "total" }, h("th", {}, "Balance (input − terms)"),
+        h("td", { class: "num" }, tiny ? "0" : fmt(residual)), h("td", { class: "num" }, tiny ? "0" : share(residual))),
+      h("tr", {}, h("th", {}, "Largest energy created"), h("td", {}),
+        h("td", { class: "num" }, fmt(100 * e.max_excess_fraction, 3))),
+    ]));
+}
+
+function modelCard(s) {
+  const n = s.numerics || {};
+  const pair = (label, value) => h("tr", {}, h("th", {}, label), h("td", { class: "num" }, value));
+  const rows = [
+    pair("Model", s.model), pair("Scheme", s.scheme), pair("Cells", n.cells ?? "—"),
+    pair("Time step (µs)", us(n.time_step)), pair("Steps", n.steps ?? "—"),
+    n.scheme === "paper" && pair("γ", fmt(n.gamma, 3)), n.scheme === "sigma" && pair("σ", fmt(n.sigma, 3)),
+    pair("Courant number", fmt(n.courant, 3)),
+  ];
+  if (s.error_estimate) {
+    rows.push(pair("Tolerance", String(s.tolerance)),
+      pair("Error estimate", s.error_estimate.worst.toExponential(1)),
+      pair("Grids run", String((s.runs || []).length)));
+  }
+  return card("Model and numerics", h("table", { class: "model" }, h("tbody", {}, rows)),
+    h("p", { class: "why" }, h("strong", {}, "Why: "), s.why || "—"));
+}
+
+async function showSummary(view) {
+  let s;
+  try {
+    s = await getJSON(`/v1/jobs/${view.id}/summary`);
+  } catch (error) {
+    if (view === shown) showJobError(`The summary could not be loaded: ${describe(error)}`);
+    return;
+  }
+  if (view !== shown) return;
+  const warnings = s.warnings || [];
+  $("summary").replaceChildren(
+    warnings.length
+      ? h("div", { class: "banner warning" }, h("p", { class: "title" },
+          `${warnings.length} warning${warnings.length === 1 ? "" : "s"}`), h("ul", {}, warnings.map((w) => h("li", {}, w))))
+      : h("p", { class: "muted small" }, "No warnings."),
+    pulseCard(s),
+    h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Plots: each PNG fetched with the key; a click opens the SVG (or the PNG) full size.
+
+async function showPlots(view) {
+  const box = $("plots");
+  let plots;
+  try {
+    ({ plots } = await getJSON(`/v1/jobs/${view.id}/plots`));
+  } catch (error) {
+    const reason = error.status === 404 ? "this service does not draw them" : describe(error);
+    if (view === shown) box.replaceChildren(h("p", { class: "muted" }, `No plots: ${reason}.`));
+    return;
+  }
+  if (view !== shown) return;
+  const figures = plots.map((plot) => h("figure", { class: "plot", "data-plot": plot.name },
+    plot.available ? h("div", { class: "frame loading" }) : h("div", { class: "frame unavailable" }, plot.reason || "not available"),
+    h("figcaption", {}, plot.title || plot.name)));
+  box.replaceChildren(card("Plots", h("div", { class: "plot-grid" }, figures)));
+  await Promise.all(plots.map(async (plot, i) => {
+    if (!plot.available) return;
+    const frame = figures[i].querySelector(".frame");
+    try {
+      const img = h("img", { src: await objectUrl(plot.links.png, view.urls), alt: plot.title || plot.name,
+                             title: "click to enlarge", onclick: () => enlarge(plot, view) });
+      frame.replaceChildren(img);
+    } catch (error) {
+      frame.textContent = describe(error);
+      frame.classList.add("unavailable");
+    }
+    frame.classList.remove("loading");
+  }));
+}
+
+async function enlarge(plot, view) {
+  const box = $("lightbox");
+  const img = box.querySelector("img");
+  try {
+    img.src = await objectUrl(plot.links.svg || plot.links.png, view.urls);
+  } catch (error) {
+    showJobError(`The plot could not be opened: ${describe(error)}`);
+    return;
+  }
+  img.alt = plot.title || plot.name;
+  box.querySelector("figcaption").textContent = `${plot.title || plot.name} — click or press Esc to close`;
+  box.hidden = false;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+document.addEventListener("DOMContentLoaded", () => {
+  $("api-key").value = localStorage.getItem(KEY_STORAGE) || "";
+  $("key-form").addEventListener("submit", saveKey);
+  $("preset").addEventListener("change", choosePreset);
+  $("case-form").addEventListener("submit", submitCase);
+  $("refresh-jobs").addEventListener("click", refreshJobs);
+  $("cancel").addEventListener("click", cancelJob);
+  $("download").addEventListener("click", downloadResult);
+  $("lightbox").addEventListener("click", () => { $("lightbox").hidden = true; });
+  document.addEventListener("keydown", (event) => {
+    if (event.key === "Escape") $("lightbox").hidden = true;
+  });
+  loadPresets();
+  refreshJobs();
+  const linked = /^#job=([\w-]+)$/.exec(location.hash);
+  if (linked) openJob(linked[1]);
+});

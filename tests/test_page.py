@@ -1,0 +1,197 @@
+"""The job page in headless Chromium against the live stack (real API, real embedded worker).
+
+The service runs with an API key, so every image and the HDF5 are seen to come through `fetch()`
+with the key: a plain `<img src>` or link would get 401.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import shutil
+from decimal import ROUND_HALF_UP, Decimal
+from pathlib import Path
+
+import pytest
+from playwright.sync_api import Page, expect, sync_playwright
+
+from conftest import merge
+from live_stack import Stack
+from solver.presets import preset_json
+
+KEY = "page-test-key"
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 # Without these Chromium reaches for the internet at start-up.
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+# A job of a few seconds: long enough to watch it run and cancel it.
+LONG = {"numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
+        "outputs": {"history_stride": 100, "probes": []}}
+
+
+def chromium() -> str:
+    path = "/usr/bin/chromium" if Path("/usr/bin/chromium").exists() else shutil.which("chromium")
+    if path is None:
+        pytest.fail("Chromium is not installed: scripts/test installs it (Debian's chromium package)")
+    return path
+
+
+def shown(value: float, digits: int = 4) -> str:
+    """A number as the page writes it: `digits` significant digits, an exponent below 0.001."""
+    if value == 0:
+        return "0"
+    if abs(value) < 1e-3:
+        mantissa, exponent = f"{value:.{digits - 1}e}".split("e")
+        return f"{mantissa}e{int(exponent)}"
+    decimals = max(digits - 1 - math.floor(math.log10(abs(value))), 0)
+    # JavaScript's toFixed rounds the exact binary value, a tie away from zero (606.25 -> 606.3).
+    return str(Decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP))
+
+
+@pytest.fixture(scope="module")
+def stack(tmp_path_factory):
+    s = Stack(tmp_path_factory.mktemp("page"), None, workers=1, env={"PERCUSSIM_API_KEYS": KEY})
+    s.client.headers["X-API-Key"] = KEY
+    yield s
+    s.stop()
+
+
+@pytest.fixture(scope="module")
+def browser():
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=chromium(), args=CHROMIUM_ARGS)
+        yield browser
+        browser.close()
+
+
+@pytest.fixture
+def open_page(browser, stack):
+    """Opens the page in a fresh 1280×800 context, with `key` stored or none; a script error
+    on any page fails the test."""
+    contexts, errors = [], []
+
+    def open_(key: str | None) -> Page:
+        context = browser.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True)
+        context.set_default_timeout(20_000)
+        contexts.append(context)
+        if key:
+            context.add_init_script(f"localStorage.setItem('percussim.apiKey', {json.dumps(key)})")
+        page = context.new_page()
+        page.on("pageerror", lambda error: errors.append(error))
+        page.goto(stack.url + "/")
+        return page
+
+    yield open_
+    for context in contexts:
+        context.close()
+    assert not errors, errors
+
+
+@pytest.fixture
+def page(open_page):
+    return open_page(KEY)
+
+
+def _case_in_page(page: Page, preset: str) -> dict:
+    page.select_option("#preset", preset)
+    expect(page.locator("#case-json")).not_to_be_empty()
+    return json.loads(page.input_value("#case-json"))
+
+
+def _shown_job(page: Page) -> str:
+    page.wait_for_url("**/#job=*")
+    return page.url.split("#job=")[1]
+
+
+def test_without_a_key_the_page_asks_for_one_then_works(open_page):
+    page = open_page(None)
+    expect(page.locator("#key-needed")).to_contain_text("needs an API key")
+    page.fill("#api-key", KEY)
+    page.click("#key-form button")
+    expect(page.locator("#key-needed")).to_be_hidden()
+    expect(page.locator("#preset option[value=fig9]")).to_have_count(1)
+    assert page.evaluate("localStorage.getItem('percussim.apiKey')") == KEY
+
+
+def test_a_preset_runs_to_its_summary_plots_and_hdf5(page, stack):
+    _case_in_page(page, "fig9")
+    page.click("#submit")
+    row = page.locator("[data-quantity=peak_contact_force]")
+    expect(row).to_be_visible()
+    job_id = _shown_job(page)
+    summary = stack.client.get(f"/v1/jobs/{job_id}/summary").json()
+
+    def cells(quantity: str) -> list[str]:
+        return [t.strip() for t in page.locator(f"[data-quantity={quantity}] td").all_inner_texts()]
+
+    peak, compressive = summary["peak_contact_force"], summary["max_compressive_stress"]
+    assert cells("co_impact_time")[:2] == [shown(summary["co_impact_time"] * 1e6), "µs"]
+    assert cells("peak_contact_force") == [shown(peak["value"] / 1e3), "kN", "", shown(peak["time"] * 1e6)]
+    assert cells("max_compressive_stress") == [shown(compressive["value"] / 1e6), "MPa",
+                                               shown(compressive["x"] * 1e3), shown(compressive["time"] * 1e6)]
+    assert cells("striker_rebound_velocity")[:2] == [shown(summary["striker_rebound_velocity"]), "m/s"]
+    to_medium = page.locator("[data-energy=to_medium] .value").inner_text()
+    assert to_medium == shown(summary["energy"]["to_medium"])
+
+    plots = stack.client.get(f"/v1/jobs/{job_id}/plots").json()["plots"]
+    available = [p["name"] for p in plots if p["available"]]
+    assert available, plots
+    for plot in plots:
+        figure = page.locator(f"figure[data-plot={plot['name']}]")
+        if plot["available"]:
+            image = figure.locator("img")
+            expect(image).to_be_visible()
+            assert image.evaluate("img => img.complete && img.naturalWidth > 0"), plot["name"]
+        else:
+            expect(figure).to_contain_text(plot["reason"])
+    page.click(f"figure[data-plot={available[0]}] img")  # full size, the SVG
+    enlarged = page.locator("#lightbox img")
+    expect(enlarged).to_be_visible()
+    page.wait_for_function("() => document.querySelector('#lightbox img').naturalWidth > 0")
+    page.keyboard.press("Escape")
+    expect(enlarged).to_be_hidden()
+
+    with page.expect_download() as download:
+        page.click("#download")
+    assert download.value.suggested_filename == f"fig9-{job_id}.h5"
+    assert Path(download.value.path()).read_bytes()[:8] == HDF5_SIGNATURE
+
+
+def test_a_refused_case_shows_every_field_and_message(page, stack):
+    case = merge(_case_in_page(page, "fig9"), {"striker": {"mass": -1.0}, "contact": {"exponent": 0.9}})
+    refused = stack.client.post("/v1/jobs", json=case)
+    assert refused.status_code == 422
+    page.fill("#case-json", json.dumps(case, indent=2))
+    page.click("#submit")
+    problems = page.locator("#case-errors tbody tr")
+    expect(problems).to_have_count(len(refused.json()["detail"]))
+    rows = [dict(zip(("field", "message"), r.locator("td").all_inner_texts())) for r in problems.all()]
+    assert rows == refused.json()["detail"]
+    assert "striker.mass" in [r["field"] for r in rows]
+
+    # A syntax error is reported where it is, and nothing is sent.
+    before = stack.client.get("/v1/jobs").json()["total"]
+    page.fill("#case-json", '{"name": "x",\n  "striker": {"mass": 1,}\n}')
+    page.click("#submit")
+    expect(page.locator("#case-errors")).to_contain_text("not valid JSON")
+    expect(page.locator("#case-errors td").first).to_have_text("line 2, column 25")
+    assert stack.client.get("/v1/jobs").json()["total"] == before
+
+
+def test_a_running_job_shows_progress_can_be_cancelled_and_reopened(page, stack):
+    page.fill("#case-json", json.dumps(merge(preset_json("fig3"), LONG)))
+    page.click("#submit")
+    expect(page.locator("#job-status")).to_have_text("running")
+    page.wait_for_function("() => parseFloat(document.querySelector('#progress-bar').style.width) > 0")
+    job_id = _shown_job(page)
+    page.click("#cancel")
+    expect(page.locator("#job-status")).to_have_text("cancelled")
+    assert stack.client.get(f"/v1/jobs/{job_id}").json()["status"] == "cancelled"
+
+    # An earlier job, opened from the recent jobs list, shows its summary.
+    done = stack.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"]
+    stack.wait_status(done, ("succeeded",))
+    page.click("#refresh-jobs")
+    page.click(f"[data-job='{done}']")
+    expect(page.locator("[data-quantity=co_impact_time]")).to_be_visible()
+    assert _shown_job(page) == done
