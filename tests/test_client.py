@@ -181,3 +181,13 @@ def test_the_client_imports_without_the_service_or_the_solver():
     loaded = subprocess.run([sys.executable, "-c", "import sys, service.client; print(*sorted(sys.modules))"],
                             cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
     assert not {"fastapi", "celery", "numba", "numpy", "solver"} & set(loaded)
+
+
+def test_the_worked_example_runs_a_preset_and_downloads_its_result(stack, tmp_path):
+    """examples/submit.py, as `scripts/run` runs it."""
+    output = tmp_path / "fig3.h5"
+    done = subprocess.run([sys.executable, "examples/submit.py", "--url", stack.url, "--preset", "fig3",
+                           "--output", str(output)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert "succeeded" in done.stdout and f"result written to {output}" in done.stdout
+    assert read_result(output).summary["name"] == "fig3"

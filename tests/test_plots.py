@@ -8,6 +8,8 @@ import math
 import os
 import shutil
 import struct
+import subprocess
+import sys
 import xml.etree.ElementTree as ET
 
 import h5py
@@ -17,6 +19,7 @@ from fastapi.testclient import TestClient
 
 import solver.plots as plots
 from conftest import BASE_CASE, merge
+from live_stack import ROOT
 from service.app import create_app
 from solver.case import parse_case
 from solver.cli import main
@@ -351,3 +354,14 @@ def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(re
     assert client.get(f"/v1/jobs/{job_id}/plots/force.png", headers=alice).status_code == 200
     for path in ("plots", "plots/force.png"):
         assert client.get(f"/v1/jobs/{job_id}/{path}", headers=bob).status_code == 404
+
+
+def test_the_plot_example_runs_a_preset_and_draws_every_plot(tmp_path):
+    """examples/plot_preset.py, which draws the README's pictures."""
+    done = subprocess.run([sys.executable, "examples/plot_preset.py", "--preset", "fig9",
+                           "--result", str(tmp_path / "fig9.h5"), "--out", str(tmp_path / "plots")],
+                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    drawn = sorted(p.stem for p in (tmp_path / "plots").glob("*.png"))
+    assert drawn == sorted(PLOTS) and "skipped" not in done.stdout
+    assert all(p.read_bytes().startswith(b"\x89PNG\r\n\x1a\n") for p in (tmp_path / "plots").glob("*.png"))
