@@ -144,6 +144,14 @@ def test_the_builder_installs_the_project_not_editable(stages):
     assert not any(" -e " in a or "--editable" in a for a in installs), "not an editable install"
 
 
+def test_a_non_editable_install_carries_the_job_page():
+    """`pip install .` copies only Python modules unless package data names the rest."""
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    static = [p.relative_to(ROOT / "service").as_posix() for p in (ROOT / "service" / "static").rglob("*")
+              if p.is_file()]
+    assert static and all(any(fnmatch(f, pattern) for pattern in data["service"]) for f in static), static
+
+
 def test_the_runtime_user_is_not_root(final):
     users = effective_users(final)
     assert final.all("USER"), "the final stage sets a USER"
