@@ -27,7 +27,10 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from numba import njit
+from llvmlite import ir
+from numba import njit, types
+from numba.core import cgutils
+from numba.extending import intrinsic
 
 # Force kinds (`force_kind`)
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
@@ -228,6 +231,72 @@ def node_stress(u, i, n, e_over_h, struck_end_stress, working_end_stress):
     if i == n:
         return working_end_stress
     return 0.5 * e_over_h * (u[i + 1] - u[i - 1])
+
+
+def _llvm_binary(name):
+    """A Numba function `(float64, float64) → float64` that is the LLVM intrinsic `name`."""
+    @intrinsic
+    def call(typingctx, a, b):
+        def codegen(context, builder, signature, args):
+            double = ir.DoubleType()
+            fn = cgutils.get_or_insert_function(
+                builder.module, ir.FunctionType(double, [double, double]), name)
+            return builder.call(fn, args)
+        return types.float64(types.float64, types.float64), codegen
+    return call
+
+
+# LLVM vectorises a min/max reduction written with these. Numba's `min`/`max` are a compare and a
+# select, which it does not, even under `fastmath` (Numba flags the compare, not the select).
+fmin = _llvm_binary("llvm.minnum.f64")
+fmax = _llvm_binary("llvm.maxnum.f64")
+
+# Nodes a block: enough for a block's vector reduction to pay, few for searching one to be cheap
+STRESS_BLOCK = 64
+
+
+# `nnan` lets the min/max and the comparisons be plain vector instructions, without NaN fix-ups.
+# Sound where `advance` calls it: the energy check just before has stopped the run on any non-finite
+# displacement (it makes the tool's kinetic energy non-finite), and E/2h times a difference of
+# finite numbers is never NaN (it may overflow to ±inf, which `nnan` allows).
+@njit(cache=True, fastmath={"nnan"})
+def interior_stress_extremes(un, half_e_over_h):
+    """The first interior nodes of the least and of the greatest stress `½·E/h·(u_{i+1} − u_{i−1})`
+    (n ≥ 2).
+
+    A loop that carries the extreme's index with its value does not vectorise. So one pass over
+    blocks of `STRESS_BLOCK` nodes finds the extreme values and the first block holding each, and
+    a second one finds the first node of that value in that block: both are reductions that do.
+    """
+    n = len(un) - 1
+    low = high = half_e_over_h * (un[2] - un[0])
+    low_start = high_start = 1
+    for start in range(1, n, STRESS_BLOCK):
+        lo, hi = low, high
+        # A view, so that the loop's indices start at a constant: else LLVM cannot prove `i − 1 ≥ 0`
+        # and keeps Numba's wrap-around of negative indices, which turns the loads into gathers.
+        v = un[start - 1:min(start + STRESS_BLOCK, n) + 1]
+        for i in range(1, len(v) - 1):
+            s = half_e_over_h * (v[i + 1] - v[i - 1])
+            lo = fmin(lo, s)
+            hi = fmax(hi, s)
+        if lo < low:
+            low, low_start = lo, start
+        if hi > high:
+            high, high_start = hi, start
+    return (first_node(un, half_e_over_h, low_start, low),
+            first_node(un, half_e_over_h, high_start, high))
+
+
+@njit(cache=True, fastmath={"nnan"})
+def first_node(un, half_e_over_h, start, value):
+    """The first node of the block from `start` where the stress is `value` (its last if none)."""
+    v = un[start - 1:min(start + STRESS_BLOCK, len(un) - 1) + 1]
+    last = len(v) - 2
+    first = last
+    for i in range(1, last + 1):
+        first = min(first, i if half_e_over_h * (v[i + 1] - v[i - 1]) == value else last)
+    return start - 1 + first
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"})
@@ -440,17 +509,19 @@ def advance(
             if balance > trackers[T_ENERGY_EXCESS]:
                 trackers[T_ENERGY_EXCESS] = balance
 
-            # Stress extremes along the tool: the layer's extreme nodes, then, inside the tool, the
-            # vertex of the parabola through each and its neighbours, so that a peak between two
-            # nodes is not missed by up to σ''·h²/8.
+            # Stress extremes along the tool: the layer's extreme nodes (the first on ties), then,
+            # inside the tool, the vertex of the parabola through each and its neighbours, so that
+            # a peak between two nodes is not missed by up to σ''·h²/8.
             lowest, highest = 0, 0
             s_low, s_high = s0, s0
-            for i in range(1, n):
-                s = half_e_over_h * (un[i + 1] - un[i - 1])
+            if n > 1:
+                i_low, i_high = interior_stress_extremes(un, half_e_over_h)
+                s = node_stress(un, i_low, n, e_over_h, s0, sn)
                 if s < s_low:
-                    s_low, lowest = s, i
+                    s_low, lowest = s, i_low
+                s = node_stress(un, i_high, n, e_over_h, s0, sn)
                 if s > s_high:
-                    s_high, highest = s, i
+                    s_high, highest = s, i_high
             if sn < s_low:
                 s_low, lowest = sn, n
             if sn > s_high:
