@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import io
 import os
-import tempfile
+import secrets
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable, NamedTuple
@@ -198,9 +198,10 @@ class Client:
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
         answer = self._send("GET", self._result_path(job_id), stream=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent)
+        # Not mkstemp: its file is owner-only, and a downloaded result should get the umask's permissions.
+        tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}.part")
         try:
-            with os.fdopen(fd, "wb") as f:
+            with open(tmp, "xb") as f:
                 for chunk in answer.iter_bytes():
                     f.write(chunk)
             os.replace(tmp, path)

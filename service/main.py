@@ -67,7 +67,7 @@ def run_service(host: str = "127.0.0.1", port: int = 8000, workers: int | None =
         count = workers
     else:
         count = 1 if s.embedded else 0
-    print(f"percussim: API on http://{host}:{port} (docs at /docs), queue {JobQueue(s).describe()}"
+    print(f"percussim: job page and API on http://{host}:{port}/ (API docs at /docs), queue {JobQueue(s).describe()}"
           f" with {count} worker(s) started here, results in {s.results_dir.resolve()}", flush=True)
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, _stop_requested)

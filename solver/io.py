@@ -9,7 +9,7 @@ from __future__ import annotations
 import glob
 import json
 import os
-import tempfile
+import secrets
 from math import prod
 from pathlib import Path
 from typing import BinaryIO
@@ -107,9 +107,9 @@ class ResultWriter:
 
     def __enter__(self) -> ResultWriter:
         self.path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(prefix=f".{self.path.name}.", suffix=PARTIAL, dir=self.path.parent)
-        os.close(fd)
-        self._tmp = Path(tmp)
+        # A fresh name that h5py creates, not mkstemp's file: the result gets the permissions the
+        # user's umask gives, not mkstemp's owner-only ones.
+        self._tmp = self.path.with_name(f".{self.path.name}.{secrets.token_hex(8)}{PARTIAL}")
         return self
 
     def __exit__(self, *exc) -> None:

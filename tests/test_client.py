@@ -4,6 +4,8 @@ embedded worker), and the client's handling of 401 and 503 against a stand-in tr
 from __future__ import annotations
 
 import json
+import os
+import stat
 import subprocess
 import sys
 
@@ -64,8 +66,13 @@ def test_a_preset_runs_to_the_local_summary_and_arrays(api, tmp_path):
     assert force.max() <= summary["peak_contact_force"]["value"] == pytest.approx(force.max(), rel=1e-4)
     assert result.summary == summary and result.case == load_preset("fig9")
 
-    path = api.download(job["id"], tmp_path / "out" / "fig9.h5")
+    old_umask = os.umask(0o022)
+    try:
+        path = api.download(job["id"], tmp_path / "out" / "fig9.h5")
+    finally:
+        os.umask(old_umask)
     assert sorted(p.name for p in path.parent.iterdir()) == ["fig9.h5"]  # no partial file left
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644  # the umask's permissions, not owner-only
     with h5py.File(path) as f:
         assert f.attrs["format"] == "percussim-result" and f["contact/force"].attrs["units"] == "N"
     np.testing.assert_array_equal(read_result(path).history["contact/force"], force)

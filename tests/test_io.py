@@ -1,5 +1,8 @@
 """HDF5 results: the contract's layout, a lossless round trip, atomic writes, streamed runs."""
 
+import os
+import stat
+
 import h5py
 import numpy as np
 import pytest
@@ -143,3 +146,13 @@ def test_remove_partial_removes_only_what_dead_writers_left(tmp_path):
     (tmp_path / ".other.h5.x1y2.part").write_bytes(b"another file's")
     remove_partial(path)
     assert sorted(p.name for p in tmp_path.iterdir()) == [".other.h5.x1y2.part", "r.h5"]
+
+
+def test_a_result_file_gets_the_permissions_of_the_users_umask(tmp_path):
+    """Written through a temporary file, yet not owner-only as mkstemp's would be."""
+    old = os.umask(0o022)
+    try:
+        path = write_result(simulate(parse_case(CASE)), tmp_path / "result.h5")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE(path.stat().st_mode) == 0o644
