@@ -1,7 +1,9 @@
 """`percussim serve`: the API in the foreground, with its own queue workers in embedded mode.
 
 The workers are child processes in the same process group, so stopping the group stops them all;
-on Ctrl-C or SIGTERM the service stops them itself before it exits.
+on Ctrl-C or SIGTERM the service stops them itself before it exits. A worker that dies meanwhile
+is started again; in embedded mode the job it was running is queued again, since the filesystem
+broker lost its message with the worker (Redis delivers such a job again by itself).
 """
 
 from __future__ import annotations
@@ -10,16 +12,20 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 
 import uvicorn
 
-from worker.settings import settings
+from worker.settings import Settings, settings
+from worker.store import FAILED, QUEUED, RUNNING, JobStore, now
 
-from .queue import JobQueue
+from .queue import BROKER_ERRORS, JobQueue
 
 STOP_SECONDS = 10.0  # how long a worker may take to finish its running job when the service stops
 COLD_STOP_SECONDS = 5.0  # then how long it may take to stop that job and requeue it
+WATCH_SECONDS = 1.0  # how often the service looks for a worker that died
+MAX_ATTEMPTS = 3  # runs of a job whose worker died under it, before the job is failed
 
 
 def _stop_requested(signum: int, frame) -> None:
@@ -28,10 +34,64 @@ def _stop_requested(signum: int, frame) -> None:
     raise SystemExit(0)
 
 
-def _start_worker(k: int) -> subprocess.Popen:
-    # Distinct names: each worker has its own heartbeat file and Celery node name.
-    name = f"percussim{k}@{socket.gethostname()}"
+def _start_worker(name: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "solver", "worker", "--name", name])
+
+
+def queue_again(settings: Settings, worker: str, status: int) -> list[str]:
+    """Queue again the jobs the dead `worker` was running, or fail those it died under
+    MAX_ATTEMPTS times (a case that kills its worker must not kill every worker in turn).
+    Returns the ids queued again."""
+    jobs = JobStore(settings.results_dir)
+    lost = [r for r in jobs.records() if r["status"] == RUNNING and r["worker"] == worker]
+    again = []
+    for record in lost:
+        if record["attempts"] >= MAX_ATTEMPTS:
+            jobs.update(record["id"], status=FAILED, finished=now(), error=(
+                f"its worker died {record['attempts']} times while running it (last exit status "
+                f"{status}): a case that needs more memory than the machine has, or a crash; "
+                "try a coarser grid or fewer outputs"))
+        else:
+            jobs.update(record["id"], status=QUEUED, progress=0.0)
+            again.append(record["id"])
+    if again:
+        try:
+            JobQueue(settings).enqueue(*again)
+        except BROKER_ERRORS as error:
+            for job_id in again:
+                jobs.update(job_id, status=FAILED, finished=now(),
+                            error=f"its worker died and the job could not be queued again: {error}")
+            return []
+        print(f"percussim: queued again {len(again)} job(s) {worker} was running", flush=True)
+    return again
+
+
+class _Workers:
+    """The queue workers the service runs, watched: one that dies is started again."""
+
+    def __init__(self, count: int, settings: Settings):
+        self.settings = settings
+        # Distinct names: each worker has its own heartbeat file and Celery node name.
+        self.processes = {name: _start_worker(name)
+                          for name in (f"percussim{k}@{socket.gethostname()}" for k in range(1, count + 1))}
+        self._stopping = threading.Event()
+        self._watcher = threading.Thread(target=self._watch, name="percussim-workers", daemon=True)
+        self._watcher.start()
+
+    def _watch(self) -> None:
+        while not self._stopping.wait(WATCH_SECONDS):
+            for name, process in self.processes.items():
+                if process.poll() is not None:
+                    print(f"percussim: worker {name} exited (status {process.returncode}); "
+                          "starting it again", flush=True)
+                    if self.settings.embedded:
+                        queue_again(self.settings, name, process.returncode)
+                    self.processes[name] = _start_worker(name)
+
+    def stop(self) -> None:
+        self._stopping.set()
+        self._watcher.join()
+        _stop_workers(list(self.processes.values()))
 
 
 def _stop_workers(workers: list[subprocess.Popen]) -> None:
@@ -71,10 +131,8 @@ def run_service(host: str = "127.0.0.1", port: int = 8000, workers: int | None =
           f" with {count} worker(s) started here, results in {s.results_dir.resolve()}", flush=True)
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, _stop_requested)
-    children: list[subprocess.Popen] = []
+    children = _Workers(count, s)
     try:
-        for k in range(1, count + 1):
-            children.append(_start_worker(k))
         uvicorn.run("service.app:app", host=host, port=port)
     finally:
-        _stop_workers(children)
+        children.stop()

@@ -40,6 +40,18 @@ def wait_for(check, timeout: float, what: str, interval: float = 0.1):
     raise TimeoutError(f"{what} not ready within {timeout} s")
 
 
+def children(pid: int) -> list[int]:
+    """The processes `pid` started (Linux: /proc/PID/task/PID/children)."""
+    try:
+        return [int(c) for c in Path(f"/proc/{pid}/task/{pid}/children").read_text().split()]
+    except FileNotFoundError:  # it has exited
+        return []
+
+
+def command_line(pid: int) -> str:
+    return Path(f"/proc/{pid}/cmdline").read_bytes().replace(b"\0", b" ").decode(errors="replace")
+
+
 class Process:
     def __init__(self, args: list[str], env: dict, log: Path):
         self.log = log

@@ -4,6 +4,7 @@ Each test prints the counts it saw."""
 
 from __future__ import annotations
 
+import os
 import signal
 import time
 
@@ -11,7 +12,7 @@ import h5py
 import pytest
 
 from conftest import BASE_CASE, merge
-from live_stack import RedisServer, Stack, wait_for
+from live_stack import RedisServer, Stack, children, command_line, wait_for
 from solver.presets import preset_json
 
 FINISHED = ("succeeded", "failed", "cancelled")
@@ -67,6 +68,31 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         assert sorted(p.name for p in folder.iterdir()) == ["case.json", "job.json", "result.h5", "summary.json"]
         with h5py.File(folder / "result.h5") as f:
             assert f.attrs["format"] == "percussim-result" and len(f["contact/force"]) > 0
+    finally:
+        s.stop()
+
+
+def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(tmp_path, capsys):
+    """The default set-up: `percussim serve` with its own worker on the filesystem broker, which
+    loses the message of a job whose worker dies; the service queues the job again."""
+    s = Stack(tmp_path, None, workers=1)
+    try:
+        job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
+        running = s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
+        serve = s.processes[0].popen.pid
+        [worker] = [pid for pid in children(serve) if " worker " in command_line(pid)]
+        for pid in [worker, *children(worker)]:  # the worker and its pool, no chance to clean up
+            os.kill(pid, signal.SIGKILL)
+        record = s.wait_status(job["id"], FINISHED, timeout=90)
+        report(capsys, f"\nembedded worker killed mid-job: the service started it again; the job then "
+                       f"{record['status']} after {record['attempts']} attempts")
+        assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
+        assert record["worker"] == running["worker"]  # the same worker, started again
+        log = s.processes[0].log.read_text()
+        assert f"worker {running['worker']} exited" in log and "queued again 1 job(s)" in log
+        after = s.client.post("/v1/jobs", json=preset_json("fig3")).json()
+        assert s.wait_status(after["id"], FINISHED, timeout=30)["status"] == "succeeded"
     finally:
         s.stop()
 

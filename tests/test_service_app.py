@@ -15,7 +15,9 @@ from fastapi.testclient import TestClient
 
 from conftest import BASE_CASE, merge
 from service.app import create_app
+from service.main import MAX_ATTEMPTS, queue_again
 from solver.presets import PRESETS_ENV, preset_json, preset_names
+from worker.broker import queue_folder
 from worker.settings import Settings
 from worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry, now
 
@@ -347,3 +349,23 @@ def test_an_oversized_body_is_refused_with_413_naming_the_limit(tmp_path):
     assert answer.status_code == 413
     assert client.get("/v1/jobs").json()["total"] == 0
     assert client.post("/v1/jobs", json=BASE_CASE).status_code == 202  # under the limit: as before
+
+
+def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_often(tmp_path):
+    """What `percussim serve` does when one of its embedded workers dies: the filesystem broker
+    lost the messages of the jobs it was running."""
+    settings, jobs = Settings(results_dir=tmp_path), JobStore(tmp_path)
+
+    def running(worker: str, attempts: int) -> str:
+        job_id = jobs.create(BASE_CASE)["id"]
+        jobs.update(job_id, status="running", worker=worker, attempts=attempts, progress=0.4)
+        return job_id
+
+    lost, doomed, elsewhere = running("w1@x", 1), running("w1@x", MAX_ATTEMPTS), running("w2@x", 1)
+    assert queue_again(settings, "w1@x", -9) == [lost]
+    assert jobs.get(lost)["status"] == "queued" and jobs.get(lost)["progress"] == 0.0
+    failed = jobs.get(doomed)
+    assert failed["status"] == FAILED and f"died {MAX_ATTEMPTS} times" in failed["error"] \
+        and "exit status -9" in failed["error"]
+    assert jobs.get(elsewhere)["status"] == "running"
+    assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job

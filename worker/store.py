@@ -22,6 +22,7 @@ import secrets
 import tempfile
 from datetime import datetime, timezone
 from pathlib import Path
+from typing import Iterator
 
 QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
 FINISHED = (SUCCEEDED, FAILED, CANCELLED)
@@ -121,17 +122,19 @@ class JobStore:
     def cancel_requested(self, job_id: str) -> bool:
         return (self.folder(job_id) / "cancel").exists()
 
-    def list(self, offset: int = 0, limit: int = 50) -> tuple[int, list[dict]]:
-        """(total, records) newest first."""
-        records = []
+    def records(self) -> Iterator[dict]:
+        """Every job's record, in no order."""
         for folder in self.jobs.iterdir():
             try:
                 record = json.loads((folder / "job.json").read_text())
             except (OSError, ValueError):
                 continue  # a folder being created
             if self._sees(record):
-                records.append(record)
-        records.sort(key=lambda r: r["created"], reverse=True)
+                yield record
+
+    def list(self, offset: int = 0, limit: int = 50) -> tuple[int, list[dict]]:
+        """(total, records) newest first."""
+        records = sorted(self.records(), key=lambda r: r["created"], reverse=True)
         return len(records), records[offset:offset + limit]
 
 
