@@ -11,7 +11,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Callable, Iterator
 
-EXIT_FAILED, EXIT_INVALID = 1, 2
+EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED = 1, 2, 130
 PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
 
 
@@ -84,8 +84,14 @@ def _submit(args: argparse.Namespace) -> int:
             if args.no_wait:
                 print(json.dumps(job, indent=2))
                 return 0
-            with _progress_bar(args.progress) as advance:
-                api.wait(job["id"], progress=lambda fraction, record: advance(fraction))
+            try:
+                with _progress_bar(args.progress) as advance:
+                    api.wait(job["id"], progress=lambda fraction, record: advance(fraction))
+            except KeyboardInterrupt:
+                # Ctrl-C stops the job, as it stops a local run, rather than leave it running unseen.
+                api.cancel(job["id"])
+                print(f"percussim: cancelled job {job['id']}", file=sys.stderr)
+                return EXIT_INTERRUPTED
             if args.output:
                 api.download(job["id"], args.output)
             summary = api.summary(job["id"])
@@ -247,7 +253,8 @@ def parser() -> argparse.ArgumentParser:
     run.set_defaults(handler=_run)
     submit = commands.add_parser("submit", help="run a case on a percussim service and print its pulse summary")
     submit.add_argument("case", help="impact case JSON")
-    submit.add_argument("--url", required=True, help="the service, e.g. http://127.0.0.1:8000")
+    submit.add_argument("--url", default=os.environ.get("PERCUSSIM_URL", "http://127.0.0.1:8000"),
+                        help="the service (default: $PERCUSSIM_URL, else http://127.0.0.1:8000)")
     submit.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
                         help="sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
     submit.add_argument("--summary", metavar="OUT.json", help="also write the summary here")

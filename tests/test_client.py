@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import signal
 import stat
 import subprocess
 import sys
@@ -15,7 +16,7 @@ import numpy as np
 import pytest
 
 from conftest import BASE_CASE, merge
-from live_stack import ROOT, Stack
+from live_stack import ROOT, Stack, wait_for
 from service.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 from solver import load_case
 from solver.io import read_result
@@ -153,6 +154,23 @@ def test_submit_exits_2_naming_the_field_and_1_with_a_failed_jobs_reason(stack, 
     failed = _percussim("submit", str(diverges), "--url", stack.url, cwd=tmp_path)
     assert failed.returncode == 1 and failed.stdout == ""
     assert "failed: " in failed.stderr and "non-finite at t =" in failed.stderr
+
+
+def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
+    case = tmp_path / "long.json"
+    case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
+    submit = subprocess.Popen([sys.executable, "-m", "solver", "submit", str(case), "--url", stack.url],
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        job = wait_for(lambda: next((j for j in stack.client.get("/v1/jobs").json()["jobs"]
+                                     if j["status"] == "running"), None), 30, "the submitted job running")
+        submit.send_signal(signal.SIGINT)
+        out, err = submit.communicate(timeout=30)
+    finally:
+        submit.kill()
+    assert submit.returncode == 130 and out == "", err
+    assert f"percussim: cancelled job {job['id']}" in err
+    assert stack.wait_status(job["id"], ("cancelled", "succeeded", "failed"))["status"] == "cancelled"
 
 
 def _stand_in(*answers: httpx.Response) -> tuple[Client, list[httpx.Request]]:
