@@ -3,7 +3,8 @@
 The workers are child processes in the same process group, so stopping the group stops them all;
 on Ctrl-C or SIGTERM the service stops them itself before it exits. A worker that dies meanwhile
 is started again; in embedded mode the job it was running is queued again, since the filesystem
-broker lost its message with the worker (Redis delivers such a job again by itself).
+broker lost its message with the worker (Redis delivers such a job again by itself), and so are
+the jobs a crashed service left running when it starts again.
 """
 
 from __future__ import annotations
@@ -38,19 +39,19 @@ def _start_worker(name: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "solver", "worker", "--name", name])
 
 
-def queue_again(settings: Settings, worker: str, status: int) -> list[str]:
-    """Queue again the jobs the dead `worker` was running, or fail those it died under
-    MAX_ATTEMPTS times (a case that kills its worker must not kill every worker in turn).
-    Returns the ids queued again."""
+def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
+    """Queue again the jobs the dead `worker` was running (`death` says how it died), or fail
+    those it died under MAX_ATTEMPTS times: a case that kills its worker must not kill every
+    worker in turn. Returns the ids queued again."""
     jobs = JobStore(settings.results_dir)
     lost = [r for r in jobs.records() if r["status"] == RUNNING and r["worker"] == worker]
     again = []
     for record in lost:
         if record["attempts"] >= MAX_ATTEMPTS:
             jobs.update(record["id"], status=FAILED, finished=now(), error=(
-                f"its worker died {record['attempts']} times while running it (last exit status "
-                f"{status}): a case that needs more memory than the machine has, or a crash; "
-                "try a coarser grid or fewer outputs"))
+                f"its worker died {record['attempts']} times while running it (the last time: {death}): "
+                "a case that needs more memory than the machine has, or a crash; try a coarser grid "
+                "or fewer outputs"))
         else:
             jobs.update(record["id"], status=QUEUED, progress=0.0)
             again.append(record["id"])
@@ -62,7 +63,7 @@ def queue_again(settings: Settings, worker: str, status: int) -> list[str]:
                 jobs.update(job_id, status=FAILED, finished=now(),
                             error=f"its worker died and the job could not be queued again: {error}")
             return []
-        print(f"percussim: queued again {len(again)} job(s) {worker} was running", flush=True)
+        print(f"percussim: queued again {len(again)} job(s) {worker} was running ({death})", flush=True)
     return again
 
 
@@ -72,8 +73,13 @@ class _Workers:
     def __init__(self, count: int, settings: Settings):
         self.settings = settings
         # Distinct names: each worker has its own heartbeat file and Celery node name.
-        self.processes = {name: _start_worker(name)
-                          for name in (f"percussim{k}@{socket.gethostname()}" for k in range(1, count + 1))}
+        names = [f"percussim{k}@{socket.gethostname()}" for k in range(1, count + 1)]
+        if settings.embedded:
+            # No worker of this service runs yet: what is recorded as running on one was cut off
+            # when the service last stopped (a crash, a power cut), its message lost with it.
+            for name in names:
+                queue_again(settings, name, "the service stopped while it ran")
+        self.processes = {name: _start_worker(name) for name in names}
         self._stopping = threading.Event()
         self._watcher = threading.Thread(target=self._watch, name="percussim-workers", daemon=True)
         self._watcher.start()
@@ -85,7 +91,7 @@ class _Workers:
                     print(f"percussim: worker {name} exited (status {process.returncode}); "
                           "starting it again", flush=True)
                     if self.settings.embedded:
-                        queue_again(self.settings, name, process.returncode)
+                        queue_again(self.settings, name, f"exit status {process.returncode}")
                     self.processes[name] = _start_worker(name)
 
     def stop(self) -> None:

@@ -129,7 +129,8 @@ class Stack:
             for k in range(workers):
                 self.add_worker(f"w{k}")
         else:  # embedded: serve starts its own workers
-            self.processes.append(Process([*serve, "--workers", str(workers)], self.env, folder / "api.log"))
+            self.serve_embedded = [*serve, "--workers", str(workers)]
+            self.processes.append(Process(self.serve_embedded, self.env, folder / "api.log"))
         self.client = httpx.Client(base_url=self.url, timeout=30)
         wait_for(lambda: len(self.client.get("/readyz").json().get("workers", [])) >= workers, 60,
                  f"the API and {workers} worker(s)")
@@ -146,6 +147,13 @@ class Stack:
         self.processes[0].stop()
         self.processes[0] = Process(self.serve_api, self.env, self.folder / "api-restarted.log")
         wait_for(lambda: self.client.get("/healthz").status_code == 200, 60, "the restarted API")
+
+    def crash_and_restart(self) -> None:
+        """Embedded mode: kill the service and its workers at once (SIGKILL to the process group,
+        as a crash or a power cut would), then start it again on the same port and folder."""
+        self.processes[0].stop(signal.SIGKILL)
+        self.processes[0] = Process(self.serve_embedded, self.env, self.folder / "api-restarted.log")
+        wait_for(lambda: self.client.get("/readyz").status_code == 200, 60, "the restarted service")
 
     def wait_status(self, job_id: str, statuses: tuple[str, ...], timeout: float = 120) -> dict:
         def status():

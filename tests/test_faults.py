@@ -97,6 +97,25 @@ def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(
         s.stop()
 
 
+def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_restarts(tmp_path, capsys):
+    s = Stack(tmp_path, None, workers=1)
+    try:
+        job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
+        queued = [s.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"] for _ in range(3)]
+        s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
+        s.crash_and_restart()
+        record = s.wait_status(job["id"], FINISHED, timeout=90)
+        counts = wait_all_finished(s, queued, timeout=60)
+        report(capsys, f"\nembedded service killed mid-job and started again: the job {record['status']} "
+                       f"after {record['attempts']} attempts; the 3 queued behind it {counts}")
+        assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
+        assert counts == {"succeeded": 3}  # their messages were on disk all along
+        assert "queued again 1 job(s)" in (tmp_path / "api-restarted.log").read_text()
+    finally:
+        s.stop()
+
+
 def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(redis, tmp_path, capsys):
     s = Stack(tmp_path, redis.url, workers=1)
     try:

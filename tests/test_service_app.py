@@ -362,10 +362,10 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
         return job_id
 
     lost, doomed, elsewhere = running("w1@x", 1), running("w1@x", MAX_ATTEMPTS), running("w2@x", 1)
-    assert queue_again(settings, "w1@x", -9) == [lost]
+    assert queue_again(settings, "w1@x", "exit status -9") == [lost]
     assert jobs.get(lost)["status"] == "queued" and jobs.get(lost)["progress"] == 0.0
     failed = jobs.get(doomed)
     assert failed["status"] == FAILED and f"died {MAX_ATTEMPTS} times" in failed["error"] \
-        and "exit status -9" in failed["error"]
+        and "the last time: exit status -9" in failed["error"]
     assert jobs.get(elsewhere)["status"] == "running"
     assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
