@@ -13,10 +13,10 @@ from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
-from solver.case import Case
+from solver.case import Case, CaseError, FieldError
 from solver.grid import resolve_numerics
 from solver.limits import check_limits
-from solver.plots import FORMATS, PLOTS, NotAvailable, problems, render
+from solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
 from worker.settings import Settings
 from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
 
@@ -205,25 +205,36 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         200: {"content": {media: binary for media in FORMATS.values()}, "description": "the plot"},
         404: {"model": Problem, "description": "no job with this id, no plot with this name, or a "
                                                "plot this result cannot make (the reason says why)"},
+        422: {"model": FieldErrors, "description": "times that are not numbers, outside the run's fields, "
+                                                   "or given for a plot other than stress_along"},
     } | not_ready)
-    def get_plot(request: Request, job_id: str, name: str, fmt: Literal["png", "svg"]) -> FileResponse:
-        """A plot of a succeeded job's result (the names are in `/plots`), drawn once and then kept."""
+    def get_plot(request: Request, job_id: str, name: str, fmt: Literal["png", "svg"],
+                 times: Annotated[str | None, Query(
+                     description="stress_along only: the times (s) of its curves, e.g. 5e-5,1e-4,1.5e-4 "
+                                 "(default: spread over the first contact)")] = None) -> Response:
+        """A plot of a succeeded job's result (the names are in `/plots`), drawn once and then kept;
+        stress_along at chosen `times` is drawn each time it is asked for."""
         jobs = store(request)
         record = jobs.get(job_id)
         # The name is checked before any path is made from it.
         if name not in PLOTS:
             raise HTTPException(status_code=404,
                                 detail=f"no plot named {name!r}; the plots are: {', '.join(PLOTS)}")
+        if times is not None and name != "stress_along":
+            raise CaseError([FieldError(field="query.times", message="only the stress_along plot takes times")])
         if record["status"] != SUCCEEDED:
             raise _not_ready(record, "plots")
         kept, result = jobs.plot_path(job_id, name, fmt), jobs.result_path(job_id)
-        # Kept plots older than the result (a job written again) are drawn again.
-        if not (kept.is_file() and kept.stat().st_mtime >= result.stat().st_mtime):
-            try:
+        try:
+            if times is not None:
+                return Response(render(result, name, fmt, parse_times(times)), media_type=FORMATS[fmt])
+            # Kept plots older than the result (a job written again) are drawn again.
+            if not (kept.is_file() and kept.stat().st_mtime >= result.stat().st_mtime):
                 jobs.write_plot(job_id, name, fmt, render(result, name, fmt))
-            except NotAvailable as error:
-                raise HTTPException(status_code=404,
-                                    detail=f"job {job_id} has no {name} plot: {error}") from None
+        except NotAvailable as error:
+            raise HTTPException(status_code=404, detail=f"job {job_id} has no {name} plot: {error}") from None
+        except ValueError as error:  # times that are not numbers, or outside the run's fields
+            raise CaseError([FieldError(field="query.times", message=str(error))]) from None
         return FileResponse(kept, media_type=FORMATS[fmt])
 
     @router.delete("/{job_id}", status_code=202, response_model=Job, responses=not_found | {

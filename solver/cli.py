@@ -184,11 +184,12 @@ def _parameter(text: str) -> tuple[str, list]:
 
 
 def _times(text: str) -> list[float]:
-    """`T1,T2,...`: times in s."""
+    from .plots import parse_times
+
     try:
-        return [float(t) for t in text.split(",")]
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected times in s, T1,T2,... (e.g. 5e-5,1e-4), not {text!r}") from None
+        return parse_times(text)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def _plots(args: argparse.Namespace) -> int:

@@ -34,6 +34,7 @@ MAX_FILL_POINTS = 2_000  # samples of the stacked energy terms: a fill is never 
                          # SVG of eight fills of 20 000 points each is 5 MB
 MAX_MAP_SIDE = 1000  # times and stations read for the space–time map
 DEFAULT_TIMES = 5  # curves of stress along the tool when no times are given
+MAX_TIMES = 12  # curves of stress along the tool at the most: more is a tangle, not a plot
 ALONG_THE_TOOL = "x along the tool (m), struck end at 0"
 # matplotlib's font cache is shared by every figure and is not thread-safe.
 _DRAWING = threading.Lock()
@@ -194,6 +195,19 @@ def _default_frames(src: _Source, frame_times: np.ndarray) -> list[int]:
     if len(frames) < min(DEFAULT_TIMES, len(after)):
         frames = range(min(DEFAULT_TIMES, len(after)))
     return [int(after[k]) for k in frames]
+
+
+def parse_times(text: str) -> list[float]:
+    """`T1,T2,...`, times in s, for `stress_along`; a ValueError says what is wrong."""
+    try:
+        times = [float(t) for t in text.split(",")]
+    except ValueError:
+        raise ValueError(f"expected times in s, T1,T2,... (e.g. 5e-5,1e-4), not {text!r}") from None
+    if not all(math.isfinite(t) for t in times):
+        raise ValueError(f"times must be finite numbers of seconds, not {text!r}")
+    if len(times) > MAX_TIMES:
+        raise ValueError(f"{len(times)} times are more than the {MAX_TIMES} curves one plot shows")
+    return times
 
 
 def _frames(src: _Source, times: Sequence[float] | None) -> list[int]:

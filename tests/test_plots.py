@@ -338,6 +338,27 @@ def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_mak
     assert client.get(f"/v1/jobs/{job_id}/plots/force.pdf").status_code == 422
 
 
+def test_http_draws_stress_along_the_tool_at_chosen_times_and_names_bad_ones(results, store):
+    client, jobs = store
+    job_id = _succeeded(client, jobs, results["full"])
+    url = f"/v1/jobs/{job_id}/plots/stress_along"
+    chosen = client.get(f"{url}.png", params={"times": "5e-5,1e-4,1.5e-4"})
+    assert chosen.status_code == 200 and chosen.headers["content-type"] == "image/png"
+    assert chosen.content == render(results["full"], "stress_along", "png", [5e-5, 1e-4, 1.5e-4])
+    assert not jobs.plot_path(job_id, "stress_along", "png").exists()  # chosen times are not kept
+    assert chosen.content != client.get(f"{url}.png").content  # the default times are others
+    assert jobs.plot_path(job_id, "stress_along", "png").exists()  # the default plot is
+    assert client.get(f"{url}.svg", params={"times": "1e-4"}).headers["content-type"] == "image/svg+xml"
+    for times, message in (("abc", "expected times in s"), ("1e-4,nan", "must be finite"),
+                           ("1", "outside the run's fields"), (",".join(["1e-4"] * 13), "more than the 12")):
+        bad = client.get(f"{url}.png", params={"times": times})
+        assert bad.status_code == 422 and bad.json()["detail"][0]["field"] == "query.times", bad.text
+        assert message in bad.json()["detail"][0]["message"], (times, bad.text)
+    other = client.get(f"/v1/jobs/{job_id}/plots/force.png", params={"times": "1e-4"})
+    assert other.status_code == 422 and other.json()["detail"] == [
+        {"field": "query.times", "message": "only the stress_along plot takes times"}]
+
+
 def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(results, tmp_path, monkeypatch):
     for name in list(os.environ):
         if name.startswith("PERCUSSIM_"):
