@@ -195,3 +195,22 @@ def test_a_running_job_shows_progress_can_be_cancelled_and_reopened(page, stack)
     page.click(f"[data-job='{done}']")
     expect(page.locator("[data-quantity=co_impact_time]")).to_be_visible()
     assert _shown_job(page) == done
+
+
+def test_stress_along_the_tool_is_redrawn_at_the_times_asked(page, stack):
+    case = merge(_case_in_page(page, "fig9"), {"outputs": {"fields": True, "field_stride": 16}})
+    page.fill("#case-json", json.dumps(case, indent=2))
+    page.click("#submit")
+    figure = page.locator("figure[data-plot=stress_along]")
+    image = figure.locator("img")
+    expect(image).to_be_visible()
+    first = image.get_attribute("src")
+    figure.locator("input").fill("50, 100, 150")
+    figure.locator("button").click()
+    expect(image).not_to_have_attribute("src", first)
+    page.wait_for_function(
+        "() => document.querySelector('figure[data-plot=stress_along] img').naturalWidth > 0")
+    # A time outside the run is named by the service, shown under the plot.
+    figure.locator("input").fill("1e9")
+    figure.locator("button").click()
+    expect(figure.locator(".times-error")).to_contain_text("outside the run's fields")

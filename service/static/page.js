@@ -444,7 +444,8 @@ async function showPlots(view) {
   if (view !== shown) return;
   const figures = plots.map((plot) => h("figure", { class: "plot", "data-plot": plot.name },
     plot.available ? h("div", { class: "frame loading" }) : h("div", { class: "frame unavailable" }, plot.reason || "not available"),
-    h("figcaption", {}, plot.title || plot.name)));
+    h("figcaption", {}, plot.title || plot.name),
+    plot.available && plot.name === "stress_along" ? timesForm(plot, view) : null));
   box.replaceChildren(card("Plots", h("div", { class: "plot-grid" }, figures)));
   await Promise.all(plots.map(async (plot, i) => {
     if (!plot.available) return;
@@ -461,11 +462,35 @@ async function showPlots(view) {
   }));
 }
 
+// The stress along the tool at times the user chooses (µs here, s in the API).
+function timesForm(plot, view) {
+  const input = h("input", { type: "text", placeholder: "e.g. 50, 100, 150", spellcheck: "false" });
+  const message = h("span", { class: "times-error" });
+  const redraw = async (event) => {
+    event.preventDefault();
+    const micro = input.value.split(/[\s,;]+/).filter(Boolean);
+    const query = micro.length ? `?times=${micro.map((t) => Number(t) * 1e-6).join(",")}` : "";
+    message.textContent = "";
+    try {
+      const url = await objectUrl(`${plot.links.png}${query}`, view.urls);
+      const frame = document.querySelector('[data-plot="stress_along"] .frame');
+      frame.querySelector("img").src = url;
+      plot.chosen = { png: `${plot.links.png}${query}`, svg: `${plot.links.svg}${query}` };
+    } catch (error) {
+      message.textContent = Array.isArray(error.detail)
+        ? error.detail.map((d) => d.message).join("; ") : describe(error);
+    }
+  };
+  return h("form", { class: "times", onsubmit: redraw },
+    h("label", {}, "At times (µs) ", input), h("button", { type: "submit" }, "Redraw"), message);
+}
+
 async function enlarge(plot, view) {
   const box = $("lightbox");
   const img = box.querySelector("img");
   try {
-    img.src = await objectUrl(plot.links.svg || plot.links.png, view.urls);
+    const links = plot.chosen || plot.links;  // the times last chosen, if any
+    img.src = await objectUrl(links.svg || links.png, view.urls);
   } catch (error) {
     showJobError(`The plot could not be opened: ${describe(error)}`);
     return;
