@@ -21,7 +21,7 @@ from worker.settings import Settings
 from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
 
 from .errors import FieldErrors, Problem
-from .queue import BROKER_ERRORS, JobQueue
+from .queue import JobQueue
 
 RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker is down
 
@@ -116,16 +116,12 @@ def cancel(jobs: JobStore, job_id: str) -> dict:
 
 def queue_jobs(jobs: JobStore, queue: JobQueue, job_ids: list[str]) -> None:
     """Publish the jobs; if the broker cannot take them, record why in each and answer 503."""
-    try:
-        queue.enqueue(*job_ids)
-    except BROKER_ERRORS as error:
-        # The jobs would never run: say so in their records rather than leave them queued.
-        for job_id in job_ids:
-            jobs.update(job_id, status=FAILED, finished=now(), error=f"the job could not be queued: {error}")
+    error = queue.enqueue_or_fail(jobs, job_ids, "the job could not be queued")
+    if error is not None:
         raise HTTPException(
             status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
             detail=f"the job queue is unavailable ({queue.describe()}: {error}); "
-                   "nothing was queued: submit again later") from None
+                   "nothing was queued: submit again later")
 
 
 def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | None) -> APIRouter:

@@ -21,7 +21,7 @@ import uvicorn
 from worker.settings import Settings, settings
 from worker.store import FAILED, QUEUED, RUNNING, JobStore, now
 
-from .queue import BROKER_ERRORS, JobQueue
+from .queue import JobQueue
 
 STOP_SECONDS = 10.0  # how long a worker may take to finish its running job when the service stops
 COLD_STOP_SECONDS = 5.0  # then how long it may take to stop that job and requeue it
@@ -56,12 +56,8 @@ def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
             jobs.update(record["id"], status=QUEUED, progress=0.0)
             again.append(record["id"])
     if again:
-        try:
-            JobQueue(settings).enqueue(*again)
-        except BROKER_ERRORS as error:
-            for job_id in again:
-                jobs.update(job_id, status=FAILED, finished=now(),
-                            error=f"its worker died and the job could not be queued again: {error}")
+        if JobQueue(settings).enqueue_or_fail(jobs, again, "its worker died and the job could not be "
+                                                            "queued again") is not None:
             return []
         print(f"percussim: queued again {len(again)} job(s) {worker} was running ({death})", flush=True)
     return again

@@ -18,6 +18,7 @@ from kombu.utils.url import maybe_sanitize_url
 
 from worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
 from worker.settings import Settings
+from worker.store import FAILED, JobStore, now
 
 # What publishing raises when the broker cannot be reached (kombu wraps most of them).
 BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError,
@@ -51,6 +52,18 @@ class JobQueue:
             self.queue_folder.mkdir(parents=True, exist_ok=True)
         group(self.app.signature(RUN_JOB, args=[job_id], ignore_result=True)
               for job_id in job_ids).apply_async()
+
+    def enqueue_or_fail(self, jobs: JobStore, job_ids: list[str], failure: str) -> Exception | None:
+        """Publish the jobs; if the broker cannot take them, record in each that it failed
+        (`failure`: why it could not run, before the broker's error) rather than leave it
+        queued forever, and return the broker's error."""
+        try:
+            self.enqueue(*job_ids)
+        except BROKER_ERRORS as error:
+            for job_id in job_ids:
+                jobs.update(job_id, status=FAILED, finished=now(), error=f"{failure}: {error}")
+            return error
+        return None
 
     def problem(self) -> str | None:
         """Why the broker cannot be reached now, or None if it can."""

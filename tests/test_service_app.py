@@ -369,3 +369,14 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
         and "the last time: exit status -9" in failed["error"]
     assert jobs.get(elsewhere)["status"] == "running"
     assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
+
+
+def test_a_dead_workers_job_that_cannot_be_queued_again_ends_failed_saying_why(tmp_path):
+    settings = Settings(results_dir=tmp_path, broker_url="redis://127.0.0.1:1/0")  # nothing listens
+    jobs = JobStore(tmp_path)
+    job_id = jobs.create(BASE_CASE)["id"]
+    jobs.update(job_id, status="running", worker="w1@x", attempts=1)
+    assert queue_again(settings, "w1@x", "exit status -9") == []
+    record = jobs.get(job_id)
+    assert record["status"] == FAILED
+    assert record["error"].startswith("its worker died and the job could not be queued again: ")
