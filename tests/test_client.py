@@ -162,8 +162,11 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     submit = subprocess.Popen([sys.executable, "-m", "solver", "submit", str(case), "--url", stack.url],
                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
-        job = wait_for(lambda: next((j for j in stack.client.get("/v1/jobs").json()["jobs"]
-                                     if j["status"] == "running"), None), 30, "the submitted job running")
+        def newest_running():  # the job just submitted is the newest
+            newest = stack.client.get("/v1/jobs", params={"limit": 1}).json()["jobs"][0]
+            return newest if newest["status"] == "running" and newest["name"] == "fig3" else None
+
+        job = wait_for(newest_running, 30, "the submitted job running")
         submit.send_signal(signal.SIGINT)
         out, err = submit.communicate(timeout=30)
     finally:
