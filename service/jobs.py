@@ -229,7 +229,10 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
                 jobs.write_plot(job_id, name, fmt, render(result, name, fmt))
         except NotAvailable as error:
             raise HTTPException(status_code=404, detail=f"job {job_id} has no {name} plot: {error}") from None
-        except ValueError as error:  # times that are not numbers, or outside the run's fields
+        except ValueError as error:
+            if times is None:
+                raise
+            # Times that are not numbers, or outside the run's fields.
             raise CaseError([FieldError(field="query.times", message=str(error))]) from None
         return FileResponse(kept, media_type=FORMATS[fmt])
 
