@@ -57,3 +57,9 @@ class LinearImpact:
                          "time_step": courant * h / self.a},
             "outputs": outputs,
         }
+
+
+def observed_order(cells, errors) -> float:
+    """Observed order of convergence: the least-squares slope of log|error| against log h over a
+    ladder of grids, one number that the sampling noise of a single grid cannot swing."""
+    return float(-np.polyfit(np.log(cells), np.log(np.abs(errors)), 1)[0])

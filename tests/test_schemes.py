@@ -10,15 +10,10 @@ import pytest
 import solver.grid as grid_module
 from conftest import BASE_CASE, merge
 from solver import CaseError, parse_case, resolve_numerics, simulate_rod
+from solver.reference import observed_order
 
 TAPERED = json.loads((Path(__file__).parent / "cases" / "tapered_hertz.json").read_text())
 LADDER = (25, 50, 100, 200, 400, 800)
-
-
-def fitted_order(cells, errors) -> float:
-    """Slope of log|error| against log h, least squares over the ladder: one number that the
-    sampling noise of each single grid cannot swing."""
-    return -np.polyfit(np.log(cells), np.log(np.abs(errors)), 1)[0]
 
 
 @pytest.fixture(scope="module")
@@ -42,7 +37,7 @@ def reference_errors(request):
 @pytest.mark.parametrize("quantity", [0, 1], ids=["co_impact_time", "peak_contact_force"])
 def test_observed_order_against_the_closed_form(reference_errors, scheme, low, high, quantity):
     errors = reference_errors[scheme][:, quantity]
-    order = fitted_order(LADDER, errors)
+    order = observed_order(LADDER, errors)
     print(f"{scheme}: order {order:.2f}")
     assert low < order < high
     assert abs(errors[-1]) < (3e-3 if scheme == "paper" else 5e-6)
