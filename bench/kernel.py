@@ -15,10 +15,11 @@ compilation, the contenders of a case timed in alternation so that a busy machin
 2. **C** (`bench/kernel_c/step.c`): the same step in C for a uniform tool without external force,
    compiled here with `gcc -O3 -march=native -shared -fPIC` into a temporary directory and called
    through `ctypes` with NumPy arrays. Written to the algorithm's limit: the tool rows eliminated
-   once, so that a step is one sweep and one substitution with the precomputed factors (a fused
-   multiply-add a node on the critical path of each, no recurrence at all for the explicit
-   scheme) and the scalar contact solve; the energy sums and the stress extremes in one pass of 8
-   independent lanes, which vectorises. It computes what the summary needs (trackers, energy,
+   once, so that a step is a vectorised pass for the right-hand sides, one sweep and one
+   substitution with the precomputed factors (a fused multiply-add a node on the critical path of
+   each, split as the kernel splits them into 4 segments swept as independent chains, with their
+   carries; no recurrence at all for the explicit scheme) and the scalar contact solve; the energy
+   sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes what the summary needs (trackers, energy,
    contact intervals, in the kernel's slots) and is checked against Numba: co-impact time, peak
    contact force, stress extremes and energy terms should agree to about 1e-9.
 3. **solve_banded**: the same scheme in NumPy/SciPy, a Python loop over steps. The tool's rows
@@ -211,7 +212,7 @@ def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
     }
     parameters = np.array([values[name] for name in C_PARAMETERS])
     u, y, trackers, energy, contacts = fresh_state(s)
-    work = np.zeros(2 * (s.n + 1))
+    work = np.zeros(4 * (s.n + 1))
     status = lib.run(s.n, s.num.steps, parameters, u, y, work, trackers, energy, contacts,
                      MAX_CONTACTS)
     assert status == 0

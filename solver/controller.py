@@ -202,7 +202,7 @@ def simulate_rod(
     b2 = case.medium.damping if case.medium else 0.0
     end_stiffness = (grid.end_area[0] * tool.youngs_modulus / h,
                      grid.end_area[1] * tool.youngs_modulus / h)
-    p, inv_den, carry = K.factor_tool_rows(
+    factors = K.factor_tool_rows(
         grid.lower, grid.upper, grid.node_area, end_stiffness[1], c2, b2, r, tau, tool.density, h,
         scheme.weight_new, scheme.centered, scheme.end_masses)
 
@@ -247,7 +247,7 @@ def simulate_rod(
         field_stress = np.empty((frames, n + 1))
         status, n_hist, n_field = K.advance(
             first, last, u, y, grid.lower, grid.upper, grid.node_area, grid.area_mid,
-            grid.uniform, p, inv_den, carry,
+            grid.uniform, *factors,
             h, tau, r, tool.youngs_modulus, tool.density, *end_stiffness,
             grid.area[0], grid.area[-1],
             scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses,

@@ -3,9 +3,17 @@
 Unknowns of layer n+1 are `[y, u_0, …, u_N]` (model.md). The rows `u_1 … u_N` never change from
 step to step (only their right-hand sides do), so their elimination, swept from the working end
 toward the struck end as in the paper's (14)–(20), is factored once in `factor_tool_rows`:
-`u_i = P_i·u_{i−1} + Q_i`. A step then computes the `Q_i` (one pass), solves the striker row (11)
-and the struck-end row (9) together, and substitutes forward (one pass). The explicit scheme's
-interior rows are uncoupled (`P_i = 0`): its passes have no recurrence and vectorise.
+`u_i = P_i·u_{i−1} + Q_i`. A step then computes the `Q_i` (a recurrence toward the struck end),
+solves the striker row (11) and the struck-end row (9) together, and substitutes forward (a
+recurrence toward the working end). The explicit scheme's interior rows are uncoupled (`P_i = 0`):
+its passes have no recurrence and vectorise.
+
+Each recurrence has one multiply-add a node on its critical path, so swept node by node it runs at
+that instruction's latency, not at the machine's throughput. So the nodes are cut into
+`SEGMENTS` segments, swept together as independent chains from a zero start, and each segment's
+true values are its chain's plus a multiple of the value carried into it. The multiples, products
+of the recurrence's coefficients along the segment, are constant like the factors and computed
+with them; the carries are one step a segment.
 
 Those two rows are linear but for the contact force. It is the difference quotient of the contact
 potential Φ (`Φ' = G(δ)·δ`) between the new overlap and a reference one (layer n for the paper,
@@ -19,7 +27,10 @@ loop, so a summary-only run keeps nothing of size N·M.
 All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3, n%3, (n+1)%3` of
 `u` (3 × (N+1)) and of the striker's `y` (3), so no state but the layer index is carried between
 chunks. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first step
-is an ordinary step of the scheme.
+is an ordinary step of the scheme. The layers are indexed as `u[row, i]`, never through a row view:
+Numba counts a view's references with atomic instructions, which cost as much as a hundred nodes'
+work a step on the presets' grids. Where LLVM cannot prove an index non-negative, it is unsigned:
+Numba wraps negative indices around, and that check on every load keeps loops from vectorising.
 """
 
 from __future__ import annotations
@@ -63,6 +74,12 @@ ENERGY_SLOTS = 8
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
+# Independent chains a recurrence along the tool is split into: enough to hide the multiply-add's
+# latency (4 cycles) behind the other chains' work. `sweep_toward_struck_end` and
+# `substitute_toward_working_end` are written out for this many.
+SEGMENTS = 4
+MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swept serially
+
 
 def new_trackers() -> np.ndarray:
     t = np.zeros(TRACKER_SLOTS)
@@ -90,10 +107,19 @@ def boundary_weights(weight_new, centered, end_masses, tau):
 
 
 @njit(cache=True)
+def segment_layout(n):
+    """`(length, head)`: nodes `1 … head` are swept serially, nodes `head+1 … n` as `SEGMENTS`
+    segments of `length` nodes (none when the tool is too short for them)."""
+    length = n // SEGMENTS if n >= SEGMENTS * MIN_SEGMENT else 0
+    return length, n - SEGMENTS * length
+
+
+@njit(cache=True)
 def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_stiffness,
                      medium_damping, r, tau, density, h, weight_new, centered, end_masses):
-    """Eliminate rows u_N … u_1 once: returns `P`, `1/den` and the coefficient of `Q_{i+1}` in
-    `Q_i = rhs_i/den_i + coefficient_i·Q_{i+1}`.
+    """Eliminate rows u_N … u_1 once: returns `P`, `1/den`, the coefficient `c` of `Q_{i+1}` in
+    `Q_i = rhs_i/den_i + c_i·Q_{i+1}`, and the segments' multiples of their carries: for node i of a
+    segment `b … e` (`segment_layout`), `Π c_j` over `i … e` and `Π P_j` over `b … i`.
 
     Row u_N: `(M_N/τ² + θ·k_N + θ_s·c2 + b2·d)·u_N − θ·k_N·u_{N−1} = rhs`, `k_N = S·E/h`, with
     the weights of `boundary_weights`.
@@ -113,7 +139,95 @@ def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_st
         den = 1.0 + weight_new * r * (grid_lower[i] + grid_upper[i]) - carry[i] * p[i + 1]
         p[i] = weight_new * r * grid_lower[i] / den
         inv_den[i] = 1.0 / den
-    return p, inv_den, carry * inv_den
+    coefficient = carry * inv_den
+    coefficient[n] = 0.0  # nothing is carried into row u_N
+    length, head = segment_layout(n)
+    coefficient_product = np.ones(n + 1)
+    p_product = np.ones(n + 1)
+    for start in range(head + 1, n + 1, max(length, 1)):
+        end = start + length - 1
+        product = 1.0
+        for i in range(end, start - 1, -1):
+            product *= coefficient[i]
+            coefficient_product[i] = product
+        product = 1.0
+        for i in range(start, end + 1):
+            product *= p[i]
+            p_product[i] = product
+    return p, inv_den, coefficient, coefficient_product, p_product
+
+
+@njit(cache=True, inline="always")
+def segment_starts(length, head):
+    """The segments' length and first nodes, unsigned (`segment_layout`)."""
+    size = np.uint64(length)
+    b0 = np.uint64(head + 1)
+    return size, b0, b0 + size, b0 + np.uint64(2) * size, b0 + np.uint64(3) * size
+
+
+@njit(cache=True, inline="always")
+def sweep_toward_struck_end(u, row, coefficient, coefficient_product, length, head):
+    """`Q_i = a_i + c_i·Q_{i+1}` for i = n … 1, row `row` of `u` holding `a_i` on entry.
+
+    Returns `Q_1` and the true Q carried into each segment (`Q_{e+1}`, e its last node). On return
+    the row holds the segments' chains, started from 0 (true: chain + `Π c`·carry), and the head's
+    true values.
+    """
+    first = 0.0  # Q_{n+1}
+    carry_0 = carry_1 = carry_2 = carry_3 = 0.0  # carry_3 stays 0: the last segment ends at row N
+    if length > 0:
+        size, b0, b1, b2, b3 = segment_starts(length, head)
+        s0 = s1 = s2 = s3 = 0.0
+        for k in range(size):
+            j = size - np.uint64(1) - k
+            s0 = u[row, b0 + j] + coefficient[b0 + j] * s0
+            u[row, b0 + j] = s0
+            s1 = u[row, b1 + j] + coefficient[b1 + j] * s1
+            u[row, b1 + j] = s1
+            s2 = u[row, b2 + j] + coefficient[b2 + j] * s2
+            u[row, b2 + j] = s2
+            s3 = u[row, b3 + j] + coefficient[b3 + j] * s3
+            u[row, b3 + j] = s3
+        carry_2 = u[row, b3] + coefficient_product[b3] * carry_3
+        carry_1 = u[row, b2] + coefficient_product[b2] * carry_2
+        carry_0 = u[row, b1] + coefficient_product[b1] * carry_1
+        first = u[row, b0] + coefficient_product[b0] * carry_0
+    for i in range(head, 0, -1):
+        first = u[row, i] + coefficient[i] * first
+        u[row, i] = first
+    return first, carry_0, carry_1, carry_2, carry_3
+
+
+@njit(cache=True, inline="always")
+def substitute_toward_working_end(u, row, p, coefficient_product, p_product, length, head, x_0,
+                                  carry_0, carry_1, carry_2, carry_3):
+    """`u_i = P_i·u_{i−1} + Q_i` for i = 1 … n from `u_0 = x_0`, row `row` of `u` holding what
+    `sweep_toward_struck_end` left, with its carries: the true Q are made on the way."""
+    prev = x_0
+    for i in range(1, head + 1):
+        prev = p[i] * prev + u[row, i]
+        u[row, i] = prev
+    if length == 0:
+        return
+    size, b0, b1, b2, b3 = segment_starts(length, head)
+    s0 = s1 = s2 = s3 = 0.0
+    for j in range(size):
+        s0 = p[b0 + j] * s0 + (u[row, b0 + j] + coefficient_product[b0 + j] * carry_0)
+        u[row, b0 + j] = s0
+        s1 = p[b1 + j] * s1 + (u[row, b1 + j] + coefficient_product[b1 + j] * carry_1)
+        u[row, b1 + j] = s1
+        s2 = p[b2 + j] * s2 + (u[row, b2 + j] + coefficient_product[b2 + j] * carry_2)
+        u[row, b2 + j] = s2
+        s3 = p[b3 + j] * s3 + (u[row, b3 + j] + coefficient_product[b3 + j] * carry_3)
+        u[row, b3 + j] = s3
+    # Each segment's chain plus `Π P` times the true value before it, segment after segment.
+    before = prev
+    for start in (b0, b1, b2, b3):
+        end = start + size - np.uint64(1)
+        after = u[row, end] + p_product[end] * before
+        for j in range(size):
+            u[row, start + j] += p_product[start + j] * before
+        before = after
 
 
 @njit(cache=True, inline="always")
@@ -224,13 +338,14 @@ def crossing(before_that, before, now):
 
 
 @njit(cache=True, inline="always")
-def node_stress(u, i, n, e_over_h, struck_end_stress, working_end_stress):
-    """`σ_i = E·∂u/∂x` (tension +): central inside; at the ends the end force over the area."""
+def node_stress(u, row, i, n, e_over_h, struck_end_stress, working_end_stress):
+    """`σ_i = E·∂u/∂x` (tension +) of the layer in row `row` of `u`: central inside; at the ends
+    the end force over the area."""
     if i == 0:
         return struck_end_stress
     if i == n:
         return working_end_stress
-    return 0.5 * e_over_h * (u[i + 1] - u[i - 1])
+    return 0.5 * e_over_h * (u[row, i + 1] - u[row, i - 1])
 
 
 def _llvm_binary(name):
@@ -260,61 +375,60 @@ STRESS_BLOCK = 64
 # displacement (it makes the tool's kinetic energy non-finite), and E/2h times a difference of
 # finite numbers is never NaN (it may overflow to ±inf, which `nnan` allows).
 @njit(cache=True, fastmath={"nnan"})
-def interior_stress_extremes(un, half_e_over_h):
+def interior_stress_extremes(u, row, half_e_over_h):
     """The first interior nodes of the least and of the greatest stress `½·E/h·(u_{i+1} − u_{i−1})`
-    (n ≥ 2).
+    of the layer in row `row` of `u` (n ≥ 2).
 
     A loop that carries the extreme's index with its value does not vectorise. So one pass over
     blocks of `STRESS_BLOCK` nodes finds the extreme values and the first block holding each, and
     a second one finds the first node of that value in that block: both are reductions that do.
     """
-    n = len(un) - 1
-    low = high = half_e_over_h * (un[2] - un[0])
+    n = u.shape[1] - 1
+    one = np.uint64(1)
+    low = high = half_e_over_h * (u[row, 2] - u[row, 0])
     low_start = high_start = 1
     for start in range(1, n, STRESS_BLOCK):
         lo, hi = low, high
-        # A view, so that the loop's indices start at a constant: else LLVM cannot prove `i − 1 ≥ 0`
-        # and keeps Numba's wrap-around of negative indices, which turns the loads into gathers.
-        v = un[start - 1:min(start + STRESS_BLOCK, n) + 1]
-        for i in range(1, len(v) - 1):
-            s = half_e_over_h * (v[i + 1] - v[i - 1])
+        for i in range(np.uint64(start), np.uint64(min(start + STRESS_BLOCK, n))):
+            s = half_e_over_h * (u[row, i + one] - u[row, i - one])
             lo = fmin(lo, s)
             hi = fmax(hi, s)
         if lo < low:
             low, low_start = lo, start
         if hi > high:
             high, high_start = hi, start
-    return (first_node(un, half_e_over_h, low_start, low),
-            first_node(un, half_e_over_h, high_start, high))
+    return (first_node(u, row, half_e_over_h, low_start, low),
+            first_node(u, row, half_e_over_h, high_start, high))
 
 
-@njit(cache=True, fastmath={"nnan"})
-def first_node(un, half_e_over_h, start, value):
+@njit(cache=True, fastmath={"nnan"}, inline="always")
+def first_node(u, row, half_e_over_h, start, value):
     """The first node of the block from `start` where the stress is `value` (its last if none)."""
-    v = un[start - 1:min(start + STRESS_BLOCK, len(un) - 1) + 1]
-    last = len(v) - 2
+    one = np.uint64(1)
+    last = min(start + STRESS_BLOCK, u.shape[1] - 1) - 1
     first = last
-    for i in range(1, last + 1):
-        first = min(first, i if half_e_over_h * (v[i + 1] - v[i - 1]) == value else last)
-    return start - 1 + first
+    for i in range(np.uint64(start), np.uint64(last + 1)):
+        found = half_e_over_h * (u[row, i + one] - u[row, i - one]) == value
+        first = min(first, np.int64(i) if found else last)
+    return first
 
 
 @njit(cache=True, fastmath={"contract", "reassoc"})
-def tool_energy(un, uc, node_area, area_mid, strain_sigma):
+def tool_energy(u, new, cur, node_area, area_mid, strain_sigma):
     """`Σ S_i·(u_i − uc_i)²` and `Σ S_{i+½}·[σ(e_a² + e_b²) + (1 − 2σ)·e_a·e_b]` over the tool,
-    e the cell strains of `un` and `uc`: twice the kinetic energy times τ²/(ρh), and twice the
-    strain energy times h/E. Sums of N terms may be reordered (`reassoc`), so that they vectorise;
-    that changes them by rounding only."""
-    n = len(un) - 1
+    e the cell strains of the layers in rows `new` and `cur` of `u`: twice the kinetic energy times
+    τ²/(ρh), and twice the strain energy times h/E. Sums of N terms may be reordered (`reassoc`),
+    so that they vectorise; that changes them by rounding only."""
+    n = u.shape[1] - 1
     strain_cross = 1.0 - 2.0 * strain_sigma
-    du = un[0] - uc[0]
+    du = u[new, 0] - u[cur, 0]
     kinetic = node_area[0] * du * du
     strain = 0.0
     for i in range(1, n + 1):
-        du = un[i] - uc[i]
+        du = u[new, i] - u[cur, i]
         kinetic += node_area[i] * du * du
-        ea = un[i] - un[i - 1]
-        eb = uc[i] - uc[i - 1]
+        ea = u[new, i] - u[new, i - 1]
+        eb = u[cur, i] - u[cur, i - 1]
         strain += area_mid[i - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
     return kinetic, strain
 
@@ -326,7 +440,8 @@ def tool_energy(un, uc, node_area, area_mid, strain_sigma):
 @njit(cache=True, fastmath={"contract"})
 def advance(
     first, last,
-    u, y, grid_lower, grid_upper, node_area, area_mid, uniform, p, inv_den, carry,
+    u, y, grid_lower, grid_upper, node_area, area_mid, uniform,
+    p, inv_den, coefficient, coefficient_product, p_product,
     h, tau, r, youngs_modulus, density, end_stiffness_0, end_stiffness_n, end_area_0, end_area_n,
     weight_new, weight_old, centered, end_masses,
     striker_mass, striker_velocity,
@@ -363,6 +478,7 @@ def advance(
     half_e_over_h = 0.5 * e_over_h
     kinetic_factor = 0.5 * density * h * inv_tau2
     initial_energy = 0.5 * striker_mass * striker_velocity * striker_velocity
+    length, head = segment_layout(n)
     n_hist = 0
     n_field = 0
 
@@ -371,11 +487,10 @@ def advance(
         cur = (m - 1) % 3
         old = (m - 2) % 3
         t = m * tau
-        un = u[new]
         if m == 0:
             # (5), (6): tool at rest, striker at 0 moving at W1; layer −1 one step before.
             for i in range(n + 1):
-                un[i] = 0.0
+                u[new, i] = 0.0
                 u[2, i] = 0.0
             y[new] = 0.0
             y[2] = -striker_velocity * tau
@@ -385,65 +500,59 @@ def advance(
             s0 = -contact_force / end_area_0
             sn = 0.0
         else:
-            uc = u[cur]
-            uo = u[old]
-            ur = u[(m - back) % 3]
+            ref = (m - back) % 3
             y_cur = y[cur]
-            delta_cur = y_cur - uc[0]
-            delta_old = y[old] - uo[0]
-            delta_ref = y[(m - back) % 3] - ur[0]
+            delta_cur = y_cur - u[cur, 0]
+            delta_old = y[old] - u[old, 0]
+            delta_ref = y[ref] - u[ref, 0]
             r_n = external_force((m - 1) * tau, force_kind, force_amplitude, force_omega,
                                  force_start, force_duration)  # R(t_n), explicit in row (11)
 
-            # Right-hand sides of rows u_N … u_1, eliminated toward the struck end. The explicit
-            # layers enter the operator as one combination v = w_n·u^n + w_{n−1}·u^{n−1}.
-            v_right = weight_cur * uc[n] + weight_old * uo[n]
-            v_mid = weight_cur * uc[n - 1] + weight_old * uo[n - 1]
-            rhs = (mass_n * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - spring_weight) * ur[n]
-                   + b2 * damper_factor * ur[n])
+            # Right-hand sides of rows u_N … u_1 over their diagonals, eliminated toward the struck
+            # end. The explicit layers enter the operator as one combination
+            # v = w_n·u^n + w_{n−1}·u^{n−1}.
+            v_right = weight_cur * u[cur, n] + weight_old * u[old, n]
+            v_mid = weight_cur * u[cur, n - 1] + weight_old * u[old, n - 1]
+            rhs = (mass_n * (2.0 * u[cur, n] - u[old, n]) - c2 * (1.0 - spring_weight) * u[ref, n]
+                   + b2 * damper_factor * u[ref, n])
             if end_masses:
                 rhs -= end_stiffness_n * (v_right - v_mid)
-            un[n] = rhs * inv_den[n]  # Q_i is kept in `un` until the forward substitution
-            if weight_new == 0.0 and weight_old == 0.0:
-                # Explicit: v = u^n and the interior rows are uncoupled (den_i = 1, nothing
-                # carried), so the Q_i need no recurrence and the loops vectorise.
-                if uniform:
-                    for i in range(1, n):
-                        un[i] = 2.0 * uc[i] - uo[i] + r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1])
-                else:
-                    for i in range(1, n):
-                        un[i] = 2.0 * uc[i] - uo[i] + r * (grid_lower[i] * (uc[i - 1] - uc[i])
-                                                           + grid_upper[i] * (uc[i + 1] - uc[i]))
-                v_right = uc[1]
-                v_mid = uc[0]
-            elif uniform:
-                # Only `q` is carried from node to node: one multiply and one add on the path.
-                q = un[n]
-                for i in range(n - 1, 0, -1):
-                    v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
-                    rhs = 2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right)
-                    q = rhs * inv_den[i] + carry[i] * q
-                    un[i] = q
-                    v_right = v_mid
-                    v_mid = v_left
+            u[new, n] = rhs * inv_den[n]  # Q_i is kept in row `new` until the substitution
+            explicit = weight_new == 0.0 and weight_old == 0.0
+            if explicit and uniform:
+                # v = u^n, and the interior rows are uncoupled (den_i = 1, nothing carried)
+                for i in range(1, n):
+                    u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                                 + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
+            elif explicit:
+                for i in range(1, n):
+                    u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                                 + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
+                                        + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
             else:
-                q = un[n]
-                for i in range(n - 1, 0, -1):
-                    v_left = weight_cur * uc[i - 1] + weight_old * uo[i - 1]
-                    lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
-                    rhs = 2.0 * uc[i] - uo[i] + r * lap
-                    q = rhs * inv_den[i] + carry[i] * q
-                    un[i] = q
-                    v_right = v_mid
-                    v_mid = v_left
+                for i in range(1, n):
+                    v_left = weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1]
+                    v_mid = weight_cur * u[cur, i] + weight_old * u[old, i]
+                    v_right = weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1]
+                    if uniform:
+                        lap = v_left - 2.0 * v_mid + v_right
+                    else:
+                        lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
+                    u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
+            if explicit:
+                q_1, carry_0, carry_1, carry_2, carry_3 = u[new, 1], 0.0, 0.0, 0.0, 0.0
+            else:
+                q_1, carry_0, carry_1, carry_2, carry_3 = sweep_toward_struck_end(
+                    u, new, coefficient, coefficient_product, length, head)
             # Striker row (11) and struck-end row (9) with u_1 = P_1·u_0 + Q_1:
             # a_y·y = b_y − F and a_0·u_0 = b_0 + F, F the contact force, a scalar equation in δ.
             a_y = m1_tau2
             b_y = m1_tau2 * (2.0 * y_cur - y[old]) + r_n
             a_0 = mass_0 + end_weight * end_stiffness_0 * (1.0 - p[1])
-            b_0 = mass_0 * (2.0 * uc[0] - uo[0]) + end_weight * end_stiffness_0 * un[1]
+            b_0 = mass_0 * (2.0 * u[cur, 0] - u[old, 0]) + end_weight * end_stiffness_0 * q_1
             if end_masses:
-                b_0 += end_stiffness_0 * (v_right - v_mid)  # v_right = v_1, v_mid = v_0 here
+                b_0 += end_stiffness_0 * ((weight_cur * u[cur, 1] + weight_old * u[old, 1])
+                                          - (weight_cur * u[cur, 0] + weight_old * u[old, 0]))
             delta_free = b_y / a_y - b_0 / a_0
             compliance = 1.0 / a_y + 1.0 / a_0
             ref_potential = contact_potential(delta_ref, c1, alpha, c0) if m >= back else 0.0
@@ -457,43 +566,42 @@ def advance(
                 trackers[T_FAILED_TIME] = t
                 return STATUS_NON_FINITE, n_hist, n_field
             y[new] = y_new
-            un[0] = u0_new
-            if weight_new == 0.0:
-                un[n] = p[n] * un[n - 1] + un[n]  # P_i = 0 but at a massless working end
+            u[new, 0] = u0_new
+            if explicit:
+                # P_i = 0 but at a massless working end
+                u[new, n] = p[n] * u[new, n - 1] + u[new, n]
             else:
-                prev = u0_new
-                for i in range(1, n + 1):
-                    prev = p[i] * prev + un[i]
-                    un[i] = prev
+                substitute_toward_working_end(u, new, p, coefficient_product, p_product, length,
+                                              head, u0_new, carry_0, carry_1, carry_2, carry_3)
             # The forces at layer m: the contact law with second-order backward rates.
             delta = y_new - u0_new
             if m == 1:
                 delta_rate = (delta - delta_cur) / tau
-                end_rate = (un[n] - uc[n]) / tau
+                end_rate = (u[new, n] - u[cur, n]) / tau
                 velocity = striker_velocity
             else:
                 delta_rate = (3.0 * delta - 4.0 * delta_cur + delta_old) / (2.0 * tau)
-                end_rate = (3.0 * un[n] - 4.0 * uc[n] + uo[n]) / (2.0 * tau)
+                end_rate = (3.0 * u[new, n] - 4.0 * u[cur, n] + u[old, n]) / (2.0 * tau)
                 velocity = (3.0 * y_new - 4.0 * y_cur + y[old]) / (2.0 * tau)
             contact_force = contact_spring_force(delta, c1, alpha, c0) + b1 * delta_rate
-            medium_force = c2 * un[n] + b2 * end_rate
+            medium_force = c2 * u[new, n] + b2 * end_rate
             s0 = -contact_force / end_area_0
             sn = -medium_force / end_area_n
 
             # Energy at layer m − ½, in the form each scheme conserves (or dissipates).
             dy = y_new - y_cur
             striker_kinetic = 0.5 * striker_mass * dy * dy * inv_tau2
-            tool_kinetic, tool_strain = tool_energy(un, uc, node_area, area_mid, strain_sigma)
+            tool_kinetic, tool_strain = tool_energy(u, new, cur, node_area, area_mid, strain_sigma)
             tool_kinetic *= kinetic_factor
             tool_strain *= 0.5 * e_over_h
             contact_pot = (spring_weight * contact_potential(delta, c1, alpha, c0)
                            + (1.0 - spring_weight) * contact_potential(delta_cur, c1, alpha, c0))
-            medium_pot = 0.5 * c2 * (spring_weight * un[n] * un[n]
-                                     + (1.0 - spring_weight) * uc[n] * uc[n])
+            medium_pot = 0.5 * c2 * (spring_weight * u[new, n] * u[new, n]
+                                     + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
             energy[E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
             rate = damper_factor * (delta - delta_ref)
             energy[E_DISSIPATED_CONTACT] += b1 * rate * rate * tau
-            rate = damper_factor * (un[n] - ur[n])
+            rate = damper_factor * (u[new, n] - u[ref, n])
             energy[E_DISSIPATED_MEDIUM] += b2 * rate * rate * tau
             energy[E_STRIKER_KINETIC] = striker_kinetic
             energy[E_TOOL_KINETIC] = tool_kinetic
@@ -515,11 +623,11 @@ def advance(
             lowest, highest = 0, 0
             s_low, s_high = s0, s0
             if n > 1:
-                i_low, i_high = interior_stress_extremes(un, half_e_over_h)
-                s = node_stress(un, i_low, n, e_over_h, s0, sn)
+                i_low, i_high = interior_stress_extremes(u, new, half_e_over_h)
+                s = node_stress(u, new, i_low, n, e_over_h, s0, sn)
                 if s < s_low:
                     s_low, lowest = s, i_low
-                s = node_stress(un, i_high, n, e_over_h, s0, sn)
+                s = node_stress(u, new, i_high, n, e_over_h, s0, sn)
                 if s > s_high:
                     s_high, highest = s, i_high
             if sn < s_low:
@@ -531,8 +639,8 @@ def advance(
                 x_peak = node * h
                 peak = sign * value
                 if 0 < node < n:
-                    left = sign * node_stress(un, node - 1, n, e_over_h, s0, sn)
-                    right = sign * node_stress(un, node + 1, n, e_over_h, s0, sn)
+                    left = sign * node_stress(u, new, node - 1, n, e_over_h, s0, sn)
+                    right = sign * node_stress(u, new, node + 1, n, e_over_h, s0, sn)
                     curvature = 2.0 * peak - left - right
                     if curvature > 0.0:
                         offset = 0.5 * (right - left) / curvature
@@ -589,10 +697,10 @@ def advance(
             row[H_TIME] = t
             row[H_STRIKER_DISP] = y[new]
             row[H_STRIKER_VEL] = velocity
-            row[H_STRUCK_END] = un[0]
-            row[H_WORKING_END] = un[n]
+            row[H_STRUCK_END] = u[new, 0]
+            row[H_WORKING_END] = u[new, n]
             row[H_CONTACT_FORCE] = contact_force
-            row[H_OVERLAP] = y[new] - un[0]
+            row[H_OVERLAP] = y[new] - u[new, 0]
             row[H_MEDIUM_FORCE] = medium_force
             row[H_EXTERNAL_FORCE] = external_force(
                 t, force_kind, force_amplitude, force_omega, force_start, force_duration)
@@ -612,14 +720,14 @@ def advance(
             for k in range(len(probe_node)):
                 j = probe_node[k]
                 w = probe_weight[k]
-                s = (1.0 - w) * node_stress(un, j, n, e_over_h, s0, sn)
+                s = (1.0 - w) * node_stress(u, new, j, n, e_over_h, s0, sn)
                 if w > 0.0:
-                    s += w * node_stress(un, j + 1, n, e_over_h, s0, sn)
+                    s += w * node_stress(u, new, j + 1, n, e_over_h, s0, sn)
                 probes[n_hist, k] = s
             n_hist += 1
         if field_stride > 0 and m % field_stride == 0:
             for i in range(n + 1):
-                field_u[n_field, i] = un[i]
-                field_stress[n_field, i] = node_stress(un, i, n, e_over_h, s0, sn)
+                field_u[n_field, i] = u[new, i]
+                field_stress[n_field, i] = node_stress(u, new, i, n, e_over_h, s0, sn)
             n_field += 1
     return STATUS_OK, n_hist, n_field

@@ -2,16 +2,19 @@
 
    The same scheme, contact solve, energy audit and trackers as the Numba kernel (its slot layout
    for trackers and energy), for a uniform tool with no external force. Written for speed: the tool
-   rows are eliminated once; a step is the Q sweep toward the struck end and the forward
-   substitution (one multiply-add a node on the critical path of each; no recurrence at all for
-   the explicit scheme), the scalar contact solve, and one vectorised pass that sums the energies
-   and finds the stress extremes.
+   rows are eliminated once; a step is a vectorised pass for the right-hand sides, the Q sweep
+   toward the struck end and the forward substitution (one multiply-add a node on the critical
+   path of each, split like the kernel's into SEGMENTS independent chains with their carries; no
+   recurrence at all for the explicit scheme), the scalar contact solve, and one vectorised pass
+   that sums the energies and finds the stress extremes.
 
    Built by bench/kernel.py: gcc -O3 -march=native -shared -fPIC. Not used by the product. */
 
 #include <math.h>
 
 #define LANES 8
+#define SEGMENTS 4    /* the kernel's segment_layout() */
+#define MIN_SEGMENT 8
 
 /* prm[] layout, filled by bench/kernel.py */
 enum {
@@ -130,7 +133,7 @@ static void record_stress(double *trk, int slot, double sign, long node, double 
 }
 
 /* Layers 0 … steps of the case in prm[] on n cells. u: 3·(n+1) (layer m in row m % 3), y: 3,
-   work: 2·(n+1), trk/en: the kernel's trackers (from new_trackers()) and energy (zeros),
+   work: 4·(n+1), trk/en: the kernel's trackers (from new_trackers()) and energy (zeros),
    contacts: max_contacts × 2. Returns 0, or 1 on a non-finite value. */
 int run(long n, long steps, const double *prm, double *u, double *y, double *work,
         double *trk, double *en, double *contacts, long max_contacts)
@@ -141,7 +144,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
     const double m1 = prm[P_M1], w1 = prm[P_W1], b1 = prm[P_B1], c2 = prm[P_C2], b2 = prm[P_B2];
     const Law law = {prm[P_C1], prm[P_ALPHA], prm[P_C0]};
     const long stride = n + 1;
-    double *p = work, *g = work + stride;
+    double *p = work, *g = work + stride, *cp = work + 2 * stride, *pp = work + 3 * stride;
 
     /* boundary_weights() */
     const double ew = end_masses ? wn : 1.0;
@@ -160,7 +163,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
     const double wr = wn * r;
 
     /* factor_tool_rows(), Q_i = g_i·rhs_i + P_i·Q_{i+1}: on a uniform tool the coefficient of
-       Q_{i+1} equals P_i */
+       Q_{i+1} equals P_i (and nothing is carried into row n) */
     const double diag_n = mass_end + ew * k_end + sw * c2 + b2 * df;
     p[n] = ew * k_end / diag_n;
     g[n] = 1.0 / diag_n;
@@ -169,6 +172,22 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         p[i] = wr * g[i];
     }
     const double a_0 = mass_end + ew * k_end * (1.0 - p[1]);
+    /* segment_layout(): nodes 1 … head serially, then SEGMENTS segments of len nodes; each
+       segment's multiples of its carries, Π coefficient over i … end and Π P over start … i */
+    const long len = n >= SEGMENTS * MIN_SEGMENT ? n / SEGMENTS : 0, head = n - SEGMENTS * len;
+    for (long start = head + 1; len > 0 && start <= n; start += len) {
+        const long end = start + len - 1;
+        double product = 1.0;
+        for (long i = end; i >= start; i--) {
+            product *= i == n ? 0.0 : p[i];
+            cp[i] = product;
+        }
+        product = 1.0;
+        for (long i = start; i <= end; i++) {
+            product *= p[i];
+            pp[i] = product;
+        }
+    }
 
     /* Layer 0 and layer −1 (row 2) */
     for (long i = 0; i < stride; i++) u[i] = u[2 * stride + i] = 0.0;
@@ -187,32 +206,54 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         const double delta_cur = y_cur - uc[0], delta_old = y_old - uo[0];
         const double delta_ref = y[ref] - ur[0];
 
-        /* Q sweep toward the struck end; Q_i is kept in un[i] until the substitution */
-        double v_right = wc * uc[n] + wo * uo[n], v_mid = wc * uc[n - 1] + wo * uo[n - 1];
+        /* Right-hand sides over their diagonals (vectorised), then the Q sweep toward the struck
+           end; Q_i is kept in un[i] until the substitution */
         double rhs = mass_end * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - sw) * ur[n] + b2 * df * ur[n];
-        if (end_masses) rhs -= k_end * (v_right - v_mid);
-        double qi = rhs * g[n];
-        un[n] = qi;
+        if (end_masses) rhs -= k_end * ((wc * uc[n] + wo * uo[n]) - (wc * uc[n - 1] + wo * uo[n - 1]));
+        un[n] = rhs * g[n];
+        double q1 = 0.0, carry[SEGMENTS] = {0.0};
         if (wn != 0.0) {
-            for (long i = n - 1; i >= 1; i--) {
-                double v_left = wc * uc[i - 1] + wo * uo[i - 1];
-                double rhs_i = 2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right);
-                qi = fma(p[i], qi, rhs_i * g[i]);  /* the chain: one multiply-add */
-                un[i] = qi;
-                v_right = v_mid;
-                v_mid = v_left;
+            for (long i = 1; i < n; i++) {
+                const double v_left = wc * uc[i - 1] + wo * uo[i - 1];
+                const double v_mid = wc * uc[i] + wo * uo[i];
+                const double v_right = wc * uc[i + 1] + wo * uo[i + 1];
+                un[i] = (2.0 * uc[i] - uo[i] + r * (v_left - 2.0 * v_mid + v_right)) * g[i];
+            }
+            if (len > 0) {
+                double *q0 = un + head + 1, *q1s = q0 + len, *q2 = q1s + len, *q3 = q2 + len;
+                const double *c0 = p + head + 1, *c1 = c0 + len, *c2s = c1 + len, *c3 = c2s + len;
+                double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+                for (long j = len - 1; j >= 0; j--) {
+                    s0 = fma(c0[j], s0, q0[j]);  /* four independent chains */
+                    q0[j] = s0;
+                    s1 = fma(c1[j], s1, q1s[j]);
+                    q1s[j] = s1;
+                    s2 = fma(c2s[j], s2, q2[j]);
+                    q2[j] = s2;
+                    s3 = fma(c3[j], s3, q3[j]);  /* from 0: row n carries nothing */
+                    q3[j] = s3;
+                }
+                for (int k = SEGMENTS - 1; k >= 1; k--) {
+                    const long start = head + 1 + k * len;
+                    carry[k - 1] = un[start] + cp[start] * carry[k];
+                }
+                q1 = un[head + 1] + cp[head + 1] * carry[0];
+            }
+            for (long i = head; i >= 1; i--) {
+                q1 = fma(p[i], q1, un[i]);
+                un[i] = q1;
             }
         } else {  /* explicit (σ = 0, v = u^n): uncoupled rows, no recurrence */
             for (long i = n - 1; i >= 1; i--)
                 un[i] = 2.0 * uc[i] - uo[i] + r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1]);
-            v_right = uc[1];
-            v_mid = uc[0];
+            q1 = un[1];
         }
+        const double v_1 = wc * uc[1] + wo * uo[1], v_0 = wc * uc[0] + wo * uo[0];
 
         /* Striker row and struck-end row: one scalar equation in the new overlap */
         const double b_y = m1_tau2 * (2.0 * y_cur - y_old);
-        double b_0 = mass_end * (2.0 * uc[0] - uo[0]) + ew * k_end * un[1];
-        if (end_masses) b_0 += k_end * (v_right - v_mid);
+        double b_0 = mass_end * (2.0 * uc[0] - uo[0]) + ew * k_end * q1;
+        if (end_masses) b_0 += k_end * (v_1 - v_0);
         const double ref_pot = m >= back ? potential(delta_ref, &law) : 0.0;
         double delta = solve_overlap(b_y / m1_tau2 - b_0 / a_0, 1.0 / m1_tau2 + 1.0 / a_0,
                                      delta_ref, ref_pot, 2.0 * delta_cur - delta_old, &law,
@@ -238,9 +279,34 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
            interior rows are uncoupled, but at a massless working end */
         if (wn != 0.0) {
             double ui = u0;
-            for (long i = 1; i <= n; i++) {
+            for (long i = 1; i <= head; i++) {
                 ui = fma(p[i], ui, un[i]);
                 un[i] = ui;
+            }
+            if (len > 0) {
+                double *x0 = un + head + 1, *x1 = x0 + len, *x2 = x1 + len, *x3 = x2 + len;
+                const double *p0 = p + head + 1, *p1 = p0 + len, *p2 = p1 + len, *p3 = p2 + len;
+                const double *g0 = cp + head + 1, *g1 = g0 + len, *g2 = g1 + len, *g3 = g2 + len;
+                double s0 = 0.0, s1 = 0.0, s2 = 0.0, s3 = 0.0;
+                for (long j = 0; j < len; j++) {  /* the true Q made on the way */
+                    s0 = fma(p0[j], s0, fma(g0[j], carry[0], x0[j]));
+                    x0[j] = s0;
+                    s1 = fma(p1[j], s1, fma(g1[j], carry[1], x1[j]));
+                    x1[j] = s1;
+                    s2 = fma(p2[j], s2, fma(g2[j], carry[2], x2[j]));
+                    x2[j] = s2;
+                    s3 = fma(p3[j], s3, fma(g3[j], carry[3], x3[j]));
+                    x3[j] = s3;
+                }
+                double before = ui;
+                for (int k = 0; k < SEGMENTS; k++) {
+                    double *x = un + head + 1 + k * len;
+                    const double *pk = pp + head + 1 + k * len;
+                    const double after = fma(pk[len - 1], before, x[len - 1]);
+                    for (long j = 0; j < len; j++)
+                        x[j] = fma(pk[j], before, x[j]);
+                    before = after;
+                }
             }
         } else {
             un[n] = fma(p[n], un[n - 1], un[n]);

@@ -1,0 +1,65 @@
+"""The tool rows' solve in the kernel: factored once, swept as segments with carries.
+
+Checked against a direct banded solve of the same rows (scipy), on tools too short for segments,
+with and without a serial head before them, uniform and tapered, for every kind of scheme weight.
+"""
+
+import numpy as np
+import pytest
+from scipy.linalg import solve_banded
+
+from solver import kernel as K
+from solver.grid import make_grid
+from solver.presets import load_preset
+
+RNG = np.random.default_rng(7)
+
+
+def tool_rows(grid, r, weight_new, end_weight, end_stiffness, diag_n):
+    """The rows u_1 … u_N of the new layer as a (1, 1)-banded matrix, u_0 moved to the right."""
+    n = grid.cells
+    band = np.zeros((3, n))
+    wr = weight_new * r
+    for i in range(1, n):
+        band[1, i - 1] = 1.0 + wr * (grid.lower[i] + grid.upper[i])
+        if i > 1:
+            band[2, i - 2] = -wr * grid.lower[i]
+        band[0, i] = -wr * grid.upper[i]
+    band[1, n - 1] = diag_n
+    band[2, n - 2] = -end_weight * end_stiffness
+    return band
+
+
+@pytest.mark.parametrize("cells", [5, 31, 32, 33, 101, 2001])
+@pytest.mark.parametrize("preset", ["fig3", "fig9"])
+@pytest.mark.parametrize("weight_new, centered, end_masses",
+                         [(0.5, False, False), (1.0, False, False), (0.25, True, True)])
+def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, centered, end_masses):
+    case = load_preset(preset)
+    grid = make_grid(case.tool, cells, end_masses)
+    tau, r = 1e-6, 30.0
+    end_stiffness, c2, b2 = 2e8, 5e7, 3e3
+    p, inv_den, coefficient, coefficient_product, p_product = K.factor_tool_rows(
+        grid.lower, grid.upper, grid.node_area, end_stiffness, c2, b2, r, tau, grid.density,
+        grid.h, weight_new, centered, end_masses)
+    end_weight = weight_new if end_masses else 1.0
+    diag_n = 1.0 / inv_den[cells]
+    rhs = RNG.standard_normal(cells)  # rows 1 … N
+    u_0 = RNG.standard_normal()
+
+    u = np.zeros((3, cells + 1))
+    u[1, 1:] = rhs * inv_den[1:]
+    length, head = K.segment_layout(cells)
+    q_1, *carries = K.sweep_toward_struck_end(u, 1, coefficient, coefficient_product, length, head)
+    K.substitute_toward_working_end(u, 1, p, coefficient_product, p_product, length, head, u_0,
+                                    *carries)
+
+    band = tool_rows(grid, r, weight_new, end_weight, end_stiffness, diag_n)
+    moved = rhs.copy()
+    moved[0] += weight_new * r * grid.lower[1] * u_0
+    expected = solve_banded((1, 1), band, moved)
+    assert np.abs(u[1, 1:] - expected).max() <= 1e-11 * np.abs(expected).max()
+    assert (length > 0) == (cells >= K.SEGMENTS * K.MIN_SEGMENT)
+    assert head + K.SEGMENTS * length == cells
+    # Q_1 is the struck-end row's link: u_1 = P_1·u_0 + Q_1
+    assert q_1 == pytest.approx(expected[0] - p[1] * u_0, rel=1e-10, abs=1e-12)
