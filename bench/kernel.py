@@ -43,7 +43,10 @@ compilation, the contenders of a case timed in alternation so that a busy machin
    of its errors would need): that only favours solve_ivp. Done for the Fig. 3 preset and for the
    explicit scheme on 100 cells, whose errors are 30–50× smaller: the preset's paper scheme is
    first order (massless ends), so its errors are those of a second-order semi-discretisation on
-   a handful of cells.
+   a handful of cells. So each accuracy is also met by the kernel at its cheapest, as solve_ivp
+   is: the cheaper of the run itself and the explicit scheme at Courant number 1 on the fewest
+   cells of the same ladder whose errors are within the target (the same walk as solve_ivp's,
+   luck included), timed the same way.
 
 Printed: ns per node-step of each (for solve_ivp per node and right-hand-side evaluation), the
 agreement of C and solve_banded with Numba, and the ratios Numba/C (goal ≤ 1.3), solve_banded/Numba
@@ -352,16 +355,8 @@ def banded_run(s: Setup) -> dict[str, float]:
         stress[1:n] = 0.5 * e_over_h * (un[2:] - un[:n - 1])
         for sign, slot in ((-1.0, K.T_MAX_COMPRESSION), (1.0, K.T_MAX_TENSION)):
             node = int(np.argmax(sign * stress))
-            peak, x_peak = sign * stress[node], node * h
-            if 0 < node < n:
-                left, right = sign * stress[node - 1], sign * stress[node + 1]
-                curvature = 2.0 * peak - left - right
-                if curvature > 0.0:
-                    offset = 0.5 * (right - left) / curvature
-                    peak += 0.25 * (right - left) * offset
-                    x_peak += offset * h
-            if peak > trackers[slot]:
-                trackers[slot:slot + 3] = peak, x_peak, t
+            if sign * stress[node] > trackers[slot]:
+                trackers[slot:slot + 3] = sign * stress[node], node * h, t
 
         if contact_force > trackers[K.T_PEAK_FORCE]:
             trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = contact_force, t
@@ -488,6 +483,24 @@ def cheapest_mol(case: Case, target: tuple[float, float], reference: tuple[float
     return best, tried
 
 
+def errors_of(found: dict[str, float], reference: tuple[float, float]) -> tuple[float, float]:
+    return (abs(found["co-impact time"] / reference[0] - 1.0),
+            abs(found["peak contact force"] / reference[1] - 1.0))
+
+
+def cheapest_kernel(case: Case, target: tuple[float, float], reference: tuple[float, float]
+                    ) -> Setup | None:
+    """A cheap kernel run within `target`: the explicit scheme at Courant number 1 on `MOL_CELLS`
+    and on, walked up until both errors are within it (as `cheapest_mol` walks)."""
+    for cells in (*MOL_CELLS, *range(160, 2001, 32)):
+        s = prepare(f"explicit, Courant 1, {cells} cells", f"explicit {cells}", case,
+                    **explicit_courant_one(case, cells))
+        errors = errors_of(numba_run(s), reference)
+        if errors[0] <= target[0] and errors[1] <= target[1]:
+            return s
+    return None
+
+
 # ---------------------------------------------------------------------------------------------
 # Timing and comparison
 
@@ -596,9 +609,7 @@ def main() -> None:
           f"{reference[0] * 1e6:.4f} µs, peak contact force {reference[1] / 1e3:.3f} kN "
           f"(uncertainty {uncertainty:.1e})")
     for s in (setups[0], setups[2]):
-        found = numba_run(s)
-        target = (abs(found["co-impact time"] / reference[0] - 1.0),
-                  abs(found["peak contact force"] / reference[1] - 1.0))
+        target = errors_of(numba_run(s), reference)
         print(f"\n{s.label}: errors co-impact {target[0]:.2e}, peak force {target[1]:.2e}; "
               f"Numba {kernel_cpu[s.label] * 1e3:.2f} ms")
         run, tried = cheapest_mol(fig3, target, reference)
@@ -608,14 +619,28 @@ def main() -> None:
         mol_cpu = least_cpu({"mol": lambda: mol_run(fig3, run.cells, run.method, run.rtol)},
                             args.repeat, budget=1.0)["mol"]
         errors = mol_errors(run, reference)
-        ratio = mol_cpu / kernel_cpu[s.label]
-        ratios["solve_ivp/Numba"].append((s.short, ratio))
         print(f"  cheapest solve_ivp meeting both ({tried} runs tried): {run.method}, rtol "
               f"{run.rtol:g}, {run.cells} cells: errors {errors[0]:.2e}, {errors[1]:.2e}; "
               f"{run.evaluations} right-hand sides, {mol_cpu * 1e3:.2f} ms "
               f"({mol_cpu / (run.evaluations * (run.cells + 1)) * 1e9:.0f} ns per node and "
               f"right-hand side)")
-        print(f"  solve_ivp/Numba at equal accuracy: {ratio:.0f}")
+        ratio = mol_cpu / kernel_cpu[s.label]
+        ratios["solve_ivp/Numba"].append((f"{s.short} (this run)", ratio))
+        print(f"  solve_ivp/Numba at equal accuracy, against this run: {ratio:.0f}")
+        # Both at their cheapest for this accuracy: the kernel's own choice of scheme and grid
+        # (this run itself, or a coarser explicit one)
+        cheap, cheap_cpu = s, kernel_cpu[s.label]
+        walked = cheapest_kernel(fig3, target, reference)
+        if walked is not None:
+            walked_cpu = least_cpu({"Numba": lambda: numba_run(walked)}, args.repeat, 1.0)["Numba"]
+            if walked_cpu < cheap_cpu:
+                cheap, cheap_cpu = walked, walked_cpu
+        errors = errors_of(numba_run(cheap), reference)
+        ratio = mol_cpu / cheap_cpu
+        ratios["solve_ivp/Numba"].append((f"{s.short} accuracy, both cheapest", ratio))
+        print(f"  the kernel's cheapest run meeting both: {cheap.label}: errors {errors[0]:.2e}, "
+              f"{errors[1]:.2e}; {cheap_cpu * 1e3:.3f} ms")
+        print(f"  solve_ivp/Numba at equal accuracy, each at its cheapest: {ratio:.0f}")
 
     print("\nRatios against their goals:")
     for name, values in ratios.items():
@@ -623,7 +648,7 @@ def main() -> None:
         print(f"  {name} (goal {'≤' if at_most else '≥'} {goal:g}):")
         for short, value in values:
             met = value <= goal if at_most else value >= goal
-            print(f"    {short:14s} {value:8.2f}  {'met' if met else 'NOT met'}")
+            print(f"    {short:34s} {value:8.2f}  {'met' if met else 'NOT met'}")
 
 
 if __name__ == "__main__":

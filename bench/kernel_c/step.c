@@ -107,27 +107,15 @@ static double crossing(double before_that, double before, double now)
     return linear;
 }
 
-/* Refine a stress extreme at interior `node` by the parabola through it and its neighbours */
+/* A stress extreme of the layer at `node`: the running maximum (the kernel's, not refined
+   between nodes) */
 static void record_stress(double *trk, int slot, double sign, long node, double value,
-                          const double *un, long n, double half_e_over_h, double s0, double sn,
                           double h, double t)
 {
-    double x_peak = node * h, peak = sign * value;
-    if (0 < node && node < n) {
-        double left = node - 1 == 0 ? s0 : half_e_over_h * (un[node] - un[node - 2]);
-        double right = node + 1 == n ? sn : half_e_over_h * (un[node + 2] - un[node]);
-        left *= sign;
-        right *= sign;
-        double curvature = 2.0 * peak - left - right;
-        if (curvature > 0.0) {
-            double offset = 0.5 * (right - left) / curvature;
-            peak += 0.25 * (right - left) * offset;
-            x_peak += offset * h;
-        }
-    }
+    double peak = sign * value;
     if (peak > trk[slot]) {
         trk[slot] = peak;
-        trk[slot + 1] = x_peak;
+        trk[slot + 1] = node * h;
         trk[slot + 2] = t;
     }
 }
@@ -403,10 +391,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         if (balance > trk[T_ENERGY_EXCESS]) trk[T_ENERGY_EXCESS] = balance;
 
         /* Stress extremes, peak force, contact intervals */
-        record_stress(trk, T_MAX_COMPRESSION, -1.0, lowest, s_low, un, n, half_e_over_h, s0, sn,
-                      h, t);
-        record_stress(trk, T_MAX_TENSION, 1.0, highest, s_high, un, n, half_e_over_h, s0, sn,
-                      h, t);
+        record_stress(trk, T_MAX_COMPRESSION, -1.0, lowest, s_low, h, t);
+        record_stress(trk, T_MAX_TENSION, 1.0, highest, s_high, h, t);
         if (contact_force > trk[T_PEAK_FORCE]) {
             trk[T_PEAK_FORCE] = contact_force;
             trk[T_PEAK_FORCE_TIME] = t;
