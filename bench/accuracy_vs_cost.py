@@ -18,6 +18,9 @@ abs-sine force, repeated contacts) the case's own numerics are replaced by:
   a coarse grid can hit the tolerance by luck, which no one choosing a grid could rely on. Those
   lucky grids are listed too.
 
+Then the same tolerances on three linear impacts with a closed form (`solver.reference`), in work
+(node-steps) against the cheapest fixed grid of any scheme.
+
 `--write` writes `docs/accuracy_vs_cost.md`, `docs/accuracy_vs_cost.png` and the tables quoted in
 README.md (between its `accuracy_vs_cost` markers).
 """
@@ -36,6 +39,7 @@ from solver import parse_case
 from solver.adaptive import QUANTITIES, quantities
 from solver.controller import warm_up
 from solver.grid import wave_speed
+from solver.reference import LinearImpact, cheapest_fixed_grid, true_errors, work
 from solver.simulate import simulate
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -44,6 +48,7 @@ SCHEMES = ("paper", "sigma", "explicit")
 LADDER = [round(10 * 2 ** (k / 4)) for k in range(25)]  # 10 … 640 cells
 TOLERANCES = (1e-2, 1e-3, 1e-4)
 TARGETS = (1e-2, 1e-3, 1e-4)
+CLOSED_FORMS = ((0.3, 20.0), (0.1, 5.0), (0.6, 50.0))  # contact damping ratio ζ, striker mass m1
 
 
 def preset(name: str) -> dict:
@@ -113,14 +118,17 @@ def measure(name: str) -> dict:
         cheapest = min(meeting(ladder, tol), default=(math.nan, "none", 0))
         lucky = [f"{scheme} {cells}" for cpu_, scheme, cells in lucky_hits(ladder, tol)
                  if cpu_ < cheapest[0]]
+        cheapest_work = (cheapest[2] + 1) * (ladder_steps(ladder, cheapest) + 1)
         row = {"tol": tol, "error": error(summary, ref), "estimate": summary["error_estimate"]["worst"],
                "cpu": cpu, "model": summary["model"], "scheme": summary["scheme"],
                "cells": summary["runs"][-1]["cells"], "runs": len(summary["runs"]),
-               "cheapest": cheapest, "ratio": cpu / cheapest[0], "lucky": lucky}
+               "cheapest": cheapest, "ratio": cpu / cheapest[0],
+               "work_ratio": work(summary["runs"]) / cheapest_work, "lucky": lucky}
         tolerance.append(row)
         print(f"  tolerance {tol:g}: error {row['error']:.2e} (estimate {row['estimate']:.2e}), "
               f"{cpu * 1e3:.2f} ms in {row['runs']} runs; cheapest fixed grid meeting it: "
-              f"{cheapest[1]} {cheapest[2]} cells, {cheapest[0] * 1e3:.2f} ms → {row['ratio']:.2f}×"
+              f"{cheapest[1]} {cheapest[2]} cells, {cheapest[0] * 1e3:.2f} ms → {row['ratio']:.2f}× "
+              f"(work {row['work_ratio']:.2f}×)"
               + (f"; coarser grids meeting it by luck: {', '.join(lucky)}" if lucky else ""))
     return {"ref": ref, "uncertainty": uncertainty, "ladder": ladder, "tolerance": tolerance}
 
@@ -139,6 +147,36 @@ def meeting(ladder: dict, tol: float) -> list[tuple[float, str, int]]:
     return found
 
 
+def ladder_steps(ladder: dict, grid: tuple[float, str, int]) -> int:
+    """The time steps of a grid of the ladder (`meeting`'s CPU, scheme, cells)."""
+    _, scheme, cells = grid
+    return next(steps for c, steps, _, _ in ladder[scheme] if c == cells)
+
+
+def closed_forms() -> list[dict]:
+    """Tolerance runs on linear impacts with a closed form (`solver.reference`), three striker
+    and contact pairs: true error, and work (node-steps) against the cheapest fixed grid of any
+    scheme at Courant number 1 or ½."""
+    rows = []
+    for zeta, m1 in CLOSED_FORMS:
+        ref = LinearImpact(zeta=zeta, m1=m1)
+        for tol in TOLERANCES:
+            case = ref.case(10)
+            case["numerics"].update(cells=None, time_step=None, tolerance=tol)
+            summary = simulate(parse_case(case)).summary
+            cheapest, grid = cheapest_fixed_grid(ref, tol)
+            rows.append({"zeta": zeta, "m1": m1, "tol": tol,
+                         "error": max(true_errors(summary, ref.truth()).values()),
+                         "estimate": summary["error_estimate"]["worst"],
+                         "cells": [r["cells"] for r in summary["runs"]], "grid": grid,
+                         "work_ratio": work(summary["runs"]) / cheapest})
+            r = rows[-1]
+            print(f"  closed form ζ = {zeta:g}, m1 = {m1:g} kg, tolerance {tol:g}: error {r['error']:.2e} "
+                  f"(estimate {r['estimate']:.2e}), grids {r['cells']}; cheapest fixed grid "
+                  f"{grid[0]} at Courant {grid[1]:g} on {grid[2]} cells → work {r['work_ratio']:.2f}×")
+    return rows
+
+
 def lucky_hits(ladder: dict, tol: float) -> list[tuple[float, str, int]]:
     """Grids meeting `tol` although a finer grid of the same scheme does not."""
     settled = {scheme: cells for _, scheme, cells in meeting(ladder, tol)}
@@ -154,7 +192,7 @@ def cheapest_for(scheme: str, rows, target) -> str:
     return f"{cpu * 1e3:.2f} ms ({cells})"
 
 
-def write(results: dict) -> None:
+def write(results: dict, closed: list[dict]) -> None:
     lines = [
         "# Speed against accuracy",
         "",
@@ -178,8 +216,8 @@ def write(results: dict) -> None:
         "",
         "## Tolerance-driven runs (`numerics.tolerance`)",
         "",
-        "| preset | tolerance | true error | estimate | chosen | runs | CPU | cheapest fixed grid meeting it | ratio | coarser grids meeting it by luck |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| preset | tolerance | true error | estimate | chosen | runs | CPU | cheapest fixed grid meeting it | ratio (CPU) | ratio (work) | coarser grids meeting it by luck |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for name, r in results.items():
         for t in r["tolerance"]:
@@ -188,11 +226,29 @@ def write(results: dict) -> None:
                 f"| {name} | {t['tol']:g} | {t['error']:.1e} | {t['estimate']:.1e} | {t['model']}, "
                 f"{t['scheme']}, {t['cells']} cells | {t['runs']} | {t['cpu'] * 1e3:.2f} ms | "
                 f"{scheme} {cells} cells, {cpu * 1e3:.2f} ms | {t['ratio']:.2f}× | "
-                f"{', '.join(t['lucky']) or '—'} |")
+                f"{t['work_ratio']:.2f}× | {', '.join(t['lucky']) or '—'} |")
     lines += [
         "",
-        "Reference uncertainty: " + ", ".join(f"{n} {r['uncertainty']:.0e}" for n, r in results.items())
+        "Work: node-steps ((cells + 1) × steps) summed over the grids a run tried, against the "
+        "cheapest fixed grid's. Reference uncertainty: "
+        + ", ".join(f"{n} {r['uncertainty']:.0e}" for n, r in results.items())
         + ". Errors far below it are not meaningful.",
+        "",
+        "## Tolerance-driven runs on closed forms",
+        "",
+        "Linear impacts on a long rod (`solver.reference.LinearImpact`), whose co-impact time, "
+        "peak force and peak stress are known exactly; the cheapest fixed grid is searched over "
+        "every scheme at Courant number 1 and ½.",
+        "",
+        "| contact damping ratio ζ | striker | tolerance | true error | estimate | grids | cheapest fixed grid | ratio (work) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for c in closed:
+        scheme, courant, cells = c["grid"]
+        lines.append(f"| {c['zeta']:g} | {c['m1']:g} kg | {c['tol']:g} | {c['error']:.1e} | "
+                     f"{c['estimate']:.1e} | {', '.join(map(str, c['cells']))} | {scheme}, Courant "
+                     f"{courant:g}, {cells} cells | {c['work_ratio']:.2f}× |")
+    lines += [
         "",
         "![error against CPU time](accuracy_vs_cost.png)",
         "",
@@ -203,7 +259,7 @@ def write(results: dict) -> None:
 
 
 def quote_in_readme(lines: list[str]) -> None:
-    """Replace what stands between the README's markers with the two tables."""
+    """Replace what stands between the README's markers with the tables."""
     tables = "\n".join(("##" + line) if line.startswith("## ") else line for line in lines
                        if not line.startswith(("# ", "Written by", "![")))
     readme = ROOT / "README.md"
@@ -245,8 +301,10 @@ def main() -> None:
     args = parser.parse_args()
     warm_up()
     results = {name: measure(name) for name in PRESETS}
+    print("\nclosed forms:")
+    closed = closed_forms()
     if args.write:
-        write(results)
+        write(results, closed)
 
 
 if __name__ == "__main__":

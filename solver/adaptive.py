@@ -16,13 +16,18 @@ maximum stress), a run goes:
    about 1.4), on a ladder of grids refined in h and τ together. The first pair of grids is placed
    from an a-priori error model, `ERROR_CONSTANT·n^−p` with n the time steps per estimated
    contact, so that the finer one would just meet the tolerance: half as fine, then that grid.
-   Each later grid is as fine as the last pair's difference says is needed, at least 1.5× and at
-   most 3× finer (Richardson: the finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only
-   when both grids are near the asymptotic range, so it is taken 1.5× larger). Two grids that see
-   a different number of contacts end the ladder only if the pair before them was within the
-   tolerance too (the coarse one may have the sequence of impacts wrong, so their difference alone
-   says little of the error; grazing re-contacts that come and go from grid to grid need the
-   second pair).
+   Each later grid is as fine as the last estimate says is needed, at least 1.15× and at most 3×
+   finer than the last. A grid's error is estimated against a partner: the finest earlier grid
+   at least 1.5× and at most 3× coarser (Richardson: the finer grid's error is
+   `|Q_f − Q_c|/(r^p − 1)`, which holds only when both grids are near the asymptotic range, so it
+   is taken 1.5× larger; closer grids would amplify what is not yet asymptotic). So a step can
+   be small where the estimate says the tolerance is nearly met, and a pair need not be the last
+   two grids; only once, and only between grids that agree on the contacts: a small step that
+   did not end the ladder says the estimate was not to be trusted that closely. Two grids that
+   see a different number of contacts end the ladder only if the estimate before was within the
+   tolerance too (the coarse one may have the sequence of impacts wrong, so their difference
+   alone says little of the error; grazing re-contacts that come and go from grid to grid need
+   the second pair).
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
    Only the first run keeps nothing but what its summary needs: any later one may be the result.
 """
@@ -51,8 +56,9 @@ SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the
 # The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
 # error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.
 ESTIMATE_FACTOR = 1.5
-MIN_REFINEMENT = 1.5  # smallest refinement between two grids of the ladder
+MIN_REFINEMENT = 1.5  # between a grid and the partner its error is estimated against
 MAX_REFINEMENT = 3.0  # largest: a coarser partner is too far from the asymptotic range to judge by
+MIN_STEP = 1.15  # smallest refinement from one grid of the ladder to the next
 MAX_RUNS = 8
 MIN_CELLS = 2  # the coarsest grid's cells on a tool short against the contact
 DEFAULT_SCHEME = "explicit"
@@ -94,6 +100,19 @@ def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, 
             continue
         estimate[name] = ESTIMATE_FACTOR * abs(f - c) / factor / abs(f)
     return estimate
+
+
+def _partner(runs: list) -> tuple:
+    """The last run, its refinement over its partner, and the partner: the finest earlier run
+    between `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it."""
+    last = runs[-1][0]
+
+    def refinement(numerics: ResolvedNumerics) -> float:
+        return math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
+
+    fitting = [run for run in runs[:-1] if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT]
+    partner = max(fitting, key=lambda run: run[0].cells) if fitting else runs[-2]
+    return runs[-1], refinement(partner[0]), partner
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -142,6 +161,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     runs: list[tuple[ResolvedNumerics, dict, int]] = []
     factor = 1.0
     worst = math.inf
+    stepped_small = False
     start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
         tau = period / (start * factor)
@@ -163,8 +183,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         if stage == 0:
             factor *= 2.0
             continue
-        (previous, coarse, seen_coarse), (_, fine, seen_fine) = runs[-2], runs[-1]
-        ratio = math.sqrt((previous.time_step / numerics.time_step) * (numerics.cells / previous.cells))
+        (_, fine, seen_fine), ratio, (_, coarse, seen_coarse) = _partner(runs)
         estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
         settled = seen_fine == seen_coarse or worst <= tol  # `worst`: the previous pair's, so far
         worst = max(estimate.values(), default=0.0)
@@ -178,7 +197,11 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                    "is within the tolerance")
             return _annotated(result, tol, estimate, runs=[n for n, _, _ in runs], why=why)
         needed = (worst / (SAFETY * tol)) ** (1.0 / order)
-        factor *= min(max(needed, MIN_REFINEMENT), MAX_REFINEMENT)
+        # A small step only on an estimate to trust, and once: grids that disagree on the
+        # contacts, or a small step that did not end the ladder, need a clear refinement.
+        small = seen_fine == seen_coarse and not stepped_small
+        stepped_small = stepped_small or (small and needed < MIN_REFINEMENT)
+        factor *= min(max(needed, MIN_STEP if small else MIN_REFINEMENT), MAX_REFINEMENT)
     raise CaseError([FieldError(
         field="numerics.tolerance",
         message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}; "

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -72,7 +72,7 @@ class ResolvedNumerics:
     courant: float  # a·τ/h
 
     def as_dict(self) -> dict:
-        return asdict(self)
+        return dict(vars(self))  # its fields are scalars: dataclasses.asdict's deep copy is not needed
 
     def weights(self) -> Scheme:
         return make_scheme(self.scheme, self.gamma, self.sigma, self.end_masses)

@@ -10,6 +10,10 @@ import math
 
 import numpy as np
 
+from .adaptive import quantities
+from .case import parse_case
+from .controller import simulate_rod
+
 
 class LinearImpact:
     """A striker `m1` at `W1` on a steel rod through a linear contact of damping ratio `ζ`."""
@@ -39,6 +43,11 @@ class LinearImpact:
         inside = (delayed >= 0) & (delayed <= self.contact_time)
         return np.where(inside, -self.force(delayed) / self.area, 0.0)
 
+    def truth(self) -> dict[str, float]:
+        """The exact values of the quantities a tolerance applies to."""
+        return {"co_impact_time": self.contact_time, "peak_contact_force": self.peak_force,
+                "max_stress": self.peak_force / self.area}
+
     def errors(self, summary: dict) -> tuple[float, float]:
         """Relative errors of a run's co-impact time and peak contact force."""
         return (summary["co_impact_time"] / self.contact_time - 1,
@@ -63,3 +72,35 @@ def observed_order(cells, errors) -> float:
     """Observed order of convergence: the least-squares slope of log|error| against log h over a
     ladder of grids, one number that the sampling noise of a single grid cannot swing."""
     return float(-np.polyfit(np.log(cells), np.log(np.abs(errors)), 1)[0])
+
+
+# The fixed grids a tolerance run is measured against: every scheme, at two Courant numbers
+FIXED_GRIDS = (("paper", 1.0), ("sigma", 1.0), ("sigma", 0.5), ("explicit", 1.0), ("explicit", 0.5))
+
+
+def true_errors(summary: dict, truth: dict[str, float]) -> dict[str, float]:
+    """Relative errors of a run's quantities against `truth` (`LinearImpact.truth`)."""
+    found = quantities(summary)
+    return {name: abs(found[name] / truth[name] - 1.0) for name in truth}
+
+
+def work(runs: list[dict]) -> float:
+    """The work of runs (a summary's `runs`): nodes × steps, summed."""
+    return sum((r["cells"] + 1) * (r["steps"] + 1) for r in runs)
+
+
+def cheapest_fixed_grid(reference: LinearImpact, tol: float) -> tuple[float, tuple]:
+    """The least work of any of `FIXED_GRIDS` on a ladder of grids 2^(1/4) apart whose true error
+    on every quantity is within `tol`, and that grid: a yardstick known only in hindsight."""
+    truth = reference.truth()
+    best = (math.inf, None)
+    for scheme, courant in FIXED_GRIDS:
+        for k in range(40):
+            cells = round(8 * 2 ** (k / 4))
+            case = reference.case(cells, courant=courant)
+            case["numerics"]["scheme"] = scheme
+            result = simulate_rod(parse_case(case))
+            if max(true_errors(result.summary, truth).values()) <= tol:
+                best = min(best, (work([result.summary["numerics"]]), (scheme, courant, cells)))
+                break
+    return best
