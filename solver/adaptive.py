@@ -17,17 +17,18 @@ maximum stress), a run goes:
    from an a-priori error model, `ERROR_CONSTANT·n^−p` with n the time steps per estimated
    contact, so that the finer one would just meet the tolerance: half as fine, then that grid.
    Each later grid is as fine as the last estimate says is needed, at least 1.15× and at most 3×
-   finer than the last. A grid's error is estimated against a partner: the finest earlier grid
-   at least 1.5× and at most 3× coarser (Richardson: the finer grid's error is
-   `|Q_f − Q_c|/(r^p − 1)`, which holds only when both grids are near the asymptotic range, so it
-   is taken 1.5× larger; closer grids would amplify what is not yet asymptotic). So a step can
-   be small where the estimate says the tolerance is nearly met, and a pair need not be the last
-   two grids; only once, and only between grids that agree on the contacts: a small step that
-   did not end the ladder says the estimate was not to be trusted that closely. Two grids that
-   see a different number of contacts end the ladder only if the estimate before was within the
-   tolerance too (the coarse one may have the sequence of impacts wrong, so their difference
-   alone says little of the error; grazing re-contacts that come and go from grid to grid need
-   the second pair).
+   finer than the last. A grid's error is estimated against each of its partners, the earlier
+   grids at least 1.5× and at most 3× coarser, and the largest estimate counts (Richardson: the
+   finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only when both grids are near the
+   asymptotic range, so it is taken 1.5× larger; closer grids would amplify what is not yet
+   asymptotic, and where repeated impacts make the convergence irregular a second partner
+   catches what one pair's agreement hides). So a step can be small where the estimate says the
+   tolerance is nearly met; only once, and only between grids that agree on the contacts: a
+   small step that did not end the ladder says the estimate was not to be trusted that closely.
+   A grid whose partners see a different number of contacts ends the ladder only if the
+   estimate before was within the tolerance too (a coarse one may have the sequence of impacts
+   wrong, so the difference alone says little of the error; grazing re-contacts that come and go
+   from grid to grid need the second estimate).
    It stops when every quantity's estimate is within the tolerance; the finer run is the result.
    Only the first run keeps nothing but what its summary needs: any later one may be the result.
 """
@@ -102,17 +103,16 @@ def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, 
     return estimate
 
 
-def _partner(runs: list) -> tuple:
-    """The last run, its refinement over its partner, and the partner: the finest earlier run
-    between `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it."""
+def _partners(runs: list) -> list[tuple[float, dict, int]]:
+    """The partners of the last run, as (refinement over it, quantities, contacts): every earlier
+    run between `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it."""
     last = runs[-1][0]
 
     def refinement(numerics: ResolvedNumerics) -> float:
         return math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
 
     fitting = [run for run in runs[:-1] if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT]
-    partner = max(fitting, key=lambda run: run[0].cells) if fitting else runs[-2]
-    return runs[-1], refinement(partner[0]), partner
+    return [(refinement(n), q, seen) for n, q, seen in (fitting or runs[-2:-1])]
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -183,9 +183,14 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         if stage == 0:
             factor *= 2.0
             continue
-        (_, fine, seen_fine), ratio, (_, coarse, seen_coarse) = _partner(runs)
-        estimate = _relative_differences(fine, coarse, ratio**order - 1.0)
-        settled = seen_fine == seen_coarse or worst <= tol  # `worst`: the previous pair's, so far
+        _, fine, seen_fine = runs[-1]
+        partners = _partners(runs)
+        estimate = {}
+        for ratio, coarse, _ in partners:
+            for name, value in _relative_differences(fine, coarse, ratio**order - 1.0).items():
+                estimate[name] = max(value, estimate.get(name, 0.0))
+        agree = all(seen == seen_fine for _, _, seen in partners)
+        settled = agree or worst <= tol  # `worst`: the previous estimate, so far
         worst = max(estimate.values(), default=0.0)
         if worst <= tol and settled:
             why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
@@ -199,7 +204,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         needed = (worst / (SAFETY * tol)) ** (1.0 / order)
         # A small step only on an estimate to trust, and once: grids that disagree on the
         # contacts, or a small step that did not end the ladder, need a clear refinement.
-        small = seen_fine == seen_coarse and not stepped_small
+        small = agree and not stepped_small
         stepped_small = stepped_small or (small and needed < MIN_REFINEMENT)
         factor *= min(max(needed, MIN_STEP if small else MIN_REFINEMENT), MAX_REFINEMENT)
     raise CaseError([FieldError(
