@@ -159,12 +159,15 @@ def test_submit_exits_2_naming_the_field_and_1_with_a_failed_jobs_reason(stack, 
 def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     case = tmp_path / "long.json"
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
+    # SIGINT at its default in the child, as in a terminal: a shell's background job inherits it
+    # ignored, and Python then never turns it into KeyboardInterrupt.
     submit = subprocess.Popen([sys.executable, "-m", "solver", "submit", str(case), "--url", stack.url],
-                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
         def newest_running():  # the job just submitted is the newest
-            newest = stack.client.get("/v1/jobs", params={"limit": 1}).json()["jobs"][0]
-            return newest if newest["status"] == "running" and newest["name"] == "fig3" else None
+            jobs = stack.client.get("/v1/jobs", params={"limit": 1}).json()["jobs"]
+            return jobs[0] if jobs and jobs[0]["status"] == "running" and jobs[0]["name"] == "fig3" else None
 
         job = wait_for(newest_running, 30, "the submitted job running")
         submit.send_signal(signal.SIGINT)
