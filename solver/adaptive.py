@@ -193,6 +193,13 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         settled = agree or worst <= tol  # `worst`: the previous estimate, so far
         worst = max(estimate.values(), default=0.0)
         if worst <= tol and settled:
+            if not agree:
+                result.summary["warnings"].append(
+                    f"the grids this error estimate rests on saw different numbers of contacts "
+                    f"({seen_fine} on the last, {', '.join(str(seen) for _, _, seen in partners)} on "
+                    "the coarser ones it was compared with): the later impacts, and the stresses they "
+                    "make, may be off by more than the estimate; shorten numerics.duration to the "
+                    "impacts that matter or check them on a finer fixed grid")
             why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
                    f"free of dispersion along a uniform tool there) on grids refined until the "
                    f"estimated error is within the tolerance; the lumped model was not enough "

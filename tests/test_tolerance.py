@@ -71,6 +71,35 @@ SHORT_TOOL = {
 }
 
 
+def test_an_estimate_across_a_change_in_the_contacts_says_so():
+    """Fig. 5 at 3.7 m/s, c1 = 1.4e12: the accepted grid sees 7 contacts, the grid it is compared
+    with 10. The estimate stands (the one before was within the tolerance too), with a warning."""
+    case = merge(preset_json("fig5"), {"striker": {"velocity": 2.0 + 8.0 * 4 / 19},
+                                       "contact": {"stiffness": 1e11 * 16 ** (18 / 19)},
+                                       "numerics": {"cells": None, "time_step": None, "gamma": None,
+                                                    "tolerance": 1e-2}})
+    summary = simulate(parse_case(case)).summary
+    assert any("different numbers of contacts" in w and "numerics.duration" in w
+               for w in summary["warnings"]), summary["warnings"]
+    calm = merge(preset_json("fig3"), {"numerics": {"cells": None, "time_step": None, "gamma": None,
+                                                    "tolerance": 1e-2}})
+    assert simulate(parse_case(calm)).summary["warnings"] == []
+
+
+def test_under_a_tolerance_the_estimate_not_the_steps_rule_speaks_for_the_contact():
+    """Fig. 9 at 1e-2 ends on a grid whose shortest contact has about 12 steps, under the fixed
+    rule's 20 for 1%: the run's own estimate (within 1e-2) is what counts, so no warning says to
+    set a time step. The same grid given as numerics does warn."""
+    case = merge(preset_json("fig9"), {"numerics": {"cells": None, "time_step": None, "gamma": None,
+                                                    "tolerance": 1e-2}})
+    summary = simulate(parse_case(case)).summary
+    assert summary["error_estimate"]["worst"] <= 1e-2 and summary["warnings"] == []
+    last = summary["runs"][-1]
+    fixed = merge(case, {"numerics": {"tolerance": None, "scheme": "explicit", "cells": last["cells"],
+                                      "time_step": last["time_step"]}})
+    assert any("time steps" in w for w in simulate(parse_case(fixed)).summary["warnings"])
+
+
 def test_a_tool_short_against_the_contact_gets_the_lumped_model_and_meets_the_tolerance():
     case = parse_case(SHORT_TOOL)
     assert rigidity(case) < 0.1
