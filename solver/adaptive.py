@@ -103,16 +103,23 @@ def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, 
     return estimate
 
 
-def _partners(runs: list) -> list[tuple[float, dict, int]]:
-    """The partners of the last run, as (refinement over it, quantities, contacts): every earlier
-    run between `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it."""
-    last = runs[-1][0]
+def _estimate(runs: list, order: float) -> tuple[dict[str, float], list[int]]:
+    """The last run's error per quantity, the largest over its partners (every earlier run between
+    `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it), and the numbers
+    of contacts the partners saw."""
+    last, fine, _ = runs[-1]
 
     def refinement(numerics: ResolvedNumerics) -> float:
         return math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
 
-    fitting = [run for run in runs[:-1] if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT]
-    return [(refinement(n), q, seen) for n, q, seen in (fitting or runs[-2:-1])]
+    partners = [run for run in runs[:-1]
+                if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT] or runs[-2:-1]
+    estimate: dict[str, float] = {}
+    for numerics, coarse, _ in partners:
+        factor = refinement(numerics) ** order - 1.0
+        for name, value in _relative_differences(fine, coarse, factor).items():
+            estimate[name] = max(value, estimate.get(name, 0.0))
+    return estimate, [seen for _, _, seen in partners]
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -183,20 +190,16 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         if stage == 0:
             factor *= 2.0
             continue
-        _, fine, seen_fine = runs[-1]
-        partners = _partners(runs)
-        estimate = {}
-        for ratio, coarse, _ in partners:
-            for name, value in _relative_differences(fine, coarse, ratio**order - 1.0).items():
-                estimate[name] = max(value, estimate.get(name, 0.0))
-        agree = all(seen == seen_fine for _, _, seen in partners)
+        seen_fine = runs[-1][2]
+        estimate, partner_contacts = _estimate(runs, order)
+        agree = all(seen == seen_fine for seen in partner_contacts)
         settled = agree or worst <= tol  # `worst`: the previous estimate, so far
         worst = max(estimate.values(), default=0.0)
         if worst <= tol and settled:
             if not agree:
                 result.summary["warnings"].append(
                     f"the grids this error estimate rests on saw different numbers of contacts "
-                    f"({seen_fine} on the last, {', '.join(str(seen) for _, _, seen in partners)} on "
+                    f"({seen_fine} on the last, {', '.join(map(str, partner_contacts))} on "
                     "the coarser ones it was compared with): the later impacts, and the stresses they "
                     "make, may be off by more than the estimate; shorten numerics.duration to the "
                     "impacts that matter or check them on a finer fixed grid")
