@@ -28,8 +28,8 @@ All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3
 `u` (3 × (N+1)) and of the striker's `y` (3), so no state but the layer index is carried between
 chunks. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first step
 is an ordinary step of the scheme. The layers are indexed as `u[row, i]`, never through a row view:
-Numba counts a view's references with atomic instructions, which cost as much as a hundred nodes'
-work a step on the presets' grids. Where LLVM cannot prove an index non-negative, it is unsigned:
+Numba counts a view's references with atomic instructions, and three views a step cost about
+0.4 ns a node-step on 100 cells, a sixth of the step. Where LLVM cannot prove an index non-negative, it is unsigned:
 Numba wraps negative indices around, and that check on every load keeps loops from vectorising.
 """
 
