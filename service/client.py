@@ -17,12 +17,12 @@ the service's `Retry-After` asks, `retries` times) name the problem.
 
 from __future__ import annotations
 
-import io
 import os
 import secrets
+import tempfile
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable, NamedTuple
+from typing import TYPE_CHECKING, Any, BinaryIO, Callable, NamedTuple
 from urllib.parse import quote
 
 import httpx
@@ -187,28 +187,38 @@ class Client:
         same object a local `simulate` returns: `history` maps dataset paths ("contact/force",
         "time", "energy/to_medium", ...) to NumPy arrays, with `probe_x`, `probe_stress`,
         `fields` (None unless asked), `summary`, `case` and `numerics`; `arrays()` gives every
-        array under its HDF5 path. Use `download` for a file too large to hold in memory."""
+        array under its HDF5 path. The file is streamed to a temporary file first, so that only
+        the arrays are held; use `download` for a file too large for even those."""
         from solver.io import read_result
 
-        return read_result(io.BytesIO(self._send("GET", self._result_path(job_id)).content))
+        with tempfile.TemporaryFile() as f:
+            self._stream_to(job_id, f)
+            f.seek(0)
+            return read_result(f)
 
     def download(self, job_id: str, path: str | os.PathLike) -> Path:
         """Write the succeeded job's HDF5 result to `path`, streamed, under a temporary name
         renamed when complete (a reader never sees half a file). Returns the path."""
         path = Path(path)
         path.parent.mkdir(parents=True, exist_ok=True)
-        answer = self._send("GET", self._result_path(job_id), stream=True)
         # Not mkstemp: its file is owner-only, and a downloaded result should get the umask's permissions.
         tmp = path.with_name(f".{path.name}.{secrets.token_hex(8)}.part")
         try:
             with open(tmp, "xb") as f:
-                for chunk in answer.iter_bytes():
-                    f.write(chunk)
+                self._stream_to(job_id, f)
             os.replace(tmp, path)
         finally:
-            answer.close()
             Path(tmp).unlink(missing_ok=True)
         return path
+
+    def _stream_to(self, job_id: str, f: BinaryIO) -> None:
+        """Write the succeeded job's HDF5 result to the open binary file `f`, chunk by chunk."""
+        answer = self._send("GET", self._result_path(job_id), stream=True)
+        try:
+            for chunk in answer.iter_bytes():
+                f.write(chunk)
+        finally:
+            answer.close()
 
     def cancel(self, job_id: str) -> dict:
         """Cancel an unfinished job: a queued one at once, a running one between two chunks of its

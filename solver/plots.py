@@ -16,15 +16,16 @@ import threading
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator, Sequence
+from typing import TYPE_CHECKING, Callable, Iterator, Sequence
 
 import h5py
 import numpy as np
-from matplotlib.axes import Axes
-from matplotlib.backends.backend_agg import FigureCanvasAgg
-from matplotlib.figure import Figure
 
 from .io import FORMAT
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
+    from matplotlib.figure import Figure
 
 FORMATS = {"png": "image/png", "svg": "image/svg+xml"}  # format -> media type
 FIGSIZE = (9.0, 5.0)  # inches
@@ -333,6 +334,11 @@ def _figure(src: _Source, name: str, times: Sequence[float] | None) -> Figure:
     reason = problem(src.h5, name)
     if reason:
         raise NotAvailable(reason)
+    # Imported here, not at the top: matplotlib takes 0.3 s to import, which the API would pay at
+    # every start although most of its processes never draw.
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
     fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     plot.draw(fig, src, times)
