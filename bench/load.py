@@ -12,8 +12,8 @@ steps, a history row every step and 4 probes in its HDF5 result).
 - Sustained: a burst of jobs submitted as fast as one client can, jobs per second from the first
   submission to the last success, every job accounted for; p50 and p95 of each job's time from its
   submission to its `finished` timestamp (queueing included).
-- The job's parts, in this process: the solve alone, the solve streaming its HDF5 result, and the
-  summary's JSON, best of many.
+- The job's parts, in this process: the solve alone and the solve streaming its HDF5 result, best
+  of many.
 """
 
 from __future__ import annotations

@@ -2,6 +2,11 @@
 
 One writer, `ResultWriter`, makes every file: streamed to while a run goes (it is the run's
 `Recorder`), or given a finished in-memory result (`write_result`).
+
+Datasets and attributes are made through h5py's low-level API, into the same files as its
+high-level one makes. That one spends tens of microseconds of Python on each dataset, attribute and
+write, and a small job's file has 20 datasets, 33 attributes and as many writes: it was most of the
+job's time (`bench/load.py` prints what the write costs a job).
 """
 
 from __future__ import annotations
@@ -10,12 +15,15 @@ import glob
 import json
 import os
 import secrets
+from functools import lru_cache
 from math import prod
 from pathlib import Path
 from typing import BinaryIO
 
 import h5py
 import numpy as np
+import pydantic_core
+from h5py import h5a, h5d, h5p, h5s, h5t
 
 from .case import Case
 from .controller import Result
@@ -24,10 +32,8 @@ from .grid import ResolvedNumerics
 FORMAT = "percussim-result"
 FORMAT_VERSION = 1
 PARTIAL = ".part"  # suffix of a file being written
-COMPRESSED = {"fields/displacement", "fields/stress"}
-# Each chunk is written once, whole (see `_Rows`), so HDF5's chunk cache (8 MiB a dataset from
-# HDF5 2.0) is of no use; h5py reads a size of 0 as "the default", 1 byte turns it off.
-_COMPRESSION = {"compression": "gzip", "compression_opts": 4, "shuffle": True, "rdcc_nbytes": 1}
+COMPRESSED = {"fields/displacement", "fields/stress"}  # gzip after byte shuffling
+DEFLATE_LEVEL = 4
 # A field's chunks span the whole tool, as few rows as make about this many bytes: a row of chunks
 # is what a writer holds (h5py's own choice on 10^4 cells held 32 rows, 2.6 MB a dataset).
 FIELD_CHUNK_BYTES = 1 << 18
@@ -45,11 +51,54 @@ def units(path: str) -> str:
     return "m" if name.endswith("_displacement") else _UNITS[name]
 
 
-def _compressed(shape: tuple[int, ...], dtype: np.dtype) -> dict:
-    """Chunking and compression of a field: whole rows, about FIELD_CHUNK_BYTES a chunk."""
+def _chunk_rows(shape: tuple[int, ...], dtype: np.dtype) -> int:
+    """A field's rows a chunk: whole rows, about FIELD_CHUNK_BYTES a chunk."""
     row_bytes = np.dtype(dtype).itemsize * prod(shape[1:])
-    rows = max(1, min(shape[0], FIELD_CHUNK_BYTES // max(1, row_bytes)))
-    return {"chunks": (rows,) + tuple(shape[1:]), **_COMPRESSION}
+    return max(1, min(shape[0], FIELD_CHUNK_BYTES // max(1, row_bytes)))
+
+
+_TEXT = h5py.string_dtype()  # variable-length UTF-8, as h5py stores a str
+
+
+@lru_cache(maxsize=None)
+def _hdf5_type(dtype: np.dtype) -> h5t.TypeID:
+    """The HDF5 type h5py gives `dtype` (made once: making one is a third of an attribute's cost)."""
+    return h5t.py_create(dtype, logical=True)
+
+
+def _attribute(target: h5d.DatasetID | h5py.h5f.FileID, name: str, value: str | int | float | bool) -> None:
+    """Set attribute `name` of a new HDF5 object, typed as h5py's `attrs[name] = value` types it."""
+    data = np.array(value, dtype=_TEXT if isinstance(value, str) else None)
+    h5a.create(target, name.encode(), _hdf5_type(data.dtype), h5s.create(h5s.SCALAR)).write(data)
+
+
+def _property_list(kind: h5p.PropClassID, **settings: tuple) -> h5p.PropID:
+    properties = h5p.create(kind)
+    for setting, arguments in settings.items():
+        getattr(properties, setting)(*arguments)
+    return properties
+
+
+_LINKS = _property_list(h5p.LINK_CREATE, set_create_intermediate_group=(True,))
+# Never filled: every row is written once (`_Rows`).
+_CONTIGUOUS = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_NEVER,))
+# Each chunk is written once, whole (see `_Rows`), so HDF5's chunk cache (8 MiB a dataset from
+# HDF5 2.0) is of no use: 1 byte turns it off.
+_NO_CHUNK_CACHE = _property_list(h5p.DATASET_ACCESS, set_chunk_cache=(0, 1, 1.0))
+
+
+def _dataset(file: h5py.File, name: str, shape: tuple[int, ...], dtype: np.dtype,
+             chunk_rows: int | None) -> h5d.DatasetID:
+    """A new dataset at path `name` (its groups made as needed); chunked by `chunk_rows` rows and
+    compressed when given."""
+    layout, access = _CONTIGUOUS, None
+    if chunk_rows is not None:
+        layout = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_NEVER,),
+                                set_chunk=((chunk_rows,) + tuple(shape[1:]),), set_shuffle=(),
+                                set_deflate=(DEFLATE_LEVEL,))
+        access = _NO_CHUNK_CACHE
+    return h5d.create(file.id, name.encode(), _hdf5_type(np.dtype(dtype)), h5s.create_simple(shape),
+                      dcpl=layout, lcpl=_LINKS, dapl=access)
 
 
 class _Rows:
@@ -59,35 +108,48 @@ class _Rows:
     unused in the file); an unchunked one's is about HELD_BYTES, so that a long history is not
     written a few rows at a time."""
 
-    def __init__(self, dataset: h5py.Dataset):
-        self.dataset = dataset
-        row_bytes = dataset.dtype.itemsize * prod(dataset.shape[1:])
-        block = dataset.chunks[0] if dataset.chunks else HELD_BYTES // max(1, row_bytes)
-        self.buffer = np.empty((max(1, min(block, len(dataset))),) + dataset.shape[1:], dataset.dtype)
+    def __init__(self, name: str, dataset: h5d.DatasetID, shape: tuple[int, ...], dtype: np.dtype,
+                 chunk_rows: int | None):
+        self.name, self.dataset, self.rows = name, dataset, shape[0]
+        row_bytes = np.dtype(dtype).itemsize * prod(shape[1:])
+        block = chunk_rows if chunk_rows is not None else HELD_BYTES // max(1, row_bytes)
+        self.buffer = np.empty((max(1, min(block, self.rows)),) + tuple(shape[1:]), dtype)
         self.held = 0
         self.written = 0
 
     def append(self, rows: np.ndarray) -> None:
+        if not self.held:
+            # Whole blocks, or all that is left, go to the file at once: a held result is
+            # written one write a dataset.
+            last = self.written + len(rows) == self.rows
+            whole = len(rows) if last else len(rows) - len(rows) % len(self.buffer)
+            if whole:
+                self._write(np.ascontiguousarray(rows[:whole]))
+                rows = rows[whole:]
         while len(rows):
             take = min(len(rows), len(self.buffer) - self.held)
             self.buffer[self.held:self.held + take] = rows[:take]
             self.held += take
             rows = rows[take:]
             if self.held == len(self.buffer):
-                self._write()
+                self._write_held()
 
     def close(self) -> None:
-        self._write()
-        if self.written != len(self.dataset):
-            raise RuntimeError(f"{self.dataset.name}: {self.written} of {len(self.dataset)} rows written")
+        self._write_held()
+        if self.written != self.rows:
+            raise RuntimeError(f"{self.name}: {self.written} of {self.rows} rows written")
 
-    def _write(self) -> None:
+    def _write_held(self) -> None:
         if self.held:
-            # write_direct: half the cost of slice assignment, which a small job pays ~40 times.
-            self.dataset.write_direct(self.buffer, np.s_[:self.held],
-                                      np.s_[self.written:self.written + self.held])
-            self.written += self.held
+            self._write(self.buffer[:self.held])
             self.held = 0
+
+    def _write(self, block: np.ndarray) -> None:
+        """Write the C-contiguous `block` of rows after those written."""
+        target = self.dataset.get_space()
+        target.select_hyperslab((self.written,) + (0,) * (block.ndim - 1), block.shape)
+        self.dataset.write(h5s.create_simple(block.shape), target, block)
+        self.written += len(block)
 
 
 class ResultWriter:
@@ -125,10 +187,10 @@ class ResultWriter:
         self._rows = {}
 
     def create(self, name: str, shape: tuple[int, ...], dtype: np.dtype = np.dtype(float)) -> None:
-        dataset = self._file.create_dataset(name, shape=shape, dtype=dtype,
-                                            **(_compressed(shape, dtype) if name in COMPRESSED else {}))
-        dataset.attrs["units"] = units(name)
-        self._rows[name] = _Rows(dataset)
+        chunk_rows = _chunk_rows(shape, dtype) if name in COMPRESSED else None
+        dataset = _dataset(self._file, name, shape, dtype, chunk_rows)
+        _attribute(dataset, "units", units(name))
+        self._rows[name] = _Rows(name, dataset, shape, dtype, chunk_rows)
 
     def append(self, name: str, rows: np.ndarray) -> None:
         self._rows[name].append(rows)
@@ -147,16 +209,19 @@ class ResultWriter:
                 self.append(name, data)
         elif self._file is None:
             raise ValueError("a streamed result's arrays are only in the file it was streamed to")
-        f = self._file
-        f.attrs["format"] = FORMAT
-        f.attrs["format_version"] = FORMAT_VERSION
-        f.attrs["solver_version"] = __version__
-        f.attrs["case"] = result.case.model_dump_json()
-        f.attrs["numerics"] = json.dumps(result.numerics.as_dict())
-        for key, value in result.numerics.as_dict().items():
-            f.attrs[f"numerics.{key}"] = value
-        result.summary_json = json.dumps(result.summary)
-        f.create_dataset("summary", data=result.summary_json)
+        numerics = result.numerics.as_dict()
+        attributes = {"format": FORMAT, "format_version": FORMAT_VERSION,
+                      "solver_version": __version__, "case": result.case.model_dump_json(),
+                      "numerics": json.dumps(numerics),
+                      **{f"numerics.{key}": value for key, value in numerics.items()}}
+        for name, value in attributes.items():
+            _attribute(self._file.id, name, value)
+        # pydantic's encoder: the same text as json.dumps (NaN aside, which becomes null), 10×
+        # faster on a summary's force history.
+        result.summary_json = pydantic_core.to_json(result.summary).decode()
+        summary = np.array(result.summary_json, dtype=_TEXT)
+        h5d.create(self._file.id, b"summary", h5t.py_create(summary.dtype, logical=True),
+                   h5s.create(h5s.SCALAR)).write(h5s.ALL, h5s.ALL, summary)
         for rows in self._rows.values():
             rows.close()
         self._close()
