@@ -376,12 +376,12 @@ STRESS_BLOCK = 64
 # finite numbers is never NaN (it may overflow to ±inf, which `nnan` allows).
 @njit(cache=True, fastmath={"nnan"})
 def interior_stress_extremes(u, row, half_e_over_h):
-    """The first interior nodes of the least and of the greatest stress `½·E/h·(u_{i+1} − u_{i−1})`
-    of the layer in row `row` of `u` (n ≥ 2).
+    """`(least, its block, greatest, its block)`: the extremes of the interior stress
+    `½·E/h·(u_{i+1} − u_{i−1})` of the layer in row `row` of `u` (n ≥ 2), each with the first node
+    of the first block of `STRESS_BLOCK` nodes that holds it.
 
-    A loop that carries the extreme's index with its value does not vectorise. So one pass over
-    blocks of `STRESS_BLOCK` nodes finds the extreme values and the first block holding each, and
-    a second one finds the first node of that value in that block: both are reductions that do.
+    A loop that carries the extreme's index with its value does not vectorise; this one, over the
+    values only, does. `first_node` then finds the node in the block, when it is wanted.
     """
     n = u.shape[1] - 1
     one = np.uint64(1)
@@ -397,11 +397,10 @@ def interior_stress_extremes(u, row, half_e_over_h):
             low, low_start = lo, start
         if hi > high:
             high, high_start = hi, start
-    return (first_node(u, row, half_e_over_h, low_start, low),
-            first_node(u, row, half_e_over_h, high_start, high))
+    return low, low_start, high, high_start
 
 
-@njit(cache=True, fastmath={"nnan"}, inline="always")
+@njit(cache=True, fastmath={"nnan"})
 def first_node(u, row, half_e_over_h, start, value):
     """The first node of the block from `start` where the stress is `value` (its last if none)."""
     one = np.uint64(1)
@@ -617,26 +616,26 @@ def advance(
             if balance > trackers[T_ENERGY_EXCESS]:
                 trackers[T_ENERGY_EXCESS] = balance
 
-            # Stress extremes along the tool: the layer's extreme nodes (the first on ties). Not
-            # refined between nodes: next to a kink (a reflected front meeting the peak) a parabola
-            # through three nodes overshoots by O(h), where the nodes' own error is O(h²).
-            lowest, highest = 0, 0
-            s_low, s_high = s0, s0
+            # Stress extremes along the tool: the layer's extreme node values. Not refined between
+            # nodes: next to a kink (a reflected front meeting the peak) a parabola through three
+            # nodes overshoots by O(h), where the nodes' own error is O(h²).
             if n > 1:
-                i_low, i_high = interior_stress_extremes(u, new, half_e_over_h)
-                s = node_stress(u, new, i_low, n, e_over_h, s0, sn)
-                if s < s_low:
-                    s_low, lowest = s, i_low
-                s = node_stress(u, new, i_high, n, e_over_h, s0, sn)
-                if s > s_high:
-                    s_high, highest = s, i_high
-            if sn < s_low:
-                s_low, lowest = sn, n
-            if sn > s_high:
-                s_high, highest = sn, n
-            for peak, node, slot in ((-s_low, lowest, T_MAX_COMPRESSION),
-                                     (s_high, highest, T_MAX_TENSION)):
+                low, low_block, high, high_block = interior_stress_extremes(u, new, half_e_over_h)
+            else:
+                low, low_block, high, high_block = s0, 0, s0, 0
+            s_low, s_high = min(s0, low, sn), max(s0, high, sn)
+            for peak, value, interior, block, slot in (
+                    (-s_low, s_low, low, low_block, T_MAX_COMPRESSION),
+                    (s_high, s_high, high, high_block, T_MAX_TENSION)):
                 if peak > trackers[slot]:
+                    # Where, only for a new record (most layers set none): the first node of that
+                    # stress, from the struck end.
+                    if value == s0:
+                        node = 0
+                    elif value == interior and n > 1:
+                        node = first_node(u, new, half_e_over_h, block, value)
+                    else:
+                        node = n
                     trackers[slot] = peak
                     trackers[slot + 1] = node * h
                     trackers[slot + 2] = t

@@ -107,13 +107,23 @@ static double crossing(double before_that, double before, double now)
     return linear;
 }
 
-/* A stress extreme of the layer at `node`: the running maximum (the kernel's, not refined
-   between nodes) */
-static void record_stress(double *trk, int slot, double sign, long node, double value,
-                          double h, double t)
+/* A stress extreme `value` of the layer un[] (s0 at the struck end): the running maximum (the
+   kernel's, not refined between nodes). Where it is, the first node of that stress from the struck
+   end, is searched only for a new record: most layers set none. */
+static void record_stress(double *trk, int slot, double sign, double value, const double *un,
+                          long n, double half_e_over_h, double s0, double h, double t)
 {
     double peak = sign * value;
     if (peak > trk[slot]) {
+        long node = n;
+        if (value == s0)
+            node = 0;
+        else
+            for (long i = 1; i < n; i++)
+                if (half_e_over_h * (un[i + 1] - un[i - 1]) == value) {
+                    node = i;
+                    break;
+                }
         trk[slot] = peak;
         trk[slot + 1] = node * h;
         trk[slot + 2] = t;
@@ -301,14 +311,10 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         }
 
         /* One pass for the tool's energy and its interior stresses (node i − 1), in LANES
-           independent partial sums and extremes so that it vectorises; the first node of the
-           extreme value is then the one of the lanes' first occurrences with the smallest index */
+           independent partial sums and extremes so that it vectorises */
         double kin_l[LANES] = {0}, str_l[LANES] = {0}, low_l[LANES], high_l[LANES];
-        long low_i[LANES], high_i[LANES];
-        for (int j = 0; j < LANES; j++) {
+        for (int j = 0; j < LANES; j++)
             low_l[j] = high_l[j] = s0;
-            low_i[j] = high_i[j] = 0;
-        }
         double kinetic = 0.0, strain = 0.0;
         {
             double ea = un[1] - u0, eb = uc[1] - uc[0], du = un[1] - uc[1];
@@ -323,33 +329,24 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
                 kin_l[j] += du * du;
                 str_l[j] += strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb;
                 double s = half_e_over_h * (un[k] - un[k - 2]);
-                low_i[j] = s < low_l[j] ? k - 1 : low_i[j];
                 low_l[j] = s < low_l[j] ? s : low_l[j];
-                high_i[j] = s > high_l[j] ? k - 1 : high_i[j];
                 high_l[j] = s > high_l[j] ? s : high_l[j];
             }
         }
         double s_low = s0, s_high = s0;
-        long lowest = 0, highest = 0;
         for (int j = 0; j < LANES; j++) {
             kinetic += kin_l[j];
             strain += str_l[j];
-            if (low_l[j] < s_low || (low_l[j] == s_low && low_i[j] < lowest)) {
-                s_low = low_l[j];
-                lowest = low_i[j];
-            }
-            if (high_l[j] > s_high || (high_l[j] == s_high && high_i[j] < highest)) {
-                s_high = high_l[j];
-                highest = high_i[j];
-            }
+            s_low = low_l[j] < s_low ? low_l[j] : s_low;
+            s_high = high_l[j] > s_high ? high_l[j] : s_high;
         }
         for (; i <= n; i++) {
             double ea = un[i] - un[i - 1], eb = uc[i] - uc[i - 1], du = un[i] - uc[i];
             kinetic += du * du;
             strain += strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb;
             double s = half_e_over_h * (un[i] - un[i - 2]);
-            if (s < s_low) { s_low = s; lowest = i - 1; }
-            if (s > s_high) { s_high = s; highest = i - 1; }
+            s_low = s < s_low ? s : s_low;
+            s_high = s > s_high ? s : s_high;
         }
         /* kinetic holds nodes 1 … n at the interior area: put the ends at theirs */
         const double du_n = un[n] - uc[n], du_0 = u0 - uc[0];
@@ -363,8 +360,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         const double velocity = m == 1 ? w1 : (3.0 * y_new - 4.0 * y_cur + y_old) / (2.0 * tau);
         const double medium_force = c2 * un[n] + b2 * end_rate;
         const double sn = -medium_force / area;
-        if (sn < s_low) { s_low = sn; lowest = n; }
-        if (sn > s_high) { s_high = sn; highest = n; }
+        s_low = sn < s_low ? sn : s_low;
+        s_high = sn > s_high ? sn : s_high;
 
         /* Energy at layer m − ½ */
         const double dy = y_new - y_cur;
@@ -391,8 +388,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         if (balance > trk[T_ENERGY_EXCESS]) trk[T_ENERGY_EXCESS] = balance;
 
         /* Stress extremes, peak force, contact intervals */
-        record_stress(trk, T_MAX_COMPRESSION, -1.0, lowest, s_low, h, t);
-        record_stress(trk, T_MAX_TENSION, 1.0, highest, s_high, h, t);
+        record_stress(trk, T_MAX_COMPRESSION, -1.0, s_low, un, n, half_e_over_h, s0, h, t);
+        record_stress(trk, T_MAX_TENSION, 1.0, s_high, un, n, half_e_over_h, s0, h, t);
         if (contact_force > trk[T_PEAK_FORCE]) {
             trk[T_PEAK_FORCE] = contact_force;
             trk[T_PEAK_FORCE_TIME] = t;
