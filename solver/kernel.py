@@ -370,34 +370,53 @@ fmax = _llvm_binary("llvm.maxnum.f64")
 STRESS_BLOCK = 64
 
 
-# `nnan` lets the min/max and the comparisons be plain vector instructions, without NaN fix-ups.
-# Sound where `advance` calls it: the energy check just before has stopped the run on any non-finite
-# displacement (it makes the tool's kinetic energy non-finite), and E/2h times a difference of
-# finite numbers is never NaN (it may overflow to ±inf, which `nnan` allows).
-@njit(cache=True, fastmath={"nnan"})
-def interior_stress_extremes(u, row, half_e_over_h):
-    """`(least, its block, greatest, its block)`: the extremes of the interior stress
-    `½·E/h·(u_{i+1} − u_{i−1})` of the layer in row `row` of `u` (n ≥ 2), each with the first node
-    of the first block of `STRESS_BLOCK` nodes that holds it.
+# One pass for the energy and the stresses, in one vectorised loop; its fast-math flags:
+# - `reassoc`: sums of N terms may be reordered, which changes them by rounding only;
+# - `nnan`, `nsz`: min/max are plain vector instructions, without NaN or signed-zero fix-ups (LLVM
+#   vectorises them beside the sums only with both). Sound: a non-finite displacement makes the
+#   kinetic energy non-finite, which `advance` checks before it uses the stresses, and a stress of
+#   −0 or +0 is the same record.
+@njit(cache=True, fastmath={"contract", "reassoc", "nnan", "nsz"})
+def tool_energy_and_stresses(u, new, cur, node_area, area_mid, strain_sigma, half_e_over_h):
+    """The tool's energy terms and interior stress extremes of the layers in rows `new`, `cur` of
+    `u`: `(Σ S_i·(u_i − uc_i)², Σ S_{i+½}·[σ(e_a² + e_b²) + (1 − 2σ)·e_a·e_b], least stress, its
+    block, greatest stress, its block)`.
 
-    A loop that carries the extreme's index with its value does not vectorise; this one, over the
-    values only, does. `first_node` then finds the node in the block, when it is wanted.
+    The sums are twice the kinetic energy times τ²/(ρh) and twice the strain energy times h/E, e
+    the cell strains. The stresses are `½·E/h·(u_{i+1} − u_{i−1})` at the interior nodes of the new
+    layer (±inf when it has none), each with the first node of the first block of `STRESS_BLOCK`
+    nodes that holds it: a loop that carries an extreme's index does not vectorise, so
+    `first_node` finds the node in the block, when it is wanted.
     """
     n = u.shape[1] - 1
     one = np.uint64(1)
-    low = high = half_e_over_h * (u[row, 2] - u[row, 0])
-    low_start = high_start = 1
+    strain_cross = 1.0 - 2.0 * strain_sigma
+    du = u[new, 0] - u[cur, 0]
+    kinetic = node_area[0] * du * du
+    strain = 0.0
+    low, high = np.inf, -np.inf
+    low_start = high_start = 0
     for start in range(1, n, STRESS_BLOCK):
         lo, hi = low, high
         for i in range(np.uint64(start), np.uint64(min(start + STRESS_BLOCK, n))):
-            s = half_e_over_h * (u[row, i + one] - u[row, i - one])
+            du = u[new, i] - u[cur, i]
+            kinetic += node_area[i] * du * du
+            ea = u[new, i] - u[new, i - one]
+            eb = u[cur, i] - u[cur, i - one]
+            strain += area_mid[i - one] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
+            s = half_e_over_h * (u[new, i + one] - u[new, i - one])
             lo = fmin(lo, s)
             hi = fmax(hi, s)
         if lo < low:
             low, low_start = lo, start
         if hi > high:
             high, high_start = hi, start
-    return low, low_start, high, high_start
+    du = u[new, n] - u[cur, n]
+    kinetic += node_area[n] * du * du
+    ea = u[new, n] - u[new, n - 1]
+    eb = u[cur, n] - u[cur, n - 1]
+    strain += area_mid[n - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
+    return kinetic, strain, low, low_start, high, high_start
 
 
 @njit(cache=True, fastmath={"nnan"})
@@ -410,26 +429,6 @@ def first_node(u, row, half_e_over_h, start, value):
         found = half_e_over_h * (u[row, i + one] - u[row, i - one]) == value
         first = min(first, np.int64(i) if found else last)
     return first
-
-
-@njit(cache=True, fastmath={"contract", "reassoc"})
-def tool_energy(u, new, cur, node_area, area_mid, strain_sigma):
-    """`Σ S_i·(u_i − uc_i)²` and `Σ S_{i+½}·[σ(e_a² + e_b²) + (1 − 2σ)·e_a·e_b]` over the tool,
-    e the cell strains of the layers in rows `new` and `cur` of `u`: twice the kinetic energy times
-    τ²/(ρh), and twice the strain energy times h/E. Sums of N terms may be reordered (`reassoc`),
-    so that they vectorise; that changes them by rounding only."""
-    n = u.shape[1] - 1
-    strain_cross = 1.0 - 2.0 * strain_sigma
-    du = u[new, 0] - u[cur, 0]
-    kinetic = node_area[0] * du * du
-    strain = 0.0
-    for i in range(1, n + 1):
-        du = u[new, i] - u[cur, i]
-        kinetic += node_area[i] * du * du
-        ea = u[new, i] - u[new, i - 1]
-        eb = u[cur, i] - u[cur, i - 1]
-        strain += area_mid[i - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
-    return kinetic, strain
 
 
 # `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
@@ -590,7 +589,8 @@ def advance(
             # Energy at layer m − ½, in the form each scheme conserves (or dissipates).
             dy = y_new - y_cur
             striker_kinetic = 0.5 * striker_mass * dy * dy * inv_tau2
-            tool_kinetic, tool_strain = tool_energy(u, new, cur, node_area, area_mid, strain_sigma)
+            tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
+                u, new, cur, node_area, area_mid, strain_sigma, half_e_over_h)
             tool_kinetic *= kinetic_factor
             tool_strain *= 0.5 * e_over_h
             contact_pot = (spring_weight * contact_potential(delta, c1, alpha, c0)
@@ -619,10 +619,6 @@ def advance(
             # Stress extremes along the tool: the layer's extreme node values. Not refined between
             # nodes: next to a kink (a reflected front meeting the peak) a parabola through three
             # nodes overshoots by O(h), where the nodes' own error is O(h²).
-            if n > 1:
-                low, low_block, high, high_block = interior_stress_extremes(u, new, half_e_over_h)
-            else:
-                low, low_block, high, high_block = s0, 0, s0, 0
             s_low, s_high = min(s0, low, sn), max(s0, high, sn)
             for peak, value, interior, block, slot in (
                     (-s_low, s_low, low, low_block, T_MAX_COMPRESSION),
@@ -632,7 +628,7 @@ def advance(
                     # stress, from the struck end.
                     if value == s0:
                         node = 0
-                    elif value == interior and n > 1:
+                    elif value == interior:
                         node = first_node(u, new, half_e_over_h, block, value)
                     else:
                         node = n
