@@ -64,7 +64,8 @@ T_ENERGY_EXCESS = 13  # max over time of (stored + dissipated − input): > 0 me
 T_FAILED_TIME = 14
 T_MIN_CONTACT_STEPS = 15  # fewest steps any finished contact interval was resolved by
 T_FORCE_BEFORE, T_FORCE_BEFORE_THAT = 16, 17  # contact force at layers m−1, m−2
-TRACKER_SLOTS = 18
+T_POTENTIAL_BEFORE, T_POTENTIAL_BEFORE_THAT = 18, 19  # contact potential Φ at layers m−1, m−2
+TRACKER_SLOTS = 20
 
 # Energy slots: running work and dissipation, and the stored terms of the last layer
 E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM = 0, 1, 2
@@ -244,19 +245,14 @@ def external_force(t, kind, amplitude, omega, start, duration):
 
 
 @njit(cache=True, inline="always")
-def contact_potential(delta, c1, alpha, c0):
-    """Φ(δ), the energy stored in the contact: `c1·δ^(α+2)/(α+2)`, or `c0·δ²/2` in separation."""
+def contact_law(delta, c1, alpha, c0):
+    """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
+    separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
+    for both, as on a small grid the contact solve is a large part of a step."""
     if delta >= 0.0:
-        return c1 * delta ** (alpha + 2.0) / (alpha + 2.0)
-    return 0.5 * c0 * delta * delta
-
-
-@njit(cache=True, inline="always")
-def contact_spring_force(delta, c1, alpha, c0):
-    """Φ'(δ) = G(δ)·δ of (7): `c1·δ^(α+1)` in contact, `c0·δ` in separation."""
-    if delta >= 0.0:
-        return c1 * delta ** (alpha + 1.0)
-    return c0 * delta
+        force = c1 * delta ** (alpha + 1.0)
+        return force, force * delta / (alpha + 2.0)
+    return c0 * delta, 0.5 * c0 * delta * delta
 
 
 @njit(cache=True, inline="always")
@@ -277,10 +273,12 @@ def quotient_force(delta, ref, ref_potential, c1, alpha, c0):
     """
     diff = delta - ref
     if abs(diff) > 1e-7 * (abs(delta) + abs(ref)):
-        f = (contact_potential(delta, c1, alpha, c0) - ref_potential) / diff
-        return f, (contact_spring_force(delta, c1, alpha, c0) - f) / diff
+        spring, potential = contact_law(delta, c1, alpha, c0)
+        inverse = 1.0 / diff
+        f = (potential - ref_potential) * inverse
+        return f, (spring - f) * inverse
     mid = 0.5 * (delta + ref)
-    return (contact_spring_force(mid, c1, alpha, c0),
+    return (contact_law(mid, c1, alpha, c0)[0],
             0.5 * contact_spring_stiffness(mid, c1, alpha, c0))
 
 
@@ -553,7 +551,8 @@ def advance(
                                           - (weight_cur * u[cur, 0] + weight_old * u[old, 0]))
             delta_free = b_y / a_y - b_0 / a_0
             compliance = 1.0 / a_y + 1.0 / a_0
-            ref_potential = contact_potential(delta_ref, c1, alpha, c0) if m >= back else 0.0
+            # Φ of the reference layer, as computed when it was new (0 for the state before impact)
+            ref_potential = trackers[T_POTENTIAL_BEFORE if back == 1 else T_POTENTIAL_BEFORE_THAT]
             delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
                                   2.0 * delta_cur - delta_old, c1, alpha, c0, b1 * damper_factor)
             force = (quotient_force(delta, delta_ref, ref_potential, c1, alpha, c0)[0]
@@ -581,7 +580,8 @@ def advance(
                 delta_rate = (3.0 * delta - 4.0 * delta_cur + delta_old) / (2.0 * tau)
                 end_rate = (3.0 * u[new, n] - 4.0 * u[cur, n] + u[old, n]) / (2.0 * tau)
                 velocity = (3.0 * y_new - 4.0 * y_cur + y[old]) / (2.0 * tau)
-            contact_force = contact_spring_force(delta, c1, alpha, c0) + b1 * delta_rate
+            spring, potential = contact_law(delta, c1, alpha, c0)
+            contact_force = spring + b1 * delta_rate
             medium_force = c2 * u[new, n] + b2 * end_rate
             s0 = -contact_force / end_area_0
             sn = -medium_force / end_area_n
@@ -593,8 +593,7 @@ def advance(
                 u, new, cur, node_area, area_mid, strain_sigma, half_e_over_h)
             tool_kinetic *= kinetic_factor
             tool_strain *= 0.5 * e_over_h
-            contact_pot = (spring_weight * contact_potential(delta, c1, alpha, c0)
-                           + (1.0 - spring_weight) * contact_potential(delta_cur, c1, alpha, c0))
+            contact_pot = spring_weight * potential + (1.0 - spring_weight) * trackers[T_POTENTIAL_BEFORE]
             medium_pot = 0.5 * c2 * (spring_weight * u[new, n] * u[new, n]
                                      + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
             energy[E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
@@ -651,6 +650,8 @@ def advance(
                     trackers[T_PEAK_FORCE_TIME] = t - tau + offset * tau
             trackers[T_FORCE_BEFORE_THAT] = f1
             trackers[T_FORCE_BEFORE] = contact_force
+            trackers[T_POTENTIAL_BEFORE_THAT] = trackers[T_POTENTIAL_BEFORE]
+            trackers[T_POTENTIAL_BEFORE] = potential
 
             # Contact intervals: δ ≥ 0 is contact; crossings are placed by linear interpolation.
             in_contact = trackers[T_IN_CONTACT] != 0.0
@@ -676,6 +677,9 @@ def advance(
         if m == 0:
             trackers[T_IN_CONTACT] = 1.0  # δ(0) = 0: contact from the first instant
             trackers[T_CONTACT_START] = 0.0
+            # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
+            trackers[T_POTENTIAL_BEFORE] = 0.0
+            trackers[T_POTENTIAL_BEFORE_THAT] = 0.0
 
         if history_stride > 0 and m % history_stride == 0:
             row = history[n_hist]

@@ -27,7 +27,8 @@ enum {
     T_PEAK_FORCE, T_PEAK_FORCE_TIME, T_MAX_COMPRESSION, T_MAX_COMPRESSION_X,
     T_MAX_COMPRESSION_TIME, T_MAX_TENSION, T_MAX_TENSION_X, T_MAX_TENSION_TIME, T_IN_CONTACT,
     T_CONTACT_START, T_CONTACTS, T_CO_IMPACT, T_REBOUND_VELOCITY, T_ENERGY_EXCESS, T_FAILED_TIME,
-    T_MIN_CONTACT_STEPS, T_FORCE_BEFORE, T_FORCE_BEFORE_THAT
+    T_MIN_CONTACT_STEPS, T_FORCE_BEFORE, T_FORCE_BEFORE_THAT, T_POTENTIAL_BEFORE,
+    T_POTENTIAL_BEFORE_THAT
 };
 enum {
     E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM, E_STRIKER_KINETIC,
@@ -36,14 +37,16 @@ enum {
 
 typedef struct { double c1, alpha, c0; } Law;
 
-static inline double potential(double d, const Law *k)
+/* The spring force Φ'(d) and the potential Φ(d), with one power for both */
+static inline double spring(double d, const Law *k, double *potential)
 {
-    return d >= 0.0 ? k->c1 * pow(d, k->alpha + 2.0) / (k->alpha + 2.0) : 0.5 * k->c0 * d * d;
-}
-
-static inline double spring(double d, const Law *k)
-{
-    return d >= 0.0 ? k->c1 * pow(d, k->alpha + 1.0) : k->c0 * d;
+    if (d < 0.0) {
+        *potential = 0.5 * k->c0 * d * d;
+        return k->c0 * d;
+    }
+    const double force = k->c1 * pow(d, k->alpha + 1.0);
+    *potential = force * d / (k->alpha + 2.0);
+    return force;
 }
 
 static inline double stiffness(double d, const Law *k)
@@ -57,12 +60,14 @@ static inline void quotient(double d, double ref, double ref_pot, const Law *k,
                             double *f, double *df)
 {
     double diff = d - ref;
+    double pot;
     if (fabs(diff) > 1e-7 * (fabs(d) + fabs(ref))) {
-        *f = (potential(d, k) - ref_pot) / diff;
-        *df = (spring(d, k) - *f) / diff;
+        const double force = spring(d, k, &pot), inverse = 1.0 / diff;
+        *f = (pot - ref_pot) * inverse;
+        *df = (force - *f) * inverse;
     } else {
         double mid = 0.5 * (d + ref);
-        *f = spring(mid, k);
+        *f = spring(mid, k, &pot);
         *df = 0.5 * stiffness(mid, k);
     }
 }
@@ -193,6 +198,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
     y[2] = -w1 * tau;
     trk[T_IN_CONTACT] = 1.0;
     trk[T_CONTACT_START] = 0.0;
+    trk[T_POTENTIAL_BEFORE] = trk[T_POTENTIAL_BEFORE_THAT] = 0.0;  /* Φ(0); before impact */
 
     for (long m = 1; m <= steps; m++) {
         /* rows of layers m, m − 1, m − 2 and the reference layer (C's % keeps the sign) */
@@ -252,7 +258,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         const double b_y = m1_tau2 * (2.0 * y_cur - y_old);
         double b_0 = mass_end * (2.0 * uc[0] - uo[0]) + ew * k_end * q1;
         if (end_masses) b_0 += k_end * (v_1 - v_0);
-        const double ref_pot = m >= back ? potential(delta_ref, &law) : 0.0;
+        /* Φ of the reference layer, as computed when it was new (0 before impact) */
+        const double ref_pot = trk[back == 1 ? T_POTENTIAL_BEFORE : T_POTENTIAL_BEFORE_THAT];
         double delta = solve_overlap(b_y / m1_tau2 - b_0 / a_0, 1.0 / m1_tau2 + 1.0 / a_0,
                                      delta_ref, ref_pot, 2.0 * delta_cur - delta_old, &law,
                                      b1 * df);
@@ -270,7 +277,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         const double delta_rate = m == 1
             ? (delta - delta_cur) / tau
             : (3.0 * delta - 4.0 * delta_cur + delta_old) / (2.0 * tau);
-        const double contact_force = spring(delta, &law) + b1 * delta_rate;
+        double pot;
+        const double contact_force = spring(delta, &law, &pot) + b1 * delta_rate;
         const double s0 = -contact_force / area;
 
         /* Forward substitution: one multiply-add a node on the critical path; none when the
@@ -366,8 +374,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         /* Energy at layer m − ½ */
         const double dy = y_new - y_cur;
         const double striker_kinetic = 0.5 * m1 * dy * dy * inv_tau2;
-        const double contact_pot = sw * potential(delta, &law)
-                                   + (1.0 - sw) * potential(delta_cur, &law);
+        const double contact_pot = sw * pot + (1.0 - sw) * trk[T_POTENTIAL_BEFORE];
         const double medium_pot = 0.5 * c2 * (sw * un[n] * un[n] + (1.0 - sw) * uc[n] * uc[n]);
         double rate = df * (delta - delta_ref);
         en[E_DISSIPATED_CONTACT] += b1 * rate * rate * tau;
@@ -406,6 +413,8 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         }
         trk[T_FORCE_BEFORE_THAT] = f1;
         trk[T_FORCE_BEFORE] = contact_force;
+        trk[T_POTENTIAL_BEFORE_THAT] = trk[T_POTENTIAL_BEFORE];
+        trk[T_POTENTIAL_BEFORE] = pot;
 
         const int in_contact = trk[T_IN_CONTACT] != 0.0;
         if (in_contact && delta < 0.0) {
