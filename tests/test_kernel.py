@@ -1,7 +1,9 @@
-"""The tool rows' solve in the kernel: factored once, swept as segments with carries.
+"""The kernel's passes along the tool, against direct NumPy/SciPy computations.
 
-Checked against a direct banded solve of the same rows (scipy), on tools too short for segments,
-with and without a serial head before them, uniform and tapered, for every kind of scheme weight.
+The tool rows' solve (factored once, swept as segments with carries) against a banded solve of the
+same rows, on tools too short for segments, with and without a serial head before them, uniform
+and tapered, for every kind of scheme weight. The energy sums and the stress extremes (one
+vectorised pass, the extreme's node found in its block) against NumPy's sums, min and max.
 """
 
 import numpy as np
@@ -63,3 +65,25 @@ def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, center
     assert head + K.SEGMENTS * length == cells
     # Q_1 is the struck-end row's link: u_1 = P_1·u_0 + Q_1
     assert q_1 == pytest.approx(expected[0] - p[1] * u_0, rel=1e-10, abs=1e-12)
+
+
+@pytest.mark.parametrize("cells", [1, 2, 5, 63, 64, 65, 130, 2001])
+@pytest.mark.parametrize("strain_sigma", [0.25, 0.5])
+def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
+    grid = make_grid(load_preset("fig9").tool, cells, end_masses=True)  # conical: areas vary
+    u = RNG.normal(size=(3, cells + 1))
+    new, cur, half_e_over_h = 2, 0, 3.5
+    kinetic, strain, low, low_block, high, high_block = K.tool_energy_and_stresses(
+        u, new, cur, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h)
+
+    ea, eb = np.diff(u[new]), np.diff(u[cur])
+    assert kinetic == pytest.approx(grid.node_area @ (u[new] - u[cur]) ** 2, rel=1e-13)
+    assert strain == pytest.approx(grid.area_mid @ (strain_sigma * (ea * ea + eb * eb)
+                                                    + (1 - 2 * strain_sigma) * ea * eb), rel=1e-13)
+    stress = half_e_over_h * (u[new, 2:] - u[new, :-2])  # interior nodes 1 … n − 1
+    if cells < 2:
+        assert (low, high) == (np.inf, -np.inf)
+        return
+    assert (low, high) == (stress.min(), stress.max())
+    for value, block, first in ((low, low_block, np.argmin(stress)), (high, high_block, np.argmax(stress))):
+        assert K.first_node(u, new, half_e_over_h, block, value) == first + 1
