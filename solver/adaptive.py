@@ -37,8 +37,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
@@ -87,9 +85,11 @@ def rigidity(case: Case) -> float:
     period = contact_time_estimate(case)
     k_contact = (1.0 + alpha) * m1 * (math.pi / period) ** 2  # = (1+α)·G at the rigid-wall depth
     k_medium = case.medium.stiffness if case.medium else 0.0
-    stiffness = np.array([[k_contact, -k_contact], [-k_contact, k_contact + k_medium]])
-    omega2 = max(np.linalg.eigvals(stiffness / np.array([[m1], [m2]])).real)
-    return math.sqrt(max(omega2, 0.0)) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
+    # The larger root of det(K − ω²M) = 0 for K = [[k, −k], [−k, k + k_medium]], M = diag(m1, m2):
+    # a quadratic whose roots are real and whose larger one suffers no cancellation.
+    half_trace = 0.5 * (k_contact / m1 + (k_contact + k_medium) / m2)
+    omega2 = half_trace + math.sqrt(max(half_trace**2 - k_contact * k_medium / (m1 * m2), 0.0))
+    return math.sqrt(omega2) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
 
 
 def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, float]:

@@ -22,8 +22,10 @@ def _number(value: float) -> float | None:
 
 def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     time = history["time"]
-    # Spacing ≥ 1, so the truncated indices are distinct and increasing.
-    pick = np.linspace(0, len(time) - 1, min(len(time), FORCE_HISTORY_POINTS)).astype(int)
+    # Spacing ≥ 1, so the truncated indices are distinct and increasing; a short history is all
+    # kept (the controller passes only the rows kept here, so that is the usual case).
+    pick = (slice(None) if len(time) <= FORCE_HISTORY_POINTS else
+            np.linspace(0, len(time) - 1, FORCE_HISTORY_POINTS).astype(int))
     return {
         "time": time[pick].tolist(),
         "contact": history["contact/force"][pick].tolist(),
