@@ -25,6 +25,8 @@ maximum stress), a run goes:
    catches what one pair's agreement hides). So a step can be small where the estimate says the
    tolerance is nearly met; only once, and only between grids that agree on the contacts: a
    small step that did not end the ladder says the estimate was not to be trusted that closely.
+   The grid it stepped from is no Richardson partner (too close), but the change the step made
+   counts as an estimate too: the finer grid's error is at least that where `r^p − 1 < 1`.
    A grid whose partners see a different number of contacts ends the ladder only if the
    estimate before was within the tolerance too (a coarse one may have the sequence of impacts
    wrong, so the difference alone says little of the error; grazing re-contacts that come and go
@@ -92,33 +94,41 @@ def rigidity(case: Case) -> float:
     return math.sqrt(omega2) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
 
 
-def _relative_differences(fine: dict, coarse: dict, factor: float) -> dict[str, float]:
-    """Richardson estimate of the finer grid's relative error per quantity."""
-    estimate = {}
-    for name in QUANTITIES:
-        f, c = fine[name], coarse[name]
-        if f is None or c is None:
-            continue
-        estimate[name] = ESTIMATE_FACTOR * abs(f - c) / factor / abs(f)
-    return estimate
+def _relative_changes(fine: dict, coarse: dict) -> dict[str, float]:
+    """`|Q_f − Q_c|/|Q_f|` per quantity that both runs have."""
+    return {name: abs(fine[name] - coarse[name]) / abs(fine[name]) for name in QUANTITIES
+            if fine[name] is not None and coarse[name] is not None}
 
 
 def _estimate(runs: list, order: float) -> tuple[dict[str, float], list[int]]:
-    """The last run's error per quantity, the largest over its partners (every earlier run between
-    `MIN_REFINEMENT` and `MAX_REFINEMENT` times coarser, else the one before it), and the numbers
-    of contacts the partners saw."""
+    """The last run's error per quantity, the largest over its partners, and the numbers of
+    contacts the partners saw.
+
+    Against each earlier run `MIN_REFINEMENT` to `MAX_REFINEMENT` times coarser (else the one
+    before it), Richardson: `|Q_f − Q_c|/(r^p − 1)`, taken `ESTIMATE_FACTOR` larger. A closer run
+    (before the ladder's one small step) would amplify what is not yet asymptotic, but it still
+    says the finer grid's error is at least the change the step made (`r^p − 1 < 1` there): a
+    change beyond the tolerance refutes the coarser partners' agreement.
+    """
     last, fine, _ = runs[-1]
 
     def refinement(numerics: ResolvedNumerics) -> float:
         return math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
 
-    partners = [run for run in runs[:-1]
-                if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT] or runs[-2:-1]
+    richardson = [run for run in runs[:-1]
+                  if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT] or runs[-2:-1]
+    close = [run for run in runs[:-1] if MIN_STEP <= refinement(run[0]) < MIN_REFINEMENT]
     estimate: dict[str, float] = {}
-    for numerics, coarse, _ in partners:
-        factor = refinement(numerics) ** order - 1.0
-        for name, value in _relative_differences(fine, coarse, factor).items():
-            estimate[name] = max(value, estimate.get(name, 0.0))
+
+    def bound(coarse: dict, scale: float) -> None:
+        for name, change in _relative_changes(fine, coarse).items():
+            estimate[name] = max(scale * change, estimate.get(name, 0.0))
+
+    for numerics, coarse, _ in richardson:
+        bound(coarse, ESTIMATE_FACTOR / (refinement(numerics) ** order - 1.0))
+    for _, coarse, _ in close:
+        bound(coarse, 1.0)
+    partners = [run for run in runs[:-1] if any(run is other for other in richardson + close)]
     return estimate, [seen for _, _, seen in partners]
 
 
