@@ -15,7 +15,7 @@ import numpy as np
 from . import kernel as K
 from .case import Case
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics
-from .summary import FORCE_HISTORY_POINTS, build_summary
+from .summary import build_summary, force_history_rows
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
@@ -155,13 +155,6 @@ def _kept(first: int, last: int, stride: int) -> int:
     return last // stride - (first - 1) // stride if stride > 0 else 0
 
 
-def _summary_rows(rows: int) -> np.ndarray:
-    """The rows of a history of `rows` the summary's force history keeps, picked as
-    `summary.build_summary` picks them; gathered during the run so that the summary never needs
-    the whole history (given only these, it keeps them all)."""
-    return np.linspace(0, rows - 1, min(rows, FORCE_HISTORY_POINTS)).astype(int)
-
-
 def _probe_nodes(grid: Grid, probes: list[float]) -> tuple[np.ndarray, np.ndarray]:
     """Each probe as the node left of it and the linear weight of the node to its right."""
     s = np.asarray(probes, dtype=float) / grid.h
@@ -231,7 +224,9 @@ def simulate_rod(
         recorder.create("fields/time", (total_frames,))
         recorder.create("fields/displacement", (total_frames, n + 1))
         recorder.create("fields/stress", (total_frames, n + 1))
-    summary_rows = _summary_rows(total_rows)
+    # Gathered during the run, so that the summary never needs the whole history (given only
+    # these rows, it keeps them all).
+    summary_rows = force_history_rows(total_rows)
     summary_table = []  # the history at `summary_rows`, chunk by chunk
     row = 0  # history rows kept before this chunk
 

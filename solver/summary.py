@@ -20,12 +20,18 @@ def _number(value: float) -> float | None:
     return value if math.isfinite(value) else None
 
 
+def force_history_rows(rows: int) -> np.ndarray:
+    """The rows of a history of `rows` the summary's force history keeps: all of a short one, else
+    FORCE_HISTORY_POINTS evenly spread (spacing ≥ 1, so the truncated indices are distinct and
+    increasing)."""
+    if rows <= FORCE_HISTORY_POINTS:
+        return np.arange(rows)
+    return np.linspace(0, rows - 1, FORCE_HISTORY_POINTS).astype(int)
+
+
 def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     time = history["time"]
-    # Spacing ≥ 1, so the truncated indices are distinct and increasing; a short history is all
-    # kept (the controller passes only the rows kept here, so that is the usual case).
-    pick = (slice(None) if len(time) <= FORCE_HISTORY_POINTS else
-            np.linspace(0, len(time) - 1, FORCE_HISTORY_POINTS).astype(int))
+    pick = force_history_rows(len(time))
     return {
         "time": time[pick].tolist(),
         "contact": history["contact/force"][pick].tolist(),
