@@ -178,6 +178,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     runs: list[tuple[ResolvedNumerics, dict, int]] = []
     factor = 1.0
     worst = math.inf
+    agree = True  # the last grid's partners saw as many contacts as it did
     stepped_small = False
     start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
@@ -227,12 +228,16 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
         small = agree and not stepped_small
         stepped_small = stepped_small or (small and needed < MIN_REFINEMENT)
         factor *= min(max(needed, MIN_STEP if small else MIN_REFINEMENT), MAX_REFINEMENT)
+    counts = ", ".join(str(c) for _, _, c in runs)
+    why_not = (f"last estimate {worst:.2g}" if worst > tol else
+               f"the last estimate, {worst:.2g}, is within it, but compares grids that saw different "
+               "numbers of contacts")
     raise CaseError([FieldError(
         field="numerics.tolerance",
-        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} (last estimate {worst:.2g}; "
-                f"contacts seen by each grid: {', '.join(str(c) for _, _, c in runs)}"
+        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} ({why_not}; contacts seen by "
+                f"each grid: {counts}"
                 + ("; when that number keeps changing, the later impacts depend on the grid itself: "
-                   "shorten numerics.duration to the impacts that matter" if runs[-1][2] != runs[-2][2] else "")
+                   "shorten numerics.duration to the impacts that matter" if not agree else "")
                 + "): loosen it or give numerics.cells and numerics.time_step")])
 
 

@@ -142,6 +142,22 @@ def test_a_tolerance_beyond_the_limits_is_refused_naming_it():
     assert e.field == "numerics.tolerance" and "loosen it" in e.message
 
 
+def test_a_ladder_whose_grids_keep_changing_the_contacts_says_so():
+    """Fig. 5 at 7.5 m/s, c1 = 5.8e11: the sequence of impacts changes with the grid (5 to 8
+    contacts over 8 grids), so an estimate within the tolerance still compares different impacts."""
+    case = merge(preset_json("fig5"), {"striker": {"velocity": 2.0 + 8.0 * 13 / 19},
+                                       "contact": {"stiffness": 1e11 * 16 ** (12 / 19)},
+                                       "numerics": {"cells": None, "time_step": None, "gamma": None,
+                                                    "tolerance": 1e-2}})
+    with pytest.raises(CaseError) as error:
+        simulate(parse_case(case))
+    [e] = error.value.errors
+    print(e.message)
+    assert e.field == "numerics.tolerance"
+    assert "is within it, but compares grids that saw different numbers of contacts" in e.message
+    assert "shorten numerics.duration" in e.message
+
+
 def test_a_tolerance_and_a_grid_together_are_refused():
     with pytest.raises(CaseError) as error:
         parse_case(merge(SHORT_TOOL, {"numerics": {"cells": 50}}))
