@@ -5,6 +5,7 @@
     with Client("http://127.0.0.1:8000") as api:
         summary = api.run("examples/fig9.json", progress=lambda fraction, record: print(fraction))
         print(summary["co_impact_time"], summary["peak_contact_force"]["value"])
+        rows = api.run_sweep("examples/fig5.json", {"striker.velocity": [3, 5, 7]})
 
 It needs only httpx: the solver (and so NumPy, h5py and Numba) is imported by `result` alone,
 which reads the HDF5 result into the same `Result` a local run gives.
@@ -17,6 +18,7 @@ the service's `Retry-After` asks, `retries` times) name the problem.
 
 from __future__ import annotations
 
+import json
 import os
 import secrets
 import tempfile
@@ -33,7 +35,7 @@ if TYPE_CHECKING:
 
 FINISHED = ("succeeded", "failed", "cancelled")
 
-Progress = Callable[[float, dict], None]  # (fraction done 0..1, the job's record)
+Progress = Callable[[float, dict], None]  # (fraction done 0..1, the job's or the sweep's record)
 
 
 class FieldError(NamedTuple):
@@ -233,11 +235,62 @@ class Client:
         self.wait(job_id, progress=progress, timeout=timeout)
         return self.summary(job_id)
 
+    # -- sweeps
+
+    def submit_sweep(self, case: dict | str | os.PathLike | Case, parameters: dict[str, list]) -> dict:
+        """Queue every combination of `parameters` (dotted field path → its values, e.g.
+        `{"striker.velocity": [3, 5, 7], "contact.stiffness": [4e11, 8e11]}`) over `case` (as for
+        `submit`), each a job of its own over all the workers. Returns the sweep (`id`, `total`,
+        `rows`, ...); raises `Refused` naming the parameter value each bad variant came from."""
+        if isinstance(case, (str, os.PathLike)):
+            case = json.loads(Path(case).read_bytes())
+        elif not isinstance(case, dict):
+            case = case.model_dump(mode="json", exclude_none=True)
+        return self._json("POST", "/v1/sweeps", json={"case": case, "parameters": parameters})
+
+    def sweep(self, sweep_id: str) -> dict:
+        """The sweep: `progress` 0..1, `counts` by status, `finished`, `columns`, and a row per
+        variant (`values`, `status`, `job`, and the summary's columns once it succeeded, or
+        `error` once it failed)."""
+        return self._json("GET", self._sweep_path(sweep_id))
+
+    def wait_sweep(self, sweep_id: str, progress: Progress | None = None, poll: float = 0.5,
+                   timeout: float | None = None) -> dict:
+        """Wait until every variant has finished, asking every `poll` seconds, and return the
+        sweep. A variant that failed is a row with its `error`: the others go on.
+        `progress(fraction, sweep)` is called with each sweep polled; `TimeoutError` after
+        `timeout` seconds."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            sweep = self.sweep(sweep_id)
+            if progress is not None:
+                progress(sweep["progress"], sweep)
+            if sweep["finished"]:
+                return sweep
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"sweep {sweep_id}: {sweep['counts']} after {timeout} s")
+            time.sleep(poll)
+
+    def cancel_sweep(self, sweep_id: str) -> dict:
+        """Cancel every variant of the sweep that has not finished; returns the sweep."""
+        return self._json("DELETE", self._sweep_path(sweep_id))
+
+    def run_sweep(self, case: dict | str | os.PathLike | Case, parameters: dict[str, list],
+                  progress: Progress | None = None, timeout: float | None = None) -> list[dict]:
+        """Submit a sweep (see `submit_sweep`), wait for it (see `wait_sweep`) and return its
+        table, a row per variant in the order of the parameters' combinations."""
+        sweep_id = self.submit_sweep(case, parameters)["id"]
+        return self.wait_sweep(sweep_id, progress=progress, timeout=timeout)["rows"]
+
     # -- HTTP
 
     @staticmethod
     def _job_path(job_id: str) -> str:
         return f"/v1/jobs/{quote(job_id, safe='')}"
+
+    @staticmethod
+    def _sweep_path(sweep_id: str) -> str:
+        return f"/v1/sweeps/{quote(sweep_id, safe='')}"
 
     def _result_path(self, job_id: str) -> str:
         return f"{self._job_path(job_id)}/result.h5"

@@ -22,6 +22,7 @@ from solver import load_case
 from solver.io import read_result
 from solver.presets import load_preset, preset_json
 from solver.simulate import simulate
+from solver.sweep import COLUMNS, Sweep, run_sweep
 from test_cli import _percussim
 from test_live import LONG
 
@@ -126,6 +127,37 @@ def test_a_running_job_reports_its_progress_and_is_cancelled(api):
     assert seen == sorted(seen) and 0 < seen[-1] < 1, seen
     with pytest.raises(ServiceError, match="has already finished: it is cancelled"):
         api.cancel(job["id"])
+
+
+def test_a_sweep_runs_to_the_table_a_local_sweep_gives(api, tmp_path):
+    parameters = {"striker.velocity": [3.0, 7.0], "contact.stiffness": [4e11, 8e11]}
+    path = tmp_path / "fig5.json"
+    path.write_text(json.dumps(preset_json("fig5")))
+    seen = []
+    rows = api.run_sweep(path, parameters, progress=lambda fraction, sweep: seen.append(fraction),
+                         timeout=60)
+    local = run_sweep(Sweep(case=load_preset("fig5"), parameters=parameters), processes=1)
+    assert [row["values"] for row in rows] == [{k: row[k] for k in parameters} for row in local]
+    for row, expected in zip(rows, local):
+        assert row["status"] == "succeeded"
+        for column, _ in COLUMNS:
+            assert row[column] == expected[column], column
+    assert seen == sorted(seen) and seen[-1] == 1.0
+
+
+def test_a_sweep_with_a_bad_value_is_refused_naming_it(api):
+    with pytest.raises(Refused) as refused:
+        api.submit_sweep(preset_json("fig5"), {"contact.exponent": [0.5, 0.9]})
+    [e] = refused.value.errors
+    assert e.field == "parameters['contact.exponent'][1]" and "contact.exponent" in e.message
+
+
+def test_a_sweep_is_cancelled_and_its_rows_say_so(api):
+    sweep = api.submit_sweep(merge(preset_json("fig3"), LONG), {"striker.velocity": [4.0, 5.0]})
+    api.cancel_sweep(sweep["id"])
+    done = api.wait_sweep(sweep["id"], poll=0.05, timeout=60)
+    assert done["finished"] and done["counts"] == {"cancelled": 2}, done
+    assert [row["status"] for row in done["rows"]] == ["cancelled", "cancelled"]
 
 
 def test_submit_prints_the_summary_and_downloads_the_result(stack, tmp_path):
