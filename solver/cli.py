@@ -140,17 +140,23 @@ def _presets(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from .case import CaseError, load_case
-    from .sweep import Sweep, run_sweep
+    from service.client import Refused, ServiceError
+
+    from .case import CaseError
 
     try:
-        sweep = Sweep(case=load_case(args.case), parameters=dict(args.vary))
-        rows = run_sweep(sweep, processes=args.processes, progress=lambda done, total: print(
-            f"\rpercussim: {done}/{total} variants", end="", file=sys.stderr, flush=True))
+        rows = _sweep_on_service(args) if args.url else _sweep_here(args)
     except FileNotFoundError:
         return _no_such_file(args.case)
-    except CaseError as error:
+    except (CaseError, Refused) as error:
         return _refused(f"sweep of {args.case}", error)
+    except ServiceError as error:  # an unreachable service, a bad key
+        print(f"percussim: {error}", file=sys.stderr)
+        return EXIT_FAILED
+    except KeyboardInterrupt:
+        if not args.url:
+            print("\npercussim: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     print(file=sys.stderr)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     if args.csv:
@@ -161,7 +167,37 @@ def _sweep(args: argparse.Namespace) -> int:
     print("\t".join(columns))
     for row in rows:
         print("\t".join(_cell(row.get(c)) for c in columns))
-    return EXIT_FAILED if any("error" in r for r in rows) else 0
+    return EXIT_FAILED if any("error" in r or r.get("status", "succeeded") != "succeeded" for r in rows) else 0
+
+
+def _variants_done(done: int, total: int) -> None:
+    print(f"\rpercussim: {done}/{total} variants", end="", file=sys.stderr, flush=True)
+
+
+def _sweep_here(args: argparse.Namespace) -> list[dict]:
+    """Every variant solved on this machine's cores: a row each, the values then the columns."""
+    from .case import load_case
+    from .sweep import Sweep, run_sweep
+
+    sweep = Sweep(case=load_case(args.case), parameters=dict(args.vary))
+    return run_sweep(sweep, processes=args.processes, progress=_variants_done)
+
+
+def _sweep_on_service(args: argparse.Namespace) -> list[dict]:
+    """Every variant a job on the service at `args.url`: a row each, the values then the job, its
+    status and the columns. Ctrl-C cancels the variants not yet finished."""
+    from service.client import FINISHED, Client
+
+    with Client(args.url, api_key=args.api_key) as api:
+        sweep = api.submit_sweep(args.case, dict(args.vary))
+        try:
+            done = api.wait_sweep(sweep["id"], progress=lambda fraction, s: _variants_done(
+                sum(s["counts"].get(status, 0) for status in FINISHED), s["total"]))
+        except KeyboardInterrupt:
+            api.cancel_sweep(sweep["id"])
+            print(f"\npercussim: cancelled sweep {sweep['id']}", file=sys.stderr)
+            raise
+    return [row.pop("values") | row for row in done["rows"]]
 
 
 def _cell(value) -> str:
@@ -264,11 +300,17 @@ def parser() -> argparse.ArgumentParser:
     submit.add_argument("--progress", action="store_true",
                         help="show the progress bar on stderr even when it is not a terminal or the job is short")
     submit.set_defaults(handler=_submit)
-    sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every core")
+    sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every "
+                                              "core or on a percussim service's workers")
     sweep.add_argument("case", help="the base impact case JSON")
     sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
                        help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7")
-    sweep.add_argument("--processes", type=_count, help="processes (default: one a core)")
+    where = sweep.add_mutually_exclusive_group()
+    where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
+    where.add_argument("--url", help="run every variant as a job on this service instead (each keeps "
+                                     "its result there)")
+    sweep.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
+                       help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
     sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
     sweep.set_defaults(handler=_sweep)
     presets = commands.add_parser("presets", help="list the presets (the paper's cases), or give one's case JSON")

@@ -3,6 +3,7 @@ embedded worker), and the client's handling of 401 and 503 against a stand-in tr
 
 from __future__ import annotations
 
+import csv
 import json
 import os
 import signal
@@ -158,6 +159,30 @@ def test_a_sweep_is_cancelled_and_its_rows_say_so(api):
     done = api.wait_sweep(sweep["id"], poll=0.05, timeout=60)
     assert done["finished"] and done["counts"] == {"cancelled": 2}, done
     assert [row["status"] for row in done["rows"]] == ["cancelled", "cancelled"]
+
+
+def test_sweep_url_runs_the_variants_on_the_service_into_the_same_table(stack, tmp_path):
+    case = tmp_path / "fig5.json"
+    case.write_text(json.dumps(preset_json("fig5")))
+    vary = ["--vary", "striker.velocity=3,5", "--vary", "contact.stiffness=8e11"]
+    here = _percussim("sweep", str(case), *vary, "--processes", "1", cwd=tmp_path)
+    there = _percussim("sweep", str(case), *vary, "--url", stack.url, "--csv", "t.csv", cwd=tmp_path)
+    assert here.returncode == 0 and there.returncode == 0, there.stderr
+    assert "2/2 variants" in there.stderr
+
+    def table(printed: str) -> list[dict]:
+        header, *rows = printed.splitlines()
+        return [dict(zip(header.split("\t"), row.split("\t"))) for row in rows]
+
+    local, remote = table(here.stdout), table(there.stdout)
+    assert [r["status"] for r in remote] == ["succeeded", "succeeded"] and all(r["job"] for r in remote)
+    for mine, theirs in zip(local, remote, strict=True):
+        assert {k: theirs[k] for k in mine} == mine  # the service's rows carry the job and status too
+    assert list(csv.DictReader((tmp_path / "t.csv").open()))[1]["striker.velocity"] == "5"
+    refused = _percussim("sweep", str(case), "--vary", "contact.exponent=0.5,0.9", "--url", stack.url,
+                         cwd=tmp_path)
+    assert refused.returncode == 2
+    assert "parameters['contact.exponent'][1]" in refused.stderr
 
 
 def test_submit_prints_the_summary_and_downloads_the_result(stack, tmp_path):
