@@ -236,6 +236,30 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     assert stack.wait_status(job["id"], ("cancelled", "succeeded", "failed"))["status"] == "cancelled"
 
 
+def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_path):
+    case = tmp_path / "long.json"
+    case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
+    sweep = subprocess.Popen([sys.executable, "-m", "solver", "sweep", str(case), "--vary",
+                              "striker.velocity=4,5", "--url", stack.url],
+                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        def newest_running():
+            jobs = stack.client.get("/v1/jobs", params={"limit": 2}).json()["jobs"]
+            return any(j["status"] == "running" and j["name"] == "fig3" for j in jobs)
+
+        wait_for(newest_running, 30, "a variant running")
+        sweep.send_signal(signal.SIGINT)
+        out, err = sweep.communicate(timeout=30)
+    finally:
+        sweep.kill()
+    assert sweep.returncode == 130 and out == "", err
+    sweep_id = err.split("percussim: cancelled sweep ")[1].split()[0]
+    done = wait_for(lambda: (v := stack.client.get(f"/v1/sweeps/{sweep_id}").json())["finished"] and v,
+                    30, "the sweep's variants ended")
+    assert done["counts"] == {"cancelled": 2}, done
+
+
 def _stand_in(*answers: httpx.Response) -> tuple[Client, list[httpx.Request]]:
     """A client whose calls get `answers` in turn, and the requests it made."""
     requests = []
