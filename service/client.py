@@ -167,18 +167,11 @@ class Client:
         """Wait for the job to finish, asking every `poll` seconds, and return its record once it
         has succeeded. `progress(fraction, record)` is called with each record polled. Raises
         `JobFailed` if the job failed or was cancelled, `TimeoutError` after `timeout` seconds."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            record = self.job(job_id)
-            if progress is not None:
-                progress(record["progress"], record)
-            if record["status"] == "succeeded":
-                return record
-            if record["status"] in FINISHED:
-                raise JobFailed(record)
-            if deadline is not None and time.monotonic() > deadline:
-                raise TimeoutError(f"job {job_id} is still {record['status']} after {timeout} s")
-            time.sleep(poll)
+        record = self._poll(lambda: self.job(job_id), lambda r: r["status"] in FINISHED, progress,
+                            poll, timeout, lambda r: f"job {job_id} is still {r['status']}")
+        if record["status"] != "succeeded":
+            raise JobFailed(record)
+        return record
 
     def summary(self, job_id: str) -> dict:
         """The pulse summary of a succeeded job (a dict, as `percussim run` prints it)."""
@@ -260,16 +253,8 @@ class Client:
         sweep. A variant that failed is a row with its `error`: the others go on.
         `progress(fraction, sweep)` is called with each sweep polled; `TimeoutError` after
         `timeout` seconds."""
-        deadline = None if timeout is None else time.monotonic() + timeout
-        while True:
-            sweep = self.sweep(sweep_id)
-            if progress is not None:
-                progress(sweep["progress"], sweep)
-            if sweep["finished"]:
-                return sweep
-            if deadline is not None and time.monotonic() > deadline:
-                raise TimeoutError(f"sweep {sweep_id}: {sweep['counts']} after {timeout} s")
-            time.sleep(poll)
+        return self._poll(lambda: self.sweep(sweep_id), lambda s: s["finished"], progress, poll,
+                          timeout, lambda s: f"sweep {sweep_id} is still at {s['counts']}")
 
     def cancel_sweep(self, sweep_id: str) -> dict:
         """Cancel every variant of the sweep that has not finished; returns the sweep."""
@@ -281,6 +266,23 @@ class Client:
         table, a row per variant in the order of the parameters' combinations."""
         sweep_id = self.submit_sweep(case, parameters)["id"]
         return self.wait_sweep(sweep_id, progress=progress, timeout=timeout)["rows"]
+
+    @staticmethod
+    def _poll(fetch: Callable[[], dict], finished: Callable[[dict], bool], progress: Progress | None,
+              poll: float, timeout: float | None, still: Callable[[dict], str]) -> dict:
+        """`fetch()` every `poll` seconds until what it returns is `finished`, which is returned;
+        `progress(fraction, record)` with each; `TimeoutError` (`still(record)` says how far) after
+        `timeout` seconds."""
+        deadline = None if timeout is None else time.monotonic() + timeout
+        while True:
+            record = fetch()
+            if progress is not None:
+                progress(record["progress"], record)
+            if finished(record):
+                return record
+            if deadline is not None and time.monotonic() > deadline:
+                raise TimeoutError(f"{still(record)} after {timeout} s")
+            time.sleep(poll)
 
     # -- HTTP
 
