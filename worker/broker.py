@@ -1,7 +1,8 @@
 """Where jobs are queued, for given settings: shared by the workers and the API, no side effects.
 
-With no broker URL the queue is Celery's filesystem transport under the results folder; with one
-(Redis), the transport options bound how long a dead connection can hold a caller.
+With no broker URL the queue is Celery's filesystem transport under the results folder, each
+message written whole before a worker can see it (`worker.queue_files`); with one (Redis), the
+transport options bound how long a dead connection can hold a caller.
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ def broker_config(settings: Settings) -> dict:
         folder = str(queue_folder(settings))
         return {
             "broker_url": "filesystem://",
+            "broker_transport": "worker.queue_files:Transport",
             # The control folder defaults to ./control: keep everything under the results folder.
             "broker_transport_options": {"data_folder_in": folder, "data_folder_out": folder,
                                          "control_folder": str(settings.broker_folder / "control"),

@@ -1,0 +1,39 @@
+"""The embedded queue: kombu's filesystem transport, with every message written whole before a
+worker can see it.
+
+kombu's own transport opens a message's file in the queue folder and then writes it. A worker
+that lists the folder in between takes the file while it is still empty: it stopped with a
+`JSONDecodeError`, and the message, already removed, was lost with its job. Here a message is
+written under a name the queue does not match and renamed into place when complete: a rename
+within a folder is atomic, so a worker sees a whole message or none.
+"""
+
+from __future__ import annotations
+
+import os
+import uuid
+from time import monotonic
+
+from kombu.exceptions import ChannelError
+from kombu.transport import filesystem
+from kombu.utils.encoding import str_to_bytes
+from kombu.utils.json import dumps
+
+PARTIAL = ".part"  # a message being written: kombu's `_get` takes only names ending in .<queue>.msg
+
+
+class Channel(filesystem.Channel):
+    def _put(self, queue, payload, **kwargs):
+        """Put `payload` onto `queue`, named as kombu names it, so that messages keep their order."""
+        name = f"{int(round(monotonic() * 1000))}_{uuid.uuid4()}.{queue}.msg"
+        path = os.path.join(self.data_folder_out, name)
+        try:
+            with open(path + PARTIAL, "wb") as f:
+                f.write(str_to_bytes(dumps(payload)))
+            os.replace(path + PARTIAL, path)
+        except OSError as exc:
+            raise ChannelError(f"Cannot add file {path!r} to directory") from exc
+
+
+class Transport(filesystem.Transport):
+    Channel = Channel
