@@ -111,25 +111,19 @@ def _estimate(runs: list, order: float) -> tuple[dict[str, float], list[int]]:
     change beyond the tolerance refutes the coarser partners' agreement.
     """
     last, fine, _ = runs[-1]
-
-    def refinement(numerics: ResolvedNumerics) -> float:
-        return math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
-
-    richardson = [run for run in runs[:-1]
-                  if MIN_REFINEMENT <= refinement(run[0]) <= MAX_REFINEMENT] or runs[-2:-1]
-    close = [run for run in runs[:-1] if MIN_STEP <= refinement(run[0]) < MIN_REFINEMENT]
+    refinements = [math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
+                   for numerics, _, _ in runs[:-1]]
+    richardson = [k for k, r in enumerate(refinements)
+                  if MIN_REFINEMENT <= r <= MAX_REFINEMENT] or [len(runs) - 2]
+    close = [k for k, r in enumerate(refinements)
+             if MIN_STEP <= r < MIN_REFINEMENT and k not in richardson]
     estimate: dict[str, float] = {}
-
-    def bound(coarse: dict, scale: float) -> None:
-        for name, change in _relative_changes(fine, coarse).items():
+    for k in richardson + close:
+        r = refinements[k]
+        scale = ESTIMATE_FACTOR / (r**order - 1.0) if k in richardson else 1.0
+        for name, change in _relative_changes(fine, runs[k][1]).items():
             estimate[name] = max(scale * change, estimate.get(name, 0.0))
-
-    for numerics, coarse, _ in richardson:
-        bound(coarse, ESTIMATE_FACTOR / (refinement(numerics) ** order - 1.0))
-    for _, coarse, _ in close:
-        bound(coarse, 1.0)
-    partners = [run for run in runs[:-1] if any(run is other for other in richardson + close)]
-    return estimate, [seen for _, _, seen in partners]
+    return estimate, [runs[k][2] for k in sorted(richardson + close)]
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:

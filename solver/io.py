@@ -81,7 +81,7 @@ def _property_list(kind: h5p.PropClassID, **settings: tuple) -> h5p.PropID:
 
 _LINKS = _property_list(h5p.LINK_CREATE, set_create_intermediate_group=(True,))
 # Never filled: every row is written once (`_Rows`).
-_CONTIGUOUS = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_NEVER,))
+_NEVER_FILLED = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_NEVER,))
 # Each chunk is written once, whole (see `_Rows`), so HDF5's chunk cache (8 MiB a dataset from
 # HDF5 2.0) is of no use: 1 byte turns it off.
 _NO_CHUNK_CACHE = _property_list(h5p.DATASET_ACCESS, set_chunk_cache=(0, 1, 1.0))
@@ -91,11 +91,12 @@ def _dataset(file: h5py.File, name: str, shape: tuple[int, ...], dtype: np.dtype
              chunk_rows: int | None) -> h5d.DatasetID:
     """A new dataset at path `name` (its groups made as needed); chunked by `chunk_rows` rows and
     compressed when given."""
-    layout, access = _CONTIGUOUS, None
+    layout, access = _NEVER_FILLED, None
     if chunk_rows is not None:
-        layout = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_NEVER,),
-                                set_chunk=((chunk_rows,) + tuple(shape[1:]),), set_shuffle=(),
-                                set_deflate=(DEFLATE_LEVEL,))
+        layout = _NEVER_FILLED.copy()
+        layout.set_chunk((chunk_rows,) + tuple(shape[1:]))
+        layout.set_shuffle()
+        layout.set_deflate(DEFLATE_LEVEL)
         access = _NO_CHUNK_CACHE
     return h5d.create(file.id, name.encode(), _hdf5_type(np.dtype(dtype)), h5s.create_simple(shape),
                       dcpl=layout, lcpl=_LINKS, dapl=access)
@@ -220,7 +221,7 @@ class ResultWriter:
         # at a fraction of its cost on a summary's force history.
         result.summary_json = pydantic_core.to_json(result.summary).decode()
         summary = np.array(result.summary_json, dtype=_TEXT)
-        h5d.create(self._file.id, b"summary", h5t.py_create(summary.dtype, logical=True),
+        h5d.create(self._file.id, b"summary", _hdf5_type(summary.dtype),
                    h5s.create(h5s.SCALAR)).write(h5s.ALL, h5s.ALL, summary)
         for rows in self._rows.values():
             rows.close()
