@@ -141,14 +141,15 @@ def measure(name: str) -> dict:
 
 
 def meeting(ladder: dict, tol: float) -> list[tuple[float, str, int]]:
-    """(CPU, scheme, cells) of each scheme's coarsest grid from which every finer grid meets `tol`."""
+    """(cost, scheme, cells) of each scheme's coarsest grid from which every finer grid meets `tol`,
+    the cost a row's third column (CPU time here, work in bench/ladder_settings.py)."""
     found = []
     for scheme, rows in ladder.items():
         settled = None
-        for cells, _, cpu, err in reversed(rows):
+        for cells, _, cost, err in reversed(rows):
             if err > tol:
                 break
-            settled = (cpu, scheme, cells)
+            settled = (cost, scheme, cells)
         if settled:
             found.append(settled)
     return found

@@ -14,7 +14,7 @@ maximum stress), a run goes:
    energy-conserving; at Courant 1 a wave crosses a uniform tool without dispersion, so the stress
    maxima converge at second order too, where the σ-scheme's dispersion overshoot converges at
    about 1.4), on a ladder of grids refined in h and τ together. The first pair of grids is placed
-   from an a-priori error model, `ERROR_CONSTANT·n^−p` with n the time steps per estimated
+   from an a-priori error model, `error_constant·n^−p` (`Ladder`) with n the time steps per estimated
    contact, so that the finer one would just meet the tolerance: half as fine, then that grid.
    Each later grid is as fine as the last estimate says is needed, at least 1.15× and at most 3×
    finer than the last. A grid's error is estimated against each of its partners, the earlier
@@ -38,6 +38,7 @@ maximum stress), a run goes:
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
@@ -48,15 +49,7 @@ from .schemes import make_scheme
 
 QUANTITIES = ("co_impact_time", "peak_contact_force", "max_stress")
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
-# A second-order run's relative error is about this × n^−2, n its time steps per estimated contact
-# (fitted on the ladders of bench/accuracy_vs_cost.py: 3.4 closed form, 5–10 Fig. 3, 5.5 Fig. 5 once
-# converging, 1–6 Fig. 9).
-ERROR_CONSTANT = 6.0
 MIN_START_POINTS = 6  # the coarsest first grid, in time steps per estimated contact
-SAFETY = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
-# The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
-# error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.
-ESTIMATE_FACTOR = 1.5
 MIN_REFINEMENT = 1.5  # between a grid and the partner its error is estimated against
 MAX_REFINEMENT = 3.0  # largest: a coarser partner is too far from the asymptotic range to judge by
 MIN_STEP = 1.15  # smallest refinement from one grid of the ladder to the next
@@ -64,6 +57,24 @@ MAX_RUNS = 8
 MIN_CELLS = 2  # the coarsest grid's cells on a tool short against the contact
 DEFAULT_SCHEME = "explicit"
 COURANT = 1.0 - 1e-9  # the explicit scheme's limit, kept with a margin for rounding
+
+
+@dataclass(frozen=True)
+class Ladder:
+    """The ladder's three margins, which trade cost against the risk of an error beyond the
+    tolerance (`bench/ladder_settings.py` measures that trade for other values)."""
+
+    # A second-order run's relative error is about this × n^−2, n its time steps per estimated
+    # contact (fitted on the ladders of bench/accuracy_vs_cost.py: 3.4 closed form, 5–10 Fig. 3,
+    # 5.5 Fig. 5 once converging, 1–6 Fig. 9).
+    error_constant: float = 6.0
+    safety: float = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
+    # The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
+    # error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.
+    estimate_factor: float = 1.5
+
+
+LADDER = Ladder()
 
 
 def quantities(summary: dict) -> dict[str, float | None]:
@@ -100,12 +111,12 @@ def _relative_changes(fine: dict, coarse: dict) -> dict[str, float]:
             if fine[name] is not None and coarse[name] is not None}
 
 
-def _estimate(runs: list, order: float) -> tuple[dict[str, float], list[int]]:
+def _estimate(runs: list, order: float, estimate_factor: float) -> tuple[dict[str, float], list[int]]:
     """The last run's error per quantity, the largest over its partners, and the numbers of
     contacts the partners saw.
 
     Against each earlier run `MIN_REFINEMENT` to `MAX_REFINEMENT` times coarser (else the one
-    before it), Richardson: `|Q_f − Q_c|/(r^p − 1)`, taken `ESTIMATE_FACTOR` larger. A closer run
+    before it), Richardson: `|Q_f − Q_c|/(r^p − 1)`, taken `estimate_factor` larger. A closer run
     (before the ladder's one small step) would amplify what is not yet asymptotic, but it still
     says the finer grid's error is at least the change the step made (`r^p − 1 < 1` there): a
     change beyond the tolerance refutes the coarser partners' agreement.
@@ -120,7 +131,7 @@ def _estimate(runs: list, order: float) -> tuple[dict[str, float], list[int]]:
     estimate: dict[str, float] = {}
     for k in richardson + close:
         r = refinements[k]
-        scale = ESTIMATE_FACTOR / (r**order - 1.0) if k in richardson else 1.0
+        scale = estimate_factor / (r**order - 1.0) if k in richardson else 1.0
         for name, change in _relative_changes(fine, runs[k][1]).items():
             estimate[name] = max(scale * change, estimate.get(name, 0.0))
     return estimate, [runs[k][2] for k in sorted(richardson + close)]
@@ -143,7 +154,7 @@ def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
 
 def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                        cancelled: CancelCheck | None = None, limits: Limits = Limits(),
-                       recorder: Recorder | None = None) -> Result:
+                       recorder: Recorder | None = None, ladder: Ladder = LADDER) -> Result:
     """Meet `case.numerics.tolerance`; the summary reports the estimate, the runs and the choice.
 
     With a `recorder`, every rod run that may be the result records its outputs there, each
@@ -174,7 +185,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
     worst = math.inf
     agree = True  # the last grid's partners saw as many contacts as it did
     stepped_small = False
-    start = max(MIN_START_POINTS, 0.5 * (ERROR_CONSTANT / tol) ** (1.0 / order))
+    start = max(MIN_START_POINTS, 0.5 * (ladder.error_constant / tol) ** (1.0 / order))
     for stage in range(MAX_RUNS):
         tau = period / (start * factor)
         cells = max(math.ceil(MIN_CELLS * factor), math.ceil(length / (a * tau)))
@@ -196,7 +207,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
             factor *= 2.0
             continue
         seen_fine = runs[-1][2]
-        estimate, partner_contacts = _estimate(runs, order)
+        estimate, partner_contacts = _estimate(runs, order, ladder.estimate_factor)
         agree = all(seen == seen_fine for seen in partner_contacts)
         settled = agree or worst <= tol  # `worst`: the previous estimate, so far
         worst = max(estimate.values(), default=0.0)
@@ -216,7 +227,7 @@ def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
                    f"numerics.scheme = '{scheme}' as asked, on grids refined until the estimated error "
                    "is within the tolerance")
             return _annotated(result, tol, estimate, runs=[n for n, _, _ in runs], why=why)
-        needed = (worst / (SAFETY * tol)) ** (1.0 / order)
+        needed = (worst / (ladder.safety * tol)) ** (1.0 / order)
         # A small step only on an estimate to trust, and once: grids that disagree on the
         # contacts, or a small step that did not end the ladder, need a clear refinement.
         small = agree and not stepped_small
