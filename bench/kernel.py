@@ -164,7 +164,7 @@ def numba_run(s: Setup) -> dict[str, float]:
     case, g, sch = s.case, s.grid, s.scheme
     assert case.force is None
     u, y, trackers, energy, contacts = fresh_state(s)
-    no_rows = np.empty((0, K.HISTORY_COLUMNS))
+    no_rows = np.empty((K.HISTORY_COLUMNS, 0))
     no_fields = np.empty((0, s.n + 1))
     status, _, _ = K.advance(
         0, s.num.steps, u, y, g.lower, g.upper, g.node_area, g.area_mid, g.uniform, *s.factors,

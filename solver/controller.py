@@ -15,7 +15,7 @@ import numpy as np
 from . import kernel as K
 from .case import Case
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics
-from .summary import build_summary, force_history_rows
+from .summary import FORCE_HISTORY, build_summary, force_history_rows
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
@@ -227,7 +227,8 @@ def simulate_rod(
     # Gathered during the run, so that the summary never needs the whole history (given only
     # these rows, it keeps them all).
     summary_rows = force_history_rows(total_rows)
-    summary_table = []  # the history at `summary_rows`, chunk by chunk
+    summary_columns = [HISTORY_PATHS[path] for path in FORCE_HISTORY.values()]
+    summary_table = []  # the summary's histories at `summary_rows`, chunk by chunk
     row = 0  # history rows kept before this chunk
 
     chunk = max(1, CHUNK_NODE_STEPS // (n + 1))
@@ -236,7 +237,7 @@ def simulate_rod(
         last = min(num.steps, first + chunk - 1)
         rows = _kept(first, last, out.history_stride)
         frames = _kept(first, last, field_stride)
-        history = np.empty((rows, K.HISTORY_COLUMNS))
+        history = np.empty((K.HISTORY_COLUMNS, rows))
         probes = np.empty((rows, len(probe_node)))
         field_u = np.empty((frames, n + 1))
         field_stress = np.empty((frames, n + 1))
@@ -256,10 +257,10 @@ def simulate_rod(
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(trackers[K.T_FAILED_TIME], num)
         for path, column in HISTORY_PATHS.items():
-            recorder.append(path, history[:n_hist, column])
+            recorder.append(path, history[column, :n_hist])
         recorder.append("probes/stress", probes[:n_hist])
         low, high = np.searchsorted(summary_rows, (row, row + n_hist))
-        summary_table.append(history[summary_rows[low:high] - row])
+        summary_table.append(history[summary_columns].take(summary_rows[low:high] - row, axis=1))
         row += n_hist
         if n_field:
             recorder.append("fields/time", np.arange(-(-first // field_stride) * field_stride,
@@ -272,10 +273,10 @@ def simulate_rod(
         if cancelled is not None and first <= num.steps and cancelled():
             raise Cancelled(f"cancelled at t = {first * tau:.6g} s")
 
-    table = np.concatenate(summary_table)
+    table = np.concatenate(summary_table, axis=1)
     summary = build_summary(
         case=case, numerics=num, trackers=trackers, contacts=contacts, energy=energy,
-        history={path: table[:, column] for path, column in HISTORY_PATHS.items()},
+        history=dict(zip(FORCE_HISTORY.values(), table)),
     )
     held = recorder.held()
     if held is None:

@@ -46,7 +46,7 @@ from numba.extending import intrinsic
 # Force kinds (`force_kind`)
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
 
-# History columns, one row per kept layer
+# History quantities: `history[H_…, k]` is the k-th kept layer's (one contiguous series each)
 H_TIME, H_STRIKER_DISP, H_STRIKER_VEL, H_STRUCK_END, H_WORKING_END = 0, 1, 2, 3, 4
 H_CONTACT_FORCE, H_OVERLAP, H_MEDIUM_FORCE, H_EXTERNAL_FORCE = 5, 6, 7, 8
 H_EXTERNAL_WORK, H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM = 9, 10, 11
@@ -456,8 +456,9 @@ def advance(
     `end_masses` gives the end rows the interior's weights (they then carry their half-cell mass
     `node_area·ρh`); massless ends are quasi-static, all on the new layer.
 
-    Writes every `history_stride`-th layer to `history`/`probes` and every `field_stride`-th to
-    `field_u`/`field_stress` (strides ≤ 0 keep nothing), from row 0 of each buffer. Returns
+    Writes every `history_stride`-th layer to `history` (a column each) and `probes` (a row each)
+    and every `field_stride`-th to `field_u`/`field_stress` (strides ≤ 0 keep nothing), from the
+    first of each buffer. Returns
     `(status, rows of history written, rows of fields written)`; on a non-finite value it stops
     with `STATUS_NON_FINITE` and the time in `trackers[T_FAILED_TIME]`.
     """
@@ -682,30 +683,29 @@ def advance(
             trackers[T_POTENTIAL_BEFORE_THAT] = 0.0
 
         if history_stride > 0 and m % history_stride == 0:
-            row = history[n_hist]
-            row[H_TIME] = t
-            row[H_STRIKER_DISP] = y[new]
-            row[H_STRIKER_VEL] = velocity
-            row[H_STRUCK_END] = u[new, 0]
-            row[H_WORKING_END] = u[new, n]
-            row[H_CONTACT_FORCE] = contact_force
-            row[H_OVERLAP] = y[new] - u[new, 0]
-            row[H_MEDIUM_FORCE] = medium_force
-            row[H_EXTERNAL_FORCE] = external_force(
+            history[H_TIME, n_hist] = t
+            history[H_STRIKER_DISP, n_hist] = y[new]
+            history[H_STRIKER_VEL, n_hist] = velocity
+            history[H_STRUCK_END, n_hist] = u[new, 0]
+            history[H_WORKING_END, n_hist] = u[new, n]
+            history[H_CONTACT_FORCE, n_hist] = contact_force
+            history[H_OVERLAP, n_hist] = y[new] - u[new, 0]
+            history[H_MEDIUM_FORCE, n_hist] = medium_force
+            history[H_EXTERNAL_FORCE, n_hist] = external_force(
                 t, force_kind, force_amplitude, force_omega, force_start, force_duration)
-            row[H_EXTERNAL_WORK] = energy[E_EXTERNAL_WORK]
-            row[H_DISSIPATED_CONTACT] = energy[E_DISSIPATED_CONTACT]
-            row[H_DISSIPATED_MEDIUM] = energy[E_DISSIPATED_MEDIUM]
+            history[H_EXTERNAL_WORK, n_hist] = energy[E_EXTERNAL_WORK]
+            history[H_DISSIPATED_CONTACT, n_hist] = energy[E_DISSIPATED_CONTACT]
+            history[H_DISSIPATED_MEDIUM, n_hist] = energy[E_DISSIPATED_MEDIUM]
             if m == 0:
-                row[H_STRIKER_KINETIC] = initial_energy
+                history[H_STRIKER_KINETIC, n_hist] = initial_energy
                 for c in range(H_TOOL_KINETIC, HISTORY_COLUMNS):
-                    row[c] = 0.0
+                    history[c, n_hist] = 0.0
             else:
-                row[H_STRIKER_KINETIC] = energy[E_STRIKER_KINETIC]
-                row[H_TOOL_KINETIC] = energy[E_TOOL_KINETIC]
-                row[H_TOOL_STRAIN] = energy[E_TOOL_STRAIN]
-                row[H_CONTACT_POTENTIAL] = energy[E_CONTACT_POTENTIAL]
-                row[H_MEDIUM_POTENTIAL] = energy[E_MEDIUM_POTENTIAL]
+                history[H_STRIKER_KINETIC, n_hist] = energy[E_STRIKER_KINETIC]
+                history[H_TOOL_KINETIC, n_hist] = energy[E_TOOL_KINETIC]
+                history[H_TOOL_STRAIN, n_hist] = energy[E_TOOL_STRAIN]
+                history[H_CONTACT_POTENTIAL, n_hist] = energy[E_CONTACT_POTENTIAL]
+                history[H_MEDIUM_POTENTIAL, n_hist] = energy[E_MEDIUM_POTENTIAL]
             for k in range(len(probe_node)):
                 j = probe_node[k]
                 w = probe_weight[k]

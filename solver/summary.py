@@ -11,6 +11,8 @@ from .case import Case
 from .grid import ResolvedNumerics
 
 FORCE_HISTORY_POINTS = 2000
+# The summary's force history: its keys and the history paths they come from
+FORCE_HISTORY = {"time": "time", "contact": "contact/force", "medium": "medium/force"}
 MIN_STEPS_PER_CONTACT = 20  # below this the contact force's time error exceeds about 1%
 ENERGY_EXCESS_LIMIT = 0.005  # energy created by the scheme, as a fraction of the input
 
@@ -30,13 +32,8 @@ def force_history_rows(rows: int) -> np.ndarray:
 
 
 def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
-    time = history["time"]
-    pick = force_history_rows(len(time))
-    return {
-        "time": time[pick].tolist(),
-        "contact": history["contact/force"][pick].tolist(),
-        "medium": history["medium/force"][pick].tolist(),
-    }
+    pick = force_history_rows(len(history["time"]))
+    return {key: history[path][pick].tolist() for key, path in FORCE_HISTORY.items()}
 
 
 def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float) -> list[str]:
@@ -61,7 +58,8 @@ def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float) -
 def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
                   contacts: np.ndarray, energy: np.ndarray, history: dict[str, np.ndarray],
                   extra_warnings: list[str] | None = None) -> dict:
-    """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout.
+    """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout, and
+    `history` needs the paths of FORCE_HISTORY only.
 
     `extra_warnings` (the caller's own, e.g. outputs a model cannot provide) follow the checks'.
     """
