@@ -3,8 +3,9 @@
 The workers are child processes in the same process group, so stopping the group stops them all;
 on Ctrl-C or SIGTERM the service stops them itself before it exits. A worker that dies meanwhile
 is started again; in embedded mode the job it was running is queued again, since the filesystem
-broker lost its message with the worker (Redis delivers such a job again by itself), and so are
-the jobs a crashed service left running when it starts again.
+broker lost its message with the worker (Redis delivers such a job again by itself). When an
+embedded service starts, the queue is made again from the job records (`restore_queue`): the jobs a
+crashed service left running, and any queued job whose message was lost, run too.
 """
 
 from __future__ import annotations
@@ -39,11 +40,10 @@ def _start_worker(name: str) -> subprocess.Popen:
     return subprocess.Popen([sys.executable, "-m", "solver", "worker", "--name", name])
 
 
-def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
-    """Queue again the jobs the dead `worker` was running (`death` says how it died), or fail
-    those it died under MAX_ATTEMPTS times: a case that kills its worker must not kill every
-    worker in turn. Returns the ids queued again."""
-    jobs = JobStore(settings.results_dir)
+def _back_to_queue(jobs: JobStore, worker: str, death: str) -> list[str]:
+    """Record as queued again the jobs the dead `worker` was running (`death` says how it died), or
+    as failed those it died under MAX_ATTEMPTS times: a case that kills its worker must not kill
+    every worker in turn. Returns the ids queued again."""
     lost = [r for r in jobs.records() if r["status"] == RUNNING and r["worker"] == worker]
     again = []
     for record in lost:
@@ -55,12 +55,46 @@ def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
         else:
             jobs.update(record["id"], status=QUEUED, progress=0.0)
             again.append(record["id"])
-    if again:
-        if JobQueue(settings).enqueue_or_fail(jobs, again, "its worker died and the job could not be "
-                                                            "queued again") is not None:
-            return []
-        print(f"percussim: queued again {len(again)} job(s) {worker} was running ({death})", flush=True)
     return again
+
+
+def _say_queued_again(again: list[str], worker: str, death: str) -> None:
+    if again:
+        print(f"percussim: queued again {len(again)} job(s) {worker} was running ({death})", flush=True)
+
+
+def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
+    """Queue again the jobs the dead `worker` was running (`_back_to_queue`); returns their ids,
+    none if the broker could not take them (they are then failed, saying why)."""
+    jobs = JobStore(settings.results_dir)
+    again = _back_to_queue(jobs, worker, death)
+    if again and JobQueue(settings).enqueue_or_fail(
+            jobs, again, "its worker died and the job could not be queued again") is not None:
+        return []
+    _say_queued_again(again, worker, death)
+    return again
+
+
+def restore_queue(settings: Settings, workers: list[str]) -> list[str]:
+    """Embedded mode, before any of this service's `workers` runs: the queue as the job records
+    say it is. The jobs cut off running on them when the service last stopped (a crash, a power
+    cut) are queued again (`_back_to_queue`); then every queued job gets one message, the
+    folder's own dropped first, oldest job first. So a job whose message was lost another way (the
+    service stopped between recording the job and publishing it, a message file removed by hand)
+    runs too, and none runs twice. Returns the ids of the queued jobs."""
+    jobs = JobStore(settings.results_dir)
+    death = "the service stopped while it ran"
+    cut_off = {name: _back_to_queue(jobs, name, death) for name in workers}
+    queue = JobQueue(settings)
+    queue.purge()
+    waiting = [r["id"] for r in sorted((r for r in jobs.records() if r["status"] == QUEUED),
+                                        key=lambda r: r["created"])]
+    if waiting and queue.enqueue_or_fail(jobs, waiting, "the job could not be queued again when "
+                                                        "the service started") is not None:
+        return []
+    for name, again in cut_off.items():
+        _say_queued_again(again, name, death)
+    return waiting
 
 
 class _Workers:
@@ -71,10 +105,7 @@ class _Workers:
         # Distinct names: each worker has its own heartbeat file and Celery node name.
         names = [f"percussim{k}@{socket.gethostname()}" for k in range(1, count + 1)]
         if settings.embedded:
-            # No worker of this service runs yet: what is recorded as running on one was cut off
-            # when the service last stopped (a crash, a power cut), its message lost with it.
-            for name in names:
-                queue_again(settings, name, "the service stopped while it ran")
+            restore_queue(settings, names)
         self.processes = {name: _start_worker(name) for name in names}
         self._stopping = threading.Event()
         self._watcher = threading.Thread(target=self._watch, name="percussim-workers", daemon=True)

@@ -44,14 +44,22 @@ class JobQueue:
             return f"embedded (filesystem broker in {self.settings.broker_folder})"
         return maybe_sanitize_url(self.settings.broker_url)
 
-    def enqueue(self, *job_ids: str) -> None:
-        """Publish the jobs, fanned out over the workers as one Celery group; raises one of
-        `BROKER_ERRORS` if the broker cannot take them."""
+    def _folder_made(self) -> None:
         if self.settings.embedded:
             # The worker creates the folder too; the API may be up before any worker is.
             self.queue_folder.mkdir(parents=True, exist_ok=True)
+
+    def enqueue(self, *job_ids: str) -> None:
+        """Publish the jobs, fanned out over the workers as one Celery group; raises one of
+        `BROKER_ERRORS` if the broker cannot take them."""
+        self._folder_made()
         group(self.app.signature(RUN_JOB, args=[job_id], ignore_result=True)
               for job_id in job_ids).apply_async()
+
+    def purge(self) -> int:
+        """Drop every message waiting in the queue; returns how many."""
+        self._folder_made()
+        return self.app.control.purge()
 
     def enqueue_or_fail(self, jobs: JobStore, job_ids: list[str], failure: str) -> Exception | None:
         """Publish the jobs; if the broker cannot take them, record in each that it failed

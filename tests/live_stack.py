@@ -148,10 +148,12 @@ class Stack:
         self.processes[0] = Process(self.serve_api, self.env, self.folder / "api-restarted.log")
         wait_for(lambda: self.client.get("/healthz").status_code == 200, 60, "the restarted API")
 
-    def crash_and_restart(self) -> None:
+    def crash_and_restart(self, while_down=lambda: None) -> None:
         """Embedded mode: kill the service and its workers at once (SIGKILL to the process group,
-        as a crash or a power cut would), then start it again on the same port and folder."""
+        as a crash or a power cut would), call `while_down`, then start it again on the same port
+        and folder."""
         self.processes[0].stop(signal.SIGKILL)
+        while_down()
         self.processes[0] = Process(self.serve_embedded, self.env, self.folder / "api-restarted.log")
         wait_for(lambda: self.client.get("/readyz").status_code == 200, 60, "the restarted service")
 

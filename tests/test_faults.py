@@ -104,13 +104,16 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         queued = [s.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"] for _ in range(3)]
         s.wait_status(job["id"], ("running",), timeout=30)
         wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
-        s.crash_and_restart()
+        messages = sorted((tmp_path / "results" / "broker" / "queue").glob("*.msg"))
+        assert len(messages) == 3, messages  # the queued jobs' messages, on disk
+        s.crash_and_restart(while_down=messages[1].unlink)  # and one of them lost while down
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         counts = wait_all_finished(s, queued, timeout=60)
-        report(capsys, f"\nembedded service killed mid-job and started again: the job {record['status']} "
-                       f"after {record['attempts']} attempts; the 3 queued behind it {counts}")
+        report(capsys, f"\nembedded service killed mid-job and started again, one queued job's message "
+                       f"removed meanwhile: the job {record['status']} after {record['attempts']} "
+                       f"attempts; the 3 queued behind it {counts}")
         assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
-        assert counts == {"succeeded": 3}  # their messages were on disk all along
+        assert counts == {"succeeded": 3}, s.logs()  # the lost message's job too
         assert "queued again 1 job(s)" in (tmp_path / "api-restarted.log").read_text()
     finally:
         s.stop()

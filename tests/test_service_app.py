@@ -15,7 +15,8 @@ from fastapi.testclient import TestClient
 
 from conftest import BASE_CASE, merge
 from service.app import create_app
-from service.main import MAX_ATTEMPTS, queue_again
+from service.main import MAX_ATTEMPTS, queue_again, restore_queue
+from service.queue import JobQueue
 from solver.presets import PRESETS_ENV, preset_json, preset_names
 from worker.broker import queue_folder
 from worker.settings import Settings
@@ -369,6 +370,32 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
         and "the last time: exit status -9" in failed["error"]
     assert jobs.get(elsewhere)["status"] == "running"
     assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
+
+
+def test_an_embedded_service_starting_again_gives_every_queued_job_one_message(tmp_path):
+    """What `percussim serve` does before its embedded workers start: the queue made again from
+    the records, whatever messages the folder held."""
+    settings, jobs = Settings(results_dir=tmp_path), JobStore(tmp_path)
+    queue = JobQueue(settings)
+    published = jobs.create(BASE_CASE)["id"]
+    queue.enqueue(published)
+    lost = jobs.create(BASE_CASE)["id"]  # recorded, its message never written (or removed)
+    cut_off = jobs.create(BASE_CASE)["id"]
+    jobs.update(cut_off, status="running", worker="w1@x", attempts=1)
+    elsewhere = jobs.create(BASE_CASE)["id"]
+    jobs.update(elsewhere, status="running", worker="w2@x", attempts=1)
+    done = jobs.create(BASE_CASE)["id"]
+    queue.enqueue(done)
+    jobs.update(done, status=SUCCEEDED)
+
+    assert restore_queue(settings, ["w1@x"]) == [published, lost, cut_off]  # oldest first
+    with queue.app.connection_for_read() as connection:
+        messages = connection.SimpleQueue("celery", no_ack=True)
+        delivered = [messages.get(timeout=1).payload[0][0] for _ in range(3)]
+        with pytest.raises(messages.Empty):
+            messages.get(timeout=0.2)
+    assert sorted(delivered) == sorted([published, lost, cut_off])
+    assert jobs.get(cut_off)["status"] == "queued" and jobs.get(elsewhere)["status"] == "running"
 
 
 def test_a_dead_workers_job_that_cannot_be_queued_again_ends_failed_saying_why(tmp_path):
