@@ -32,14 +32,14 @@ def test_a_message_is_renamed_into_the_queue_only_once_written(connection, tmp_p
                      json.loads(open(source, "rb").read())["body"]))
         replace(source, target)
 
-    monkeypatch.setattr(queue_files.os, "replace", watched)
+    monkeypatch.setattr(os, "replace", watched)  # as worker.store.write_atomic calls it
     with connection.SimpleQueue("jobs") as queue:
         queue.put({"job": "abc"})
         message = queue.get(timeout=1)
         assert message.payload == {"job": "abc"}
         message.ack()
     assert len(seen) == 1 and seen[0][0] == [] and seen[0][1]
-    assert [n for n in os.listdir(tmp_path) if n.endswith((".msg", queue_files.PARTIAL))] == []
+    assert [n for n in os.listdir(tmp_path) if n.endswith((".msg", ".part"))] == []
 
 
 def test_the_embedded_service_queues_through_it(tmp_path):

@@ -10,8 +10,8 @@ within a folder is atomic, so a worker sees a whole message or none.
 
 from __future__ import annotations
 
-import os
 import uuid
+from pathlib import Path
 from time import monotonic
 
 from kombu.exceptions import ChannelError
@@ -19,20 +19,20 @@ from kombu.transport import filesystem
 from kombu.utils.encoding import str_to_bytes
 from kombu.utils.json import dumps
 
-PARTIAL = ".part"  # a message being written: kombu's `_get` takes only names ending in .<queue>.msg
+from .store import write_atomic
 
 
 class Channel(filesystem.Channel):
     def _put(self, queue, payload, **kwargs):
-        """Put `payload` onto `queue`, named as kombu names it, so that messages keep their order."""
+        """Put `payload` onto `queue`, named as kombu names it, so that messages keep their order;
+        written under a temporary name ending in `.part`, which kombu's `_get` does not take (it
+        takes names ending in .<queue>.msg)."""
         name = f"{int(round(monotonic() * 1000))}_{uuid.uuid4()}.{queue}.msg"
-        path = os.path.join(self.data_folder_out, name)
+        path = Path(self.data_folder_out) / name
         try:
-            with open(path + PARTIAL, "wb") as f:
-                f.write(str_to_bytes(dumps(payload)))
-            os.replace(path + PARTIAL, path)
+            write_atomic(path, str_to_bytes(dumps(payload)))
         except OSError as exc:
-            raise ChannelError(f"Cannot add file {path!r} to directory") from exc
+            raise ChannelError(f"Cannot add file {str(path)!r} to directory") from exc
 
 
 class Transport(filesystem.Transport):
