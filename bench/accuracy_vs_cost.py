@@ -66,6 +66,20 @@ def preset(name: str) -> dict:
     return case
 
 
+def fig5_variant(velocity: float, stiffness: float) -> dict:
+    """The Fig. 5 preset with another striker velocity and contact stiffness (`FIG5_VARIANTS`)."""
+    case = preset("fig5")
+    case["striker"]["velocity"], case["contact"]["stiffness"] = velocity, stiffness
+    return case
+
+
+def closed_form_case(reference: LinearImpact, tol: float) -> dict:
+    """The closed form's case under `numerics.tolerance` = `tol`, no grid given."""
+    case = reference.case(10)
+    case["numerics"].update(cells=None, time_step=None, tolerance=tol)
+    return case
+
+
 def with_numerics(case: dict, **numerics) -> dict:
     return {**case, "numerics": {"duration": case["numerics"]["duration"], **numerics}}
 
@@ -169,9 +183,7 @@ def closed_forms() -> list[dict]:
     for zeta, m1 in CLOSED_FORMS:
         ref = LinearImpact(zeta=zeta, m1=m1)
         for tol in TOLERANCES:
-            case = ref.case(10)
-            case["numerics"].update(cells=None, time_step=None, tolerance=tol)
-            summary = simulate(parse_case(case)).summary
+            summary = simulate(parse_case(closed_form_case(ref, tol))).summary
             cheapest, grid = cheapest_fixed_grid(ref, tol)
             rows.append({"zeta": zeta, "m1": m1, "tol": tol,
                          "error": error(summary, ref.truth()),
@@ -191,8 +203,7 @@ def fig5_variants() -> tuple[list[dict], list[tuple[int, float]]]:
     1600 cells; and the maximum stress of the first variant over a ladder of grids."""
     rows = []
     for velocity, stiffness in FIG5_VARIANTS:
-        case = preset("fig5")
-        case["striker"]["velocity"], case["contact"]["stiffness"] = velocity, stiffness
+        case = fig5_variant(velocity, stiffness)
         ref, uncertainty = reference(case, 800)
         for tol in VARIANT_TOLERANCES:
             summary = simulate(parse_case(with_numerics(case, tolerance=tol))).summary
@@ -203,8 +214,7 @@ def fig5_variants() -> tuple[list[dict], list[tuple[int, float]]]:
             print(f"  Fig. 5 at {velocity:.2f} m/s, c1 = {stiffness:.3g}, tolerance {tol:g}: error "
                   f"{r['error']:.2e} (estimate {r['estimate']:.2e}, reference uncertainty "
                   f"{uncertainty:.0e}), grids {r['cells']}")
-    case = preset("fig5")
-    case["striker"]["velocity"], case["contact"]["stiffness"] = FIG5_VARIANTS[0]
+    case = fig5_variant(*FIG5_VARIANTS[0])
     ladder = [(cells, quantities(simulate(parse_case(with_numerics(
         case, scheme="explicit", cells=cells, time_step=courant_one(case, cells)))).summary)["max_stress"])
         for cells in (100, 130, 200, 400, 800, 1600)]

@@ -50,21 +50,14 @@ SETTINGS = (
 COST_BOUND = 3.0
 
 
-def variant(velocity: float, stiffness: float) -> dict:
-    case = bench.preset("fig5")
-    case["striker"]["velocity"], case["contact"]["stiffness"] = velocity, stiffness
-    return case
-
-
 def yardsticks() -> list[dict]:
     """Every case as (name, tolerance, case, reference, least fixed-grid work or None)."""
     cases = []
     for zeta, m1 in bench.CLOSED_FORMS:
         reference = LinearImpact(zeta=zeta, m1=m1)
         for tol in bench.TOLERANCES:
-            case = reference.case(10)
-            case["numerics"].update(cells=None, time_step=None, tolerance=tol)
-            cases.append({"name": f"closed form ζ = {zeta:g}", "tol": tol, "case": case,
+            cases.append({"name": f"closed form ζ = {zeta:g}", "tol": tol,
+                          "case": bench.closed_form_case(reference, tol),
                           "reference": reference.truth(),
                           "least_work": cheapest_fixed_grid(reference, tol)[0]})
     for name, reference_cells in bench.PRESETS.items():
@@ -84,7 +77,7 @@ def yardsticks() -> list[dict]:
                           "reference": reference,
                           "least_work": min(bench.meeting(ladder, tol), default=(math.nan,))[0]})
     for velocity, stiffness in bench.FIG5_VARIANTS:
-        case = variant(velocity, stiffness)
+        case = bench.fig5_variant(velocity, stiffness)
         reference, _ = bench.reference(case, 800)
         for tol in bench.VARIANT_TOLERANCES:
             cases.append({"name": f"Fig. 5 at {velocity:.2f} m/s, c1 = {stiffness:.2g}", "tol": tol,
