@@ -29,8 +29,9 @@ All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3
 chunks. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first step
 is an ordinary step of the scheme. The layers are indexed as `u[row, i]`, never through a row view:
 Numba counts a view's references with atomic instructions, and three views a step cost about
-0.4 ns a node-step on 100 cells, a sixth of the step. Where LLVM cannot prove an index non-negative, it is unsigned:
-Numba wraps negative indices around, and that check on every load keeps loops from vectorising.
+0.4 ns a node-step on 100 cells, a sixth of the step. Where LLVM cannot prove an index
+non-negative, it is unsigned: Numba wraps negative indices around, and that check on every load
+keeps loops from vectorising.
 """
 
 from __future__ import annotations
@@ -458,9 +459,9 @@ def advance(
 
     Writes every `history_stride`-th layer to `history` (a column each) and `probes` (a row each)
     and every `field_stride`-th to `field_u`/`field_stress` (strides ≤ 0 keep nothing), from the
-    first of each buffer. Returns
-    `(status, rows of history written, rows of fields written)`; on a non-finite value it stops
-    with `STATUS_NON_FINITE` and the time in `trackers[T_FAILED_TIME]`.
+    first of each buffer. Returns `(status, layers of history written, rows of fields written)`;
+    on a non-finite value it stops with `STATUS_NON_FINITE` and the time in
+    `trackers[T_FAILED_TIME]`.
     """
     n = len(node_area) - 1
     weight_cur = 1.0 - weight_new - weight_old
