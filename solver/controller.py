@@ -14,7 +14,7 @@ import numpy as np
 
 from . import kernel as K
 from .case import Case
-from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics
+from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
 from .summary import FORCE_HISTORY, build_summary, force_history_rows
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
@@ -151,8 +151,8 @@ class MemoryRecorder:
 
 
 def _kept(first: int, last: int, stride: int) -> int:
-    """How many layers in [first, last] are multiples of `stride`."""
-    return last // stride - (first - 1) // stride if stride > 0 else 0
+    """How many layers in [first, last] are multiples of `stride` (none when last < first)."""
+    return last // stride - (first - 1) // stride if stride > 0 and last >= first else 0
 
 
 def _probe_nodes(grid: Grid, probes: list[float]) -> tuple[np.ndarray, np.ndarray]:
@@ -163,14 +163,43 @@ def _probe_nodes(grid: Grid, probes: list[float]) -> tuple[np.ndarray, np.ndarra
     return node, weight
 
 
-def _force_parameters(case: Case) -> tuple[int, float, float, float, float]:
+def force_law(case: Case) -> K.ForceLaw:
+    """R(t) as the kernel takes it."""
     f = case.force
     if f is None:
-        return K.FORCE_NONE, 0.0, 0.0, 0.0, 0.0
+        return K.ForceLaw(K.FORCE_NONE, 0.0, 0.0, 0.0, 0.0)
     if f.kind == "pulse":
-        return K.FORCE_PULSE, f.amplitude, 0.0, f.start, f.duration
+        return K.ForceLaw(K.FORCE_PULSE, f.amplitude, 0.0, f.start, f.duration)
     kind = K.FORCE_SINE if f.kind == "sine" else K.FORCE_ABS_SINE
-    return kind, f.amplitude, f.omega, 0.0, 0.0
+    return K.ForceLaw(kind, f.amplitude, f.omega, 0.0, 0.0)
+
+
+def end_conditions(case: Case, grid: Grid) -> tuple[K.StruckEnd, K.WorkingEnd]:
+    """The striker and contact, and the medium, with the impedances of the tool's end cells."""
+    c, m = case.contact, case.medium
+    impedance = grid.density * wave_speed(case.tool)
+    struck = K.StruckEnd(case.striker.mass, case.striker.velocity, c.stiffness, c.exponent,
+                         c.tension_stiffness, c.damping, impedance * grid.end_area[0])
+    working = K.WorkingEnd(m.stiffness if m else 0.0, m.damping if m else 0.0,
+                           impedance * grid.end_area[1])
+    return struck, working
+
+
+def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool
+              ) -> np.ndarray:
+    """The energy terms at `duration`, interpolated between the kernel's last two layers (`energy`
+    row 0 after layer `last`, row 1 before it): the run's last layer can lie up to a step beyond
+    the duration. The terms are at layer m − ½ in the scheme's own form, but for the ends that
+    integrate their own equations (`ends_at_layer`), whose work, dissipation and stored energy are
+    at layer m."""
+    at = np.full(K.ENERGY_SLOTS, (last - 0.5) * tau)
+    if ends_at_layer:
+        at[[K.E_EXTERNAL_WORK, K.E_DISSIPATED_CONTACT, K.E_DISSIPATED_MEDIUM, K.E_STRIKER_KINETIC,
+            K.E_CONTACT_POTENTIAL, K.E_MEDIUM_POTENTIAL]] = last * tau
+    if last < 2:
+        return energy[0].copy()
+    weight = (duration - at) / tau  # 0 at row 0, −1 at row 1
+    return energy[0] + weight * (energy[0] - energy[1])
 
 
 def simulate_rod(
@@ -187,10 +216,12 @@ def simulate_rod(
     """
     num = numerics or resolve_numerics(case, model="rod")
     scheme = num.weights()
+    impedance_ends = num.ends == "impedance"
     grid = make_grid(case.tool, num.cells, scheme.end_masses)
     n, tau, h = grid.cells, num.time_step, grid.h
     tool = case.tool
-    r = (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
+    # Courant number 1 exactly where the ends rely on the end rows being the characteristic relation
+    r = 1.0 if impedance_ends else (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
     c2 = case.medium.stiffness if case.medium else 0.0
     b2 = case.medium.damping if case.medium else 0.0
     end_stiffness = (grid.end_area[0] * tool.youngs_modulus / h,
@@ -205,7 +236,12 @@ def simulate_rod(
     u = np.zeros((3, n + 1))
     y = np.zeros(3)
     trackers = K.new_trackers()
-    energy = np.zeros(K.ENERGY_SLOTS)
+    energy = np.zeros((2, K.ENERGY_SLOTS))
+    struck, working = end_conditions(case, grid)
+    force = force_law(case)
+    # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
+    lag = 1 if scheme.centered and not impedance_ends else 0
+    last_layer = num.steps + lag
     contacts = np.zeros((MAX_CONTACTS, 2))
 
     recorder = MemoryRecorder() if recorder is None else recorder
@@ -233,10 +269,11 @@ def simulate_rod(
 
     chunk = max(1, CHUNK_NODE_STEPS // (n + 1))
     first = 0
-    while first <= num.steps:
-        last = min(num.steps, first + chunk - 1)
-        rows = _kept(first, last, out.history_stride)
-        frames = _kept(first, last, field_stride)
+    while first <= last_layer:
+        last = min(last_layer, first + chunk - 1)
+        recorded = (max(0, first - lag), last - lag)  # the layers this chunk records
+        rows = _kept(*recorded, out.history_stride)
+        frames = _kept(*recorded, field_stride)
         history = np.empty((K.HISTORY_COLUMNS, rows))
         probes = np.empty((rows, len(probe_node)))
         field_u = np.empty((frames, n + 1))
@@ -246,10 +283,8 @@ def simulate_rod(
             grid.uniform, *factors,
             h, tau, r, tool.youngs_modulus, tool.density, *end_stiffness,
             grid.area[0], grid.area[-1],
-            scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses,
-            case.striker.mass, case.striker.velocity,
-            case.contact.stiffness, case.contact.exponent, case.contact.tension_stiffness,
-            case.contact.damping, c2, b2, *_force_parameters(case),
+            scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses, impedance_ends,
+            struck, working, force,
             trackers, energy, contacts,
             history, out.history_stride, probe_node, probe_weight, probes,
             field_u, field_stress, field_stride,
@@ -263,19 +298,21 @@ def simulate_rod(
         summary_table.append(history[summary_columns].take(summary_rows[low:high] - row, axis=1))
         row += n_hist
         if n_field:
-            recorder.append("fields/time", np.arange(-(-first // field_stride) * field_stride,
-                                                     last + 1, field_stride) * tau)
+            lo, hi = recorded
+            recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride,
+                                                     hi + 1, field_stride) * tau)
             recorder.append("fields/displacement", field_u[:n_field])
             recorder.append("fields/stress", field_stress[:n_field])
         first = last + 1
         if progress is not None:
-            progress(min(1.0, first / (num.steps + 1)))
-        if cancelled is not None and first <= num.steps and cancelled():
+            progress(min(1.0, first / (last_layer + 1)))
+        if cancelled is not None and first <= last_layer and cancelled():
             raise Cancelled(f"cancelled at t = {first * tau:.6g} s")
 
     table = np.concatenate(summary_table, axis=1)
     summary = build_summary(
-        case=case, numerics=num, trackers=trackers, contacts=contacts, energy=energy,
+        case=case, numerics=num, trackers=trackers, contacts=contacts,
+        energy=energy_at(energy, last_layer, tau, case.numerics.duration, impedance_ends),
         history=dict(zip(FORCE_HISTORY.values(), table)),
     )
     held = recorder.held()

@@ -12,6 +12,9 @@ from .schemes import Scheme, make_scheme, scheme_of
 
 DEFAULT_CELLS = 100
 STEPS_PER_CONTACT = 200  # default τ resolves the estimated contact by this many steps
+# From this Courant number the explicit scheme's end rows are the characteristic relation (it is 1
+# but for rounding), and its ends integrate their own equations.
+IMPEDANCE_COURANT = 1.0 - 1e-6
 
 
 def tool_area(tool: Tool, x: np.ndarray) -> np.ndarray:
@@ -57,6 +60,46 @@ def contact_time_estimate(case: Case) -> float:
     return math.pi * math.sqrt(m1 / stiffness) if stiffness > 0 else 0.0
 
 
+def contact_stiffness_estimate(case: Case) -> float:
+    """The contact's tangent stiffness `(1+α)·c1·δ^α` at the depth of a rigid-wall impact (N/m),
+    from the contact time estimate: `(1+α)·m1·(π/T)²`."""
+    period = contact_time_estimate(case)
+    if not period > 0.0:
+        return math.inf
+    return (1.0 + case.contact.exponent) * case.striker.mass * (math.pi / period) ** 2
+
+
+# A contact or a medium this much stiffer than the tool's end cell (E·S/h) makes an end with a
+# mass of its own, or a massless one, ring against it: the contact chatters (hundreds of contacts
+# where there is one). Only the ends that integrate their own equations take any stiffness.
+STIFF_END = 20.0
+
+
+def check_stiff_ends(case: Case, weights: Scheme, cells: int, end_areas: tuple[float, float]) -> None:
+    """Refuse up front a fixed grid whose ends would ring against the contact or the medium,
+    naming the field and what to do (`STIFF_END`)."""
+    h = case.tool.length / cells
+    fix = ("leave numerics.cells, time_step and scheme out (the default accuracy takes any "
+           "stiffness), or give numerics.scheme = 'explicit' with numerics.cells only (Courant "
+           "number 1, whose ends integrate their own equations)")
+    errors = []
+    for field, stiffness, area in (
+            ("contact.stiffness", contact_stiffness_estimate(case), end_areas[0]),
+            ("medium.stiffness", case.medium.stiffness if case.medium else 0.0, end_areas[1])):
+        end_cell = case.tool.youngs_modulus * area / h
+        if stiffness > STIFF_END * end_cell:
+            needed = math.ceil(cells * stiffness / (STIFF_END * end_cell))
+            what = "the contact's" if field.startswith("contact") else "the medium's"
+            errors.append(FieldError(
+                field=field,
+                message=f"{what} stiffness, about {stiffness:.3g} N/m, is {stiffness / end_cell:.3g}× "
+                        f"that of the tool's end cell on {cells} cells ({end_cell:.3g} N/m): the "
+                        f"scheme '{weights.name}' would ring against it and the contact chatter. "
+                        f"{fix[0].upper() + fix[1:]}, or use at least {needed} cells"))
+    if errors:
+        raise CaseError(errors)
+
+
 @dataclass(frozen=True)
 class ResolvedNumerics:
     """The numerics a run actually uses; stored with every result."""
@@ -70,6 +113,10 @@ class ResolvedNumerics:
     end_masses: bool
     steps: int
     courant: float  # a·τ/h
+    # How the tool's ends are treated: "impedance" (the explicit scheme at Courant number 1: each
+    # end integrates its own equations, `kernel.struck_end_step`), "mass" (half-cell end masses),
+    # "massless" (the paper's quasi-static ends), "none" (the lumped model).
+    ends: str = "mass"
 
     def as_dict(self) -> dict:
         return dict(vars(self))  # its fields are scalars: dataclasses.asdict's deep copy is not needed
@@ -82,7 +129,9 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
                      cells: int | None = None, time_step: float | None = None) -> ResolvedNumerics:
     """Fill in the defaults (arguments override the case): N = 100 cells; τ the smaller of h/a
     (Courant 1, for the rod) and the estimated contact time / 200, so that both the wave and the
-    contact are resolved. An explicit scheme's Courant limit is checked here, before anything runs."""
+    contact are resolved; for the explicit scheme h/a, where it is exact along a uniform tool and
+    its ends integrate their own equations. An explicit scheme's Courant limit is checked here,
+    before anything runs."""
     num = case.numerics
     model = model or num.model or "rod"
     weights = scheme_of(num, scheme)
@@ -98,7 +147,11 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
                     "values of a real tool")])
     # The lumped model has no wave to resolve: τ only samples its histories.
     wave_limit = h / a if model == "rod" else math.inf
-    tau = time_step or num.time_step or min(wave_limit, contact_time_estimate(case) / STEPS_PER_CONTACT)
+    if weights.name == "explicit" and model == "rod":
+        default_tau = wave_limit
+    else:
+        default_tau = min(wave_limit, contact_time_estimate(case) / STEPS_PER_CONTACT)
+    tau = time_step or num.time_step or default_tau
     steps = num.duration / tau if tau > 0 else math.inf
     if not math.isfinite(steps):
         raise CaseError([FieldError(
@@ -113,9 +166,18 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
                     f"{cells} cells gives {courant:.4g}: set numerics.time_step ≤ {h / a:.4g} s, "
                     "use fewer cells, or numerics.scheme = 'sigma'")])
     steps = max(1, math.ceil(steps - 1e-9))
+    if model != "rod":
+        ends = "none"
+    elif weights.name == "explicit" and weights.end_masses and courant >= IMPEDANCE_COURANT:
+        ends = "impedance"
+    else:
+        ends = "mass" if weights.end_masses else "massless"
+        check_stiff_ends(case, weights, cells,
+                         tuple(tool_area(case.tool, np.array([0.0, case.tool.length]))))
     return ResolvedNumerics(
         model=model, scheme=weights.name, time_step=tau, cells=cells,
         gamma=num.gamma, sigma=num.sigma, end_masses=weights.end_masses, steps=steps, courant=courant,
+        ends=ends,
     )
 
 
@@ -128,7 +190,8 @@ class Grid:
     with `lower_i, upper_i = S_{i∓½}/S̄_i` and `S̄_i` the mean of the node's two cells: its
     stiffness is symmetric, so no taper can feed energy into the tool. (The paper's form
     `1 ∓ q_i`, `q_i = (S_{i+1} − S_{i−1})/(4S_i)`, is not: with the paper's scheme a 1:10 step in
-    area multiplied the energy 29-fold.) `node_area·ρh` is each node's mass, half a cell at the
+    area multiplied the energy 29-fold.) The end cells take the area at the end instead of their
+    mean (`make_grid`). `node_area·ρh` is each node's mass, half a cell at the
     ends, 0 at a massless end; `end_area` the cell areas in the end rows' stiffness `S·E/h`.
     """
 
@@ -168,6 +231,10 @@ def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     x = np.linspace(0.0, tool.length, cells + 1)
     h = tool.length / cells
     area_mid = np.diff(area_integral(tool, x)) / h
+    # The end cells take the ends' own areas: an end answers a sudden force through the impedance
+    # just inside it, and a cell mean h/2 away would put it O(h) off on a taper (the cells' mass
+    # changes by O(h²)).
+    area_mid[[0, -1]] = tool_area(tool, x[[0, -1]])
     node_area = np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]),
                                 [0.5 * area_mid[-1]]))
     lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)

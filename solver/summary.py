@@ -13,8 +13,6 @@ from .grid import ResolvedNumerics
 FORCE_HISTORY_POINTS = 2000
 # The summary's force history: its keys and the history paths they come from
 FORCE_HISTORY = {"time": "time", "contact": "contact/force", "medium": "medium/force"}
-MIN_STEPS_PER_CONTACT = 20  # below this the contact force's time error exceeds about 1%
-ENERGY_EXCESS_LIMIT = 0.005  # energy created by the scheme, as a fraction of the input
 
 
 def _number(value: float) -> float | None:
@@ -36,32 +34,14 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     return {key: history[path][pick].tolist() for key, path in FORCE_HISTORY.items()}
 
 
-def _warnings(case: Case, numerics: ResolvedNumerics, trackers, excess: float) -> list[str]:
-    found = []
-    steps = trackers[K.T_MIN_CONTACT_STEPS]
-    # Under a tolerance the ladder's error estimate speaks for the resolution, not this rule.
-    if case.numerics.tolerance is None and math.isfinite(steps) and steps < MIN_STEPS_PER_CONTACT:
-        shorter = numerics.time_step * steps / MIN_STEPS_PER_CONTACT
-        found.append(
-            f"a contact interval was resolved by only {steps:.1f} time steps; about 1% accuracy on "
-            f"the contact needs at least {MIN_STEPS_PER_CONTACT}: set numerics.time_step ≤ {shorter:.3g} s "
-            "or give numerics.tolerance"
-        )
-    if excess > ENERGY_EXCESS_LIMIT:
-        found.append(
-            f"the scheme created {100 * excess:.2f}% of the input energy at some instant; "
-            "reduce numerics.time_step"
-        )
-    return found
-
-
 def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
                   contacts: np.ndarray, energy: np.ndarray, history: dict[str, np.ndarray],
                   extra_warnings: list[str] | None = None) -> dict:
     """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout, and
     `history` needs the paths of FORCE_HISTORY only.
 
-    `extra_warnings` (the caller's own, e.g. outputs a model cannot provide) follow the checks'.
+    `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
+    follow (`solver.adaptive.annotate`).
     """
     count = int(trackers[K.T_CONTACTS])
     intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[:min(count, len(contacts))]]
@@ -82,6 +62,8 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
     numerical = initial + external - sum(stored.values()) - dissipated_contact - dissipated_medium
     budget = initial + max(external, 0.0)
     excess = trackers[K.T_ENERGY_EXCESS] / budget if budget > 0 else 0.0
+    to_medium = float(stored["medium_potential"] + dissipated_medium)
+    supplied = initial + external
 
     return {
         "name": case.name,
@@ -103,7 +85,8 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
         "energy": {
             "initial": initial,
             "external_work": float(external),
-            "to_medium": float(stored["medium_potential"] + dissipated_medium),
+            "to_medium": to_medium,
+            "transfer_efficiency": to_medium / supplied if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
             "numerical": float(numerical),
@@ -111,6 +94,5 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
             "max_excess_fraction": float(excess),
         },
         "force_history": _downsample(history),
-        "warnings": (_warnings(case, numerics, trackers, excess)
-                     + list(extra_warnings or [])),
+        "warnings": list(extra_warnings or []),
     }

@@ -1,6 +1,9 @@
 """Stability at the extremes: every case finishes with finite values and never creates more than
-0.5% of the input energy, or is refused up front naming the parameter and its limit. A contact
-resolved by too few steps is reported with what to change.
+0.5% of the input energy, or is refused naming the parameter and what to do. The explicit scheme
+at Courant number 1, whose ends integrate their own equations, takes every case; on the other
+schemes' fixed grids a contact or medium the ends would ring against is refused (up front, or
+once it has chattered), never answered with a chattering contact. A coarse grid's summary says
+how far off it is and what to change.
 
 One parameter at a time is pushed to its extremes around a Fig. 3-like case (20 kg at 5 m/s on a
 1.2-m tool, Hertz contact, medium), for each scheme.
@@ -14,7 +17,7 @@ import pytest
 from conftest import BASE_CASE, merge
 from solver import CaseError, parse_case
 from solver.simulate import simulate
-from solver.summary import ENERGY_EXCESS_LIMIT
+CREATED_AT_MOST = 0.005  # of the input energy: what no scheme may create at any instant
 
 # The shared test case (Fig. 3-like) on 60 cells with the default time step.
 BASE = merge(BASE_CASE, {"name": "extreme", "numerics": {"cells": 60, "time_step": None, "gamma": None}})
@@ -62,13 +65,25 @@ def check_finished(summary: dict) -> None:
                summary["max_tensile_stress"]["value"], *summary["energy"].values(),
                *summary["force_history"]["contact"], *summary["force_history"]["medium"]]
     assert np.all(np.isfinite(numbers))
-    assert summary["energy"]["max_excess_fraction"] <= ENERGY_EXCESS_LIMIT, summary["energy"]
+    assert summary["energy"]["max_excess_fraction"] <= CREATED_AT_MOST, summary["energy"]
+
+
+# What a fixed grid of the paper's or the σ-scheme may refuse: the stiff links its ends ring against.
+STIFF = {"c1=1e+12,alpha=0.0", "c1=1e+14,alpha=0.0", "c1=1e+14,alpha=0.5", "c0=1e+12",
+         "contact_damping=100.0xcritical", "medium=very_stiff"}
 
 
 @pytest.mark.parametrize("scheme", ["paper", "sigma", "explicit"])
 @pytest.mark.parametrize("name", list(CASES))
 def test_extreme_case_finishes_sound(name, scheme):
-    summary = run(CASES[name], scheme)
+    try:
+        summary = run(CASES[name], scheme)
+    except CaseError as error:
+        assert scheme != "explicit" and name in STIFF, error
+        [e] = error.errors
+        assert e.field in ("contact", "contact.stiffness", "medium.stiffness")
+        assert "default accuracy" in e.message and "'explicit'" in e.message
+        return
     check_finished(summary)
     if name == "many_contacts":
         assert summary["contacts_total"] > 20
@@ -79,10 +94,9 @@ def test_extreme_case_finishes_sound(name, scheme):
 def test_any_courant_number_is_stable_for_the_implicit_schemes(scheme, courant):
     summary = run({"numerics": {"time_step": courant * H_OVER_A}}, scheme)
     check_finished(summary)
-    steps = summary["numerics"]["steps"]
     if courant >= 10.0:
         # The contact (about 330 µs) now spans a handful of steps: said, with what to change.
-        assert any("numerics.time_step ≤" in w for w in summary["warnings"]), (steps, summary["warnings"])
+        assert any("estimated errors over 1%" in w and "cells" in w for w in summary["warnings"])
 
 
 @pytest.mark.parametrize("courant", [0.01, 0.5, 1.0])

@@ -72,18 +72,18 @@ def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, center
 def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     grid = make_grid(load_preset("fig9").tool, cells, end_masses=True)  # conical: areas vary
     u = RNG.normal(size=(3, cells + 1))
-    new, cur, half_e_over_h = 2, 0, 3.5
+    new, cur, stressed, half_e_over_h = 2, 0, 1, 3.5  # the stresses of a third layer
     kinetic, strain, low, low_block, high, high_block = K.tool_energy_and_stresses(
-        u, new, cur, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h)
+        u, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h)
 
     ea, eb = np.diff(u[new]), np.diff(u[cur])
     assert kinetic == pytest.approx(grid.node_area @ (u[new] - u[cur]) ** 2, rel=1e-13)
     assert strain == pytest.approx(grid.area_mid @ (strain_sigma * (ea * ea + eb * eb)
                                                     + (1 - 2 * strain_sigma) * ea * eb), rel=1e-13)
-    stress = half_e_over_h * (u[new, 2:] - u[new, :-2])  # interior nodes 1 … n − 1
+    stress = half_e_over_h * (u[stressed, 2:] - u[stressed, :-2])  # interior nodes 1 … n − 1
     if cells < 2:
         assert (low, high) == (np.inf, -np.inf)
         return
     assert (low, high) == (stress.min(), stress.max())
     for value, block, first in ((low, low_block, np.argmin(stress)), (high, high_block, np.argmax(stress))):
-        assert K.first_node(u, new, half_e_over_h, block, value) == first + 1
+        assert K.first_node(u, stressed, half_e_over_h, block, value) == first + 1

@@ -53,7 +53,7 @@ def test_maximum_stress_converges_at_second_order_where_a_reflected_front_meets_
     ref = LinearImpact(zeta=zeta, m1=m1)
     cells = (50, 100, 200, 400, 800)
     errors = [true_errors(simulate_rod(parse_case(merge(ref.case(n, courant=1.0 - 1e-9), {
-        "numerics": {"scheme": "explicit"}}))).summary, ref.truth())["max_stress"] for n in cells]
+        "numerics": {"scheme": "explicit"}}))).summary, ref.truth())["max_compressive_stress"] for n in cells]
     order = observed_order(cells, errors)
     print(f"ζ = {zeta}: max stress errors {errors}, order {order:.2f}")
     assert 1.7 < order < 2.4
@@ -79,7 +79,7 @@ def test_second_order_schemes_settle_on_a_tapered_hertz_contact(scheme):
     assert np.all(change[-1, 2:] < 1e-3)
 
 
-@pytest.mark.parametrize("scheme, courant", [("sigma", 0.3), ("sigma", 8.0), ("explicit", 1.0),
+@pytest.mark.parametrize("scheme, courant", [("sigma", 0.3), ("sigma", 8.0), ("explicit", 0.99),
                                              ("explicit", 0.4)])
 def test_second_order_schemes_conserve_the_discrete_energy(scheme, courant):
     """Undamped, unforced, tapered, with a tension spring c0: nothing is lost or created. (The
@@ -92,6 +92,24 @@ def test_second_order_schemes_conserve_the_discrete_energy(scheme, courant):
     energy = simulate_rod(parse_case(case)).summary["energy"]
     assert abs(energy["numerical"]) < 1e-10 * energy["initial"], energy
     assert energy["max_excess_fraction"] < 1e-10
+
+
+def test_ends_that_integrate_their_own_equations_lose_energy_only_at_second_order():
+    """At Courant number 1 the explicit scheme's ends integrate the striker, contact and medium in
+    continuous time: the audit then compares the tool's discrete energy with the ends' exact
+    integrals, and what it finds unaccounted for is the scheme's error, falling as h²."""
+    residual = []
+    for cells in (60, 120, 240):
+        case = merge(TAPERED, {
+            "contact": {"damping": 0.0, "tension_stiffness": 1e9}, "medium": {"stiffness": 2e8, "damping": 0.0},
+            "numerics": {"scheme": "explicit", "cells": cells, "duration": 2e-3},
+        })
+        result = simulate_rod(parse_case(case))
+        assert result.numerics.ends == "impedance"
+        residual.append(abs(result.summary["energy"]["numerical"]) / result.summary["energy"]["initial"])
+    print(residual)
+    assert residual[0] < 1e-3
+    assert residual[0] / residual[2] > 10.0  # 16 at second order over two doublings
 
 
 def test_explicit_scheme_refuses_a_courant_number_above_one():

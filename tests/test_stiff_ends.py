@@ -1,0 +1,94 @@
+"""Stiff ends against closed forms: Saint-Venant's rigid impact on a bar with a fixed end, stiff
+contacts that must not chatter, and boundary forces recorded as the scheme applies them."""
+
+import numpy as np
+import pytest
+
+from conftest import merge
+from solver import CaseError, parse_case
+from solver.characteristics import solve
+from solver.presets import preset_json
+from solver.reference import LinearImpact, RigidImpact, true_errors
+from solver.simulate import simulate
+
+
+@pytest.fixture(scope="module")
+def saint_venant():
+    reference = RigidImpact()
+    return reference, simulate(parse_case(reference.case()))
+
+
+def test_saint_venants_impact_is_met_at_the_default_accuracy(saint_venant):
+    """Co-impact time, the peak contact force (the fixed end's reflection back at 2L/a) and the
+    largest compression (2σ0·(1 + e^−μ) at the fixed end, 3L/a)."""
+    reference, result = saint_venant
+    summary = result.summary
+    errors = true_errors(summary, reference.truth())
+    print(errors, summary["error_estimate"], [r["cells"] for r in summary["runs"]])
+    assert max(errors.values()) <= 0.01
+    assert summary["contacts_total"] == 1
+    stress = summary["max_compressive_stress"]
+    assert stress["x"] == pytest.approx(reference.length)
+    assert stress["time"] == pytest.approx(1.5 * reference.return_time, rel=0.01)
+
+
+def test_saint_venants_struck_end_stress_follows_the_closed_form(saint_venant):
+    """`σ0·e^(−βt)` until the wave is back at 2L/a, then its continuation, while in contact: the
+    struck end's stress is the contact force over the area, recorded as the scheme applies it."""
+    reference, result = saint_venant
+    t = result.history["time"]
+    stress = result.history["contact/force"] / reference.area
+    inside = (t > 0.02 * reference.return_time) & (t < 0.95 * reference.contact_time)
+    # away from the jump at 2L/a, which the grid places within a step
+    inside &= np.abs(t - reference.return_time) > 4 * (t[1] - t[0])
+    exact = reference.struck_end_stress(t[inside])
+    assert np.abs(stress[inside] - exact).max() <= 0.01 * reference.sigma0
+
+
+@pytest.mark.parametrize("zeta", [3.0, 30.0])
+def test_a_stiff_contact_gives_one_contact_and_the_physical_force(zeta):
+    """A contact far stiffer than the tool's end cell made the σ and explicit schemes bounce
+    (1179 contacts for one); at the default accuracy it is one contact, and the force is Saint-
+    Venant's Z·W1 at the start, the striker braked by the bar."""
+    base = LinearImpact(zeta=0.3, m1=20.0, length=1.0, area=0.01)
+    k = (2.0 * zeta * base.impedance) ** 2 / base.m1
+    case = merge(base.case(10), {"contact": {"stiffness": k},
+                                 "numerics": {"cells": None, "time_step": None,
+                                              "duration": 1.5 * 2.0 * base.length / base.a}})
+    summary = simulate(parse_case(case)).summary
+    reference = solve(parse_case(case), 3200)
+    assert summary["contacts_total"] == reference.contacts == 1
+    assert summary["co_impact_time"] == pytest.approx(reference.co_impact_time, rel=0.01)
+    assert summary["peak_contact_force"]["value"] == pytest.approx(reference.peak_contact_force, rel=0.01)
+
+
+@pytest.mark.parametrize("scheme, courant", [("explicit", 0.5), ("sigma", 1.0), ("paper", 1.0)])
+def test_a_fixed_grid_a_stiff_contact_would_chatter_on_is_refused_naming_it(scheme, courant):
+    base = LinearImpact(zeta=0.3, m1=20.0, length=1.0, area=0.01)
+    k = (2.0 * 30.0 * base.impedance) ** 2 / base.m1
+    case = merge(base.case(100, courant=courant), {"contact": {"stiffness": k},
+                                                   "numerics": {"scheme": scheme}})
+    with pytest.raises(CaseError) as error:
+        simulate(parse_case(case))
+    [found] = error.value.errors
+    assert found.field in ("contact", "contact.stiffness")
+    assert "default accuracy" in found.message and "'explicit'" in found.message
+
+
+def test_recorded_forces_carry_no_ripple_the_rod_never_feels():
+    """The contact force was recorded from the new layer with backward rates while the scheme
+    applied other values: an oscillation of period 2τ (±1.5 kN on the Fig. 9 preset). What is
+    recorded now is the force the ends apply, against the independent reference's."""
+    case = preset_json("fig9")
+    case["numerics"] = {"duration": case["numerics"]["duration"]}
+    result = simulate(parse_case(case))
+    reference = solve(parse_case(case), 1600, history_points=4000)
+    t, force = result.history["time"], result.history["contact/force"]
+    peak = result.summary["peak_contact_force"]["value"]
+    expected = np.interp(t, reference.history["time"], reference.history["contact"])
+    late = t > 2 * reference.history["time"][0]
+    assert np.abs(force - expected)[late].max() <= 0.01 * peak
+    # a period-2τ ripple shows as alternating second differences of the samples
+    second = force[2:] - 2.0 * force[1:-1] + force[:-2]
+    alternating = np.abs(second[1:] + second[:-1]) < 0.5 * np.abs(second[1:] - second[:-1])
+    assert np.abs(second).max() <= 0.05 * peak and alternating.mean() < 0.5
