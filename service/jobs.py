@@ -14,8 +14,7 @@ from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
 from solver.case import Case, CaseError, FieldError
-from solver.grid import resolve_numerics
-from solver.limits import check_limits
+from solver.simulate import check_case
 from solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
 from worker.settings import Settings
 from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
@@ -139,7 +138,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     def submit(request: Request, response: Response,
                case: Annotated[Case, Body(openapi_examples=examples)]) -> dict:
         """Queue an impact case. A case over the size limits is refused here, naming the limit."""
-        check_limits(case, resolve_numerics(case), settings.limits())
+        check_case(case, settings.limits())
         jobs = store(request)
         record = jobs.create(case.model_dump(mode="json", exclude_none=True))
         queue_jobs(jobs, queue, [record["id"]])

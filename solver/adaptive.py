@@ -1,90 +1,47 @@
-"""Tolerance-driven runs: the solver chooses model, scheme and grid, and estimates its own error.
+"""Every answer with its error: tolerance-driven runs, and the estimate of a fixed grid.
 
-Given `numerics.tolerance` (relative, on the co-impact time, the peak contact force and the
-maximum stress), a run goes:
+**Under a tolerance** (`numerics.tolerance`, or the default 0.01 when the case gives no grid and
+no scheme) the solver chooses the grid: the explicit scheme at Courant number 1, whose ends
+integrate their own equations (`kernel.struck_end_step`), on grids refined in h and τ together.
+It climbs from a coarse grid placed a priori (`first_cells`), each grid twice as fine as the last,
+so that every three in a row show the order they converge at (`accuracy.estimate`: the order
+observed, not an assumed one). Once the last three are in their asymptotic range the next grid
+is as fine as the estimate says is needed (at the order observed, aiming at `AIM`× the
+tolerance, 1.2–4× finer). The ladder stops when every quantity's estimate on the finest grid is
+within the tolerance and the last three grids saw the same contacts. One that cannot (the grids
+keep disagreeing, the limits stop it, or `MAX_RUNS` grids were not enough) returns its finest run
+with the estimate it has and says so in `warnings`.
 
-1. **Lumped model when the tool is stiff against the impact.** The two-mass model (21)–(25) is the
-   rod's rigid limit; what it misses grows as ε², ε the ratio of the two-mass system's highest
-   frequency to the tool's lowest elastic one, `πa/(2L)`. Over 66 cases with ε ≤ 0.5 (tools
-   5–40 cm, tapered or not, strikers 1–100 kg, c1 1e9–1e11, two media; `bench/lumped_error.py`)
-   the relative error stayed below 0.58·ε² (median 0.22·ε²); the estimate here is
-   `LUMPED_ERROR·ε²` with LUMPED_ERROR = 1, and the lumped model is taken when that is below the
-   tolerance.
-2. **Otherwise the rod with the explicit scheme at Courant number 1** (second order and
-   energy-conserving; at Courant 1 a wave crosses a uniform tool without dispersion, so the stress
-   maxima converge at second order too, where the σ-scheme's dispersion overshoot converges at
-   about 1.4), on a ladder of grids refined in h and τ together. The first pair of grids is placed
-   from an a-priori error model, `error_constant·n^−p` (`Ladder`) with n the time steps per estimated
-   contact, so that the finer one would just meet the tolerance: half as fine, then that grid.
-   Each later grid is as fine as the last estimate says is needed, at least 1.15× and at most 3×
-   finer than the last. A grid's error is estimated against each of its partners, the earlier
-   grids at least 1.5× and at most 3× coarser, and the largest estimate counts (Richardson: the
-   finer grid's error is `|Q_f − Q_c|/(r^p − 1)`, which holds only when both grids are near the
-   asymptotic range, so it is taken 1.5× larger; closer grids would amplify what is not yet
-   asymptotic, and where repeated impacts make the convergence irregular a second partner
-   catches what one pair's agreement hides). So a step can be small where the estimate says the
-   tolerance is nearly met; only once, and only between grids that agree on the contacts: a
-   small step that did not end the ladder says the estimate was not to be trusted that closely.
-   The grid it stepped from is no Richardson partner (too close), but the change the step made
-   counts as an estimate too: the finer grid's error is at least that where `r^p − 1 < 1`.
-   A grid whose partners see a different number of contacts ends the ladder only if the
-   estimate before was within the tolerance too (a coarse one may have the sequence of impacts
-   wrong, so the difference alone says little of the error; grazing re-contacts that come and go
-   from grid to grid need the second estimate).
-   It stops when every quantity's estimate is within the tolerance; the finer run is the result.
-   Only the first run keeps nothing but what its summary needs: any later one may be the result.
+**On a fixed grid** (the case gives cells, a time step or a scheme) the run is the one asked
+for, and two companion runs on grids 2× and 4× coarser in h and τ (about 31% more work) give
+its estimate the same way (`fixed_estimate`).
+
+`numerics.model = 'lumped'` is the two-mass model (21)–(25), whose modelling error grows as ε²,
+ε the two-mass system's highest frequency over the tool's lowest elastic one (`rigidity`).
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import Callable
 
+from .accuracy import ESTIMATED, Estimate, QuantityError, estimate, not_estimated
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
 from .limits import Limits, check_limits
-from .lumped import simulate_lumped
-from .schemes import make_scheme
 
-QUANTITIES = ("co_impact_time", "peak_contact_force", "max_stress")
+DEFAULT_TOLERANCE = 0.01  # when the case gives no grid and no scheme
+# The coarsest grid of a ladder resolves the contact's time scale (`time_scale`) by this many
+# steps at a tolerance of 1e-2, and by √(1e-2/tol) times as many at another.
+FIRST_POINTS = 8.0
+CLIMB = 2.0  # refinement from one grid to the next until three in a row are asymptotic
+MIN_STEP, MAX_STEP = 1.2, 4.0  # refinement to a predicted grid
+AIM = 0.6  # a predicted grid aims its estimate at this fraction of the tolerance
+MAX_RUNS = 14
+MIN_CELLS = 2
+COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
-MIN_START_POINTS = 6  # the coarsest first grid, in time steps per estimated contact
-MIN_REFINEMENT = 1.5  # between a grid and the partner its error is estimated against
-MAX_REFINEMENT = 3.0  # largest: a coarser partner is too far from the asymptotic range to judge by
-MIN_STEP = 1.15  # smallest refinement from one grid of the ladder to the next
-MAX_RUNS = 8
-MIN_CELLS = 2  # the coarsest grid's cells on a tool short against the contact
-DEFAULT_SCHEME = "explicit"
-COURANT = 1.0 - 1e-9  # the explicit scheme's limit, kept with a margin for rounding
-
-
-@dataclass(frozen=True)
-class Ladder:
-    """The ladder's three margins, which trade cost against the risk of an error beyond the
-    tolerance (`bench/ladder_settings.py` measures that trade for other values)."""
-
-    # A second-order run's relative error is about this × n^−2, n its time steps per estimated
-    # contact (fitted on the ladders of bench/accuracy_vs_cost.py: 3.4 closed form, 5–10 Fig. 3,
-    # 5.5 Fig. 5 once converging, 1–6 Fig. 9).
-    error_constant: float = 6.0
-    safety: float = 0.7  # a predicted grid aims its error estimate at this fraction of the tolerance
-    # The Richardson estimate assumes both grids in the asymptotic range; on the presets the true
-    # error was up to 1.3× the bare estimate, so the estimate reported and tested is this much larger.
-    estimate_factor: float = 1.5
-
-
-LADDER = Ladder()
-
-
-def quantities(summary: dict) -> dict[str, float | None]:
-    """The quantities a tolerance applies to, from a summary (None when the run has none)."""
-    stress = max(summary["max_compressive_stress"]["value"], summary["max_tensile_stress"]["value"])
-    return {
-        "co_impact_time": summary["co_impact_time"],
-        "peak_contact_force": summary["peak_contact_force"]["value"] or None,
-        "max_stress": stress or None,
-    }
 
 
 def rigidity(case: Case) -> float:
@@ -105,36 +62,29 @@ def rigidity(case: Case) -> float:
     return math.sqrt(omega2) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
 
 
-def _relative_changes(fine: dict, coarse: dict) -> dict[str, float]:
-    """`|Q_f − Q_c|/|Q_f|` per quantity that both runs have."""
-    return {name: abs(fine[name] - coarse[name]) / abs(fine[name]) for name in QUANTITIES
-            if fine[name] is not None and coarse[name] is not None}
+def time_scale(case: Case) -> float:
+    """The time the contact force's shape is drawn over: the rigid-wall contact time, or, for a
+    contact stiff against the tool (its damping ratio on the tool's impedance Z above about 1),
+    the time the tool brakes the striker in, m1/Z (Saint-Venant's 1/β): the contact's own quick
+    rise is left to the ends' substeps."""
+    tool = case.tool
+    area = tool.area if tool.area is not None else tool.profile.area[0]
+    braking = case.striker.mass / (tool.density * wave_speed(tool) * area)
+    return max(contact_time_estimate(case), braking)
 
 
-def _estimate(runs: list, order: float, estimate_factor: float) -> tuple[dict[str, float], list[int]]:
-    """The last run's error per quantity, the largest over its partners, and the numbers of
-    contacts the partners saw.
+def first_cells(case: Case, tol: float) -> int:
+    """The coarsest grid of a ladder (`FIRST_POINTS`)."""
+    points = FIRST_POINTS * math.sqrt(1e-2 / tol)
+    tau = time_scale(case) / points
+    return max(MIN_CELLS, math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
 
-    Against each earlier run `MIN_REFINEMENT` to `MAX_REFINEMENT` times coarser (else the one
-    before it), Richardson: `|Q_f − Q_c|/(r^p − 1)`, taken `estimate_factor` larger. A closer run
-    (before the ladder's one small step) would amplify what is not yet asymptotic, but it still
-    says the finer grid's error is at least the change the step made (`r^p − 1 < 1` there): a
-    change beyond the tolerance refutes the coarser partners' agreement.
-    """
-    last, fine, _ = runs[-1]
-    refinements = [math.sqrt((numerics.time_step / last.time_step) * (last.cells / numerics.cells))
-                   for numerics, _, _ in runs[:-1]]
-    richardson = [k for k, r in enumerate(refinements)
-                  if MIN_REFINEMENT <= r <= MAX_REFINEMENT] or [len(runs) - 2]
-    close = [k for k, r in enumerate(refinements)
-             if MIN_STEP <= r < MIN_REFINEMENT and k not in richardson]
-    estimate: dict[str, float] = {}
-    for k in richardson + close:
-        r = refinements[k]
-        scale = estimate_factor / (r**order - 1.0) if k in richardson else 1.0
-        for name, change in _relative_changes(fine, runs[k][1]).items():
-            estimate[name] = max(scale * change, estimate.get(name, 0.0))
-    return estimate, [runs[k][2] for k in sorted(richardson + close)]
+
+def explicit_numerics(case: Case, cells: int) -> ResolvedNumerics:
+    """The explicit scheme at Courant number 1 on `cells` cells."""
+    h = case.tool.length / cells
+    return resolve_numerics(case, model="rod", scheme="explicit", cells=cells,
+                            time_step=h / wave_speed(case.tool))
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -152,108 +102,139 @@ def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
     return case.model_copy(update={"outputs": Outputs(history_stride=stride)})
 
 
-def solve_to_tolerance(case: Case, progress: ProgressCallback | None = None,
+def _estimate(case: Case, runs: list[tuple[ResolvedNumerics, dict]], order: float) -> Estimate:
+    return estimate([case.tool.length / n.cells for n, _ in runs], [s for _, s in runs], order,
+                    case.striker.velocity, case.medium is not None)
+
+
+def _limit_refusal(tol: float, numerics: ResolvedNumerics, error: CaseError) -> CaseError:
+    return CaseError([FieldError(
+        field="numerics.tolerance",
+        message=f"a tolerance of {tol:g} needs at least {numerics.cells} cells and {numerics.steps} "
+                f"steps, beyond the limits ({error}): loosen it, shorten numerics.duration, or "
+                "raise the limit")])
+
+
+def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None = None,
                        cancelled: CancelCheck | None = None, limits: Limits = Limits(),
-                       recorder: Recorder | None = None, ladder: Ladder = LADDER) -> Result:
-    """Meet `case.numerics.tolerance`; the summary reports the estimate, the runs and the choice.
+                       recorder: Recorder | None = None) -> Result:
+    """Meet `tol` on every estimated quantity (see the module's docstring); the summary reports the
+    estimate, the grids and why.
 
-    With a `recorder`, every rod run that may be the result records its outputs there, each
-    starting it again, so that it holds the result's when this returns (then `streamed`); a
-    lumped result is returned held in memory, as it is small.
+    With a `recorder`, every run that may be the result records its outputs there, each starting
+    it again, so that it holds the result's when this returns (then `streamed`).
     """
-    tol = case.numerics.tolerance
-    model = case.numerics.model
-    eps = rigidity(case)
-    lumped_error = LUMPED_ERROR * eps**2
-    if model == "lumped" or (model is None and case.numerics.scheme is None and lumped_error <= tol):
-        result = simulate_lumped(case, progress=progress, cancelled=cancelled)
-        why = (f"the tool is stiff against the impact (ε = {eps:.3g}: its lowest elastic frequency "
-               f"is {1 / eps:.3g}× the impact's), so the two-mass model (21)–(25) meets the "
-               f"tolerance; its modelling error is estimated as {LUMPED_ERROR:g}·ε² = {lumped_error:.2g}")
-        if model == "lumped":
-            why = f"numerics.model = 'lumped' as asked; modelling error estimated as ε² = {lumped_error:.2g}"
-        estimate = {name: lumped_error for name, v in quantities(result.summary).items() if v is not None}
-        return _annotated(result, tol, estimate, runs=[result.numerics], why=why)
-
-    scheme = case.numerics.scheme or DEFAULT_SCHEME
-    order = make_scheme(scheme, case.numerics.gamma, case.numerics.sigma, case.numerics.end_masses).order
-    period = contact_time_estimate(case)
-    a, length = wave_speed(case.tool), case.tool.length
-
-    runs: list[tuple[ResolvedNumerics, dict, int]] = []
-    factor = 1.0
-    worst = math.inf
-    agree = True  # the last grid's partners saw as many contacts as it did
-    stepped_small = False
-    start = max(MIN_START_POINTS, 0.5 * (ladder.error_constant / tol) ** (1.0 / order))
+    order = 2.0
+    runs: list[tuple[ResolvedNumerics, dict]] = []
+    cells = first_cells(case, tol)
+    result = None
+    found: Estimate | None = None
+    stopped = ""
     for stage in range(MAX_RUNS):
-        tau = period / (start * factor)
-        cells = max(math.ceil(MIN_CELLS * factor), math.ceil(length / (a * tau)))
-        numerics = resolve_numerics(case, model="rod", scheme=scheme, cells=cells,
-                                    time_step=min(COURANT * length / cells / a, tau))
-        final_candidate = stage > 0
+        numerics = explicit_numerics(case, cells)
+        final_candidate = stage >= 2
         run_case = case if final_candidate else _summary_only(case, numerics)
         try:
             check_limits(run_case, numerics, limits)
         except CaseError as error:
-            raise CaseError([FieldError(
-                field="numerics.tolerance",
-                message=f"a tolerance of {tol:g} needs about {numerics.cells} cells and "
-                        f"{numerics.steps} steps, beyond this service's limits ({error}): loosen it")]) from None
-        result = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
-                              cancelled=cancelled, recorder=recorder if final_candidate else None)
-        runs.append((numerics, quantities(result.summary), result.summary["contacts_total"]))
-        if stage == 0:
-            factor *= 2.0
+            if result is None:
+                raise _limit_refusal(tol, numerics, error) from None
+            stopped = (f"the next grid, {numerics.cells} cells and {numerics.steps} steps, is beyond "
+                       f"the limits ({error})")
+            break
+        candidate = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
+                                 cancelled=cancelled, recorder=recorder if final_candidate else None)
+        runs.append((numerics, candidate.summary))
+        if len(runs) < 3:
+            cells = math.ceil(cells * CLIMB)
             continue
-        seen_fine = runs[-1][2]
-        estimate, partner_contacts = _estimate(runs, order, ladder.estimate_factor)
-        agree = all(seen == seen_fine for seen in partner_contacts)
-        settled = agree or worst <= tol  # `worst`: the previous estimate, so far
-        worst = max(estimate.values(), default=0.0)
-        if worst <= tol and settled:
-            if not agree:
-                result.summary["warnings"].append(
-                    f"the grids this error estimate rests on saw different numbers of contacts "
-                    f"({seen_fine} on the last, {', '.join(map(str, partner_contacts))} on "
-                    "the coarser ones it was compared with): the later impacts, and the stresses they "
-                    "make, may be off by more than the estimate; shorten numerics.duration to the "
-                    "impacts that matter or check them on a finer fixed grid")
-            why = (f"the explicit scheme at Courant number 1 (second order, energy-conserving, and "
-                   f"free of dispersion along a uniform tool there) on grids refined until the "
-                   f"estimated error is within the tolerance; the lumped model was not enough "
-                   f"(estimated modelling error {lumped_error:.2g})"
-                   if case.numerics.scheme is None else
-                   f"numerics.scheme = '{scheme}' as asked, on grids refined until the estimated error "
-                   "is within the tolerance")
-            return _annotated(result, tol, estimate, runs=[n for n, _, _ in runs], why=why)
-        needed = (worst / (ladder.safety * tol)) ** (1.0 / order)
-        # A small step only on an estimate to trust, and once: grids that disagree on the
-        # contacts, or a small step that did not end the ladder, need a clear refinement.
-        small = agree and not stepped_small
-        stepped_small = stepped_small or (small and needed < MIN_REFINEMENT)
-        factor *= min(max(needed, MIN_STEP if small else MIN_REFINEMENT), MAX_REFINEMENT)
-    counts = ", ".join(str(c) for _, _, c in runs)
-    why_not = (f"last estimate {worst:.2g}" if worst > tol else
-               f"the last estimate, {worst:.2g}, is within it, but compares grids that saw different "
-               "numbers of contacts")
-    raise CaseError([FieldError(
-        field="numerics.tolerance",
-        message=f"{MAX_RUNS} grids did not reach a tolerance of {tol:g} ({why_not}; contacts seen by "
-                f"each grid: {counts}"
-                + ("; when that number keeps changing, the later impacts depend on the grid itself: "
-                   "shorten numerics.duration to the impacts that matter" if not agree else "")
-                + "): loosen it or give numerics.cells and numerics.time_step")])
+        result, found = candidate, _estimate(case, runs, order)
+        if found.worst <= tol and found.same_contacts:
+            break
+        cells = math.ceil(cells * next_refinement(found, tol))
+    else:
+        stopped = f"{MAX_RUNS} grids did not reach it"
+    why = ("the default accuracy (numerics gives neither a grid nor a scheme), as if "
+           f"numerics.tolerance were {tol:g}: " if case.numerics.tolerance is None else "")
+    why += ("the explicit scheme at Courant number 1, its ends integrating their own equations, on "
+            "grids refined until the error estimated from the last three is within the tolerance")
+    return annotate(result, found, tolerance=tol, runs=[n for n, _ in runs], why=why,
+                    unmet=stopped if stopped else "")
 
 
-def _annotated(result: Result, tol: float, estimate: dict[str, float],
-               runs: list[ResolvedNumerics], why: str) -> Result:
-    result.summary.update({
-        "tolerance": tol,
-        "error_estimate": {**estimate, "worst": max(estimate.values(), default=0.0)},
+def next_refinement(found: Estimate, tol: float) -> float:
+    """How much finer the next grid is: `CLIMB` while the last three grids disagree on the
+    contacts, or a quantity still to be refined is not in its asymptotic range; otherwise as the
+    worst quantity's estimate asks at the order its grids showed (1–2), 1.2–4×."""
+    wanting = [e for e in found.errors.values() if e.error > AIM * tol]
+    if not found.same_contacts or not all(e.asymptotic for e in wanting):
+        return CLIMB
+    needed = MIN_STEP
+    for e in wanting:
+        needed = max(needed, (e.error / (AIM * tol)) ** (1.0 / max(1.0, min(e.order, 2.0))))
+    return min(needed, MAX_STEP)
+
+
+def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,
+                   run: Callable[[Case, ResolvedNumerics], Result], limits: Limits) -> Result:
+    """The error of a run on a fixed grid, from companion runs `COMPANIONS` times coarser in h and
+    τ (as many of them as the grid allows) at the scheme's order; `run` solves a case on given
+    numerics."""
+    companions, missing = [], []
+    for factor in COMPANIONS:
+        cells = round(numerics.cells / factor)
+        if cells < MIN_CELLS:
+            missing.append(f"{factor}× coarser: fewer than {MIN_CELLS} cells")
+            continue
+        try:
+            coarse = resolve_numerics(case, model="rod", scheme=numerics.scheme, cells=cells,
+                                      time_step=numerics.time_step * numerics.cells / cells)
+            companions.append((coarse, run(_summary_only(case, coarse), coarse).summary))
+        except CaseError as error:  # a grid too coarse for a stiff contact or medium
+            missing.append(f"{factor}× coarser: {error.errors[0].message.split(':')[0]}")
+    if not companions:
+        result.summary["warnings"].append(
+            f"no error estimate: no coarser grid to compare {numerics.cells} cells with "
+            f"({'; '.join(missing)}); leave numerics.cells, time_step and scheme out for the "
+            "default accuracy, which estimates its error, or give numerics.tolerance")
+        return annotate(result, None, tolerance=None, runs=[numerics], why=result.summary["why"])
+    if missing:
+        result.summary["warnings"].append(
+            f"the error estimate rests on one coarser grid, at the scheme's order ({'; '.join(missing)})")
+    runs = companions + [(numerics, result.summary)]
+    found = _estimate(case, runs, numerics.weights().order)
+    return annotate(result, found, tolerance=None, runs=[n for n, _ in runs],
+                    why=result.summary["why"])
+
+
+def lumped_estimate(case: Case, result: Result) -> Result:
+    """The lumped model's estimate: its modelling error, `LUMPED_ERROR·ε²` on every quantity."""
+    eps = rigidity(case)
+    error = LUMPED_ERROR * eps**2
+    skip = not_estimated(result.summary, case.striker.velocity, case.medium is not None)
+    found = Estimate({name: QuantityError(error, None, False) for name in ESTIMATED
+                      if name not in skip}, skip, True)
+    return annotate(result, found, tolerance=case.numerics.tolerance, runs=[result.numerics],
+                    why=f"numerics.model = 'lumped' as asked: the two-mass model problem (21)–(25); "
+                        f"its modelling error estimated as ε² = {error:.2g} (ε = {eps:.3g}, the "
+                        "two-mass system's highest frequency over the tool's lowest elastic one)")
+
+
+def annotate(result: Result, found: Estimate | None, tolerance: float | None,
+             runs: list[ResolvedNumerics], why: str, unmet: str = "") -> Result:
+    """Write the estimate, the tolerance, the grids and why into the result's summary, with the
+    warnings the estimate calls for (`accuracy.accuracy_warnings`)."""
+    from .accuracy import accuracy_warnings
+
+    summary = result.summary
+    summary.update({
+        "tolerance": tolerance,
+        "error_estimate": found.relative() if found else None,
+        "not_estimated": dict(found.left_out) if found else {},
         "why": why,
         "runs": [{"model": n.model, "scheme": n.scheme, "cells": n.cells,
                   "time_step": n.time_step, "steps": n.steps} for n in runs],
     })
+    if found is not None:
+        summary["warnings"].extend(accuracy_warnings(found, summary, tolerance, unmet))
     return result
-

@@ -158,22 +158,30 @@ Force = Annotated[Union[SineForce, AbsSineForce, PulseForce], Field(discriminato
 
 
 class Numerics(_Model):
-    """Time span, grid and scheme. `time_step` (τ) and `cells` (N = L/h) default from the case itself;
-    with `tolerance` instead, the solver chooses model, scheme and grid to meet it."""
+    """Time span and accuracy. With only `duration` the case is solved to the default accuracy, as
+    if `tolerance` were 0.01: the solver chooses the scheme and the grid and estimates its error.
+    Giving `cells`, `time_step` or `scheme` runs that fixed grid instead (the paper's scheme unless
+    another is named), its error estimated from two coarser companion runs."""
 
     duration: Duration
-    time_step: Duration | None = None
-    cells: int | None = Field(default=None, ge=1, le=2**31)  # the service limits are far lower
+    time_step: Duration | None = Field(
+        default=None, description="τ (s) of a fixed grid; default from the case itself")
+    cells: int | None = Field(  # the service limits are far lower than the bound
+        default=None, ge=1, le=2**31, description="N = L/h of a fixed grid; default 100 once a grid is asked")
     tolerance: float | None = Field(
         default=None, ge=1e-5, le=0.2,
-        description="relative accuracy asked on co-impact time, peak contact force and maximum "
-                    "stress; the solver chooses model, scheme and grid and reports its error estimate",
+        description="relative accuracy asked on every headline quantity (co-impact time, peak "
+                    "contact force, maximum compressive and tensile stress, energy to the medium, "
+                    "rebound velocity, transfer efficiency); the solver chooses the grid and reports "
+                    "its error estimate. Default 0.01 when numerics gives no cells, time_step or scheme",
     )
     scheme: Literal["paper", "sigma", "explicit"] | None = Field(
         default=None,
-        description="'paper': the weighted scheme (8) with γ (first order); 'sigma': the symmetric "
-                    "σ-scheme (second order, energy-conserving); 'explicit': central differences "
-                    "(second order, Courant number a·τ/h ≤ 1). Default 'paper', or chosen under tolerance",
+        description="a fixed grid's scheme: 'paper', the weighted scheme (8) with γ (first order); "
+                    "'sigma', the symmetric σ-scheme (second order, energy-conserving); 'explicit', "
+                    "central differences (second order, Courant number a·τ/h ≤ 1; at 1, its default, "
+                    "exact along a uniform tool, with ends that integrate their own equations). "
+                    "Default 'paper' when a grid is given; chosen by the solver otherwise",
     )
     gamma: float = Field(
         default=0.5, le=1.0,
@@ -190,8 +198,8 @@ class Numerics(_Model):
     )
     model: Literal["rod", "lumped"] | None = Field(
         default=None,
-        description="'rod': the tool as an elastic rod (8)–(13); 'lumped': the two-mass model problem "
-                    "(21)–(25). Default 'rod', or chosen under tolerance",
+        description="'rod': the tool as an elastic rod (8)–(13), the default; 'lumped': the two-mass "
+                    "model problem (21)–(25), its modelling error estimated as ε²",
     )
 
     @field_validator("gamma")

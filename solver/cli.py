@@ -52,6 +52,13 @@ def _print_summary(summary: dict, path: str | None) -> int:
     return 0
 
 
+def _limits():
+    """The size limits of local runs: the service's settings (`PERCUSSIM_MAX_*`) read here too."""
+    from worker.settings import Settings
+
+    return Settings().limits()
+
+
 def _run(args: argparse.Namespace) -> int:
     from .case import CaseError, load_case
     from .controller import NumericalFailure
@@ -61,7 +68,8 @@ def _run(args: argparse.Namespace) -> int:
         case = load_case(args.case)
         with _progress_bar(args.progress) as advance:
             # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
-            result = simulate(case, model=args.model, result_path=args.output, progress=advance)
+            result = simulate(case, model=args.model, result_path=args.output, progress=advance,
+                              limits=_limits())
     except FileNotFoundError:
         return _no_such_file(args.case)
     except CaseError as error:
@@ -180,7 +188,7 @@ def _sweep_here(args: argparse.Namespace) -> list[dict]:
     from .sweep import Sweep, run_sweep
 
     sweep = Sweep(case=load_case(args.case), parameters=dict(args.vary))
-    return run_sweep(sweep, processes=args.processes, progress=_variants_done)
+    return run_sweep(sweep, processes=args.processes, progress=_variants_done, limits=_limits())
 
 
 def _sweep_on_service(args: argparse.Namespace) -> list[dict]:

@@ -11,6 +11,9 @@ from .grid import ResolvedNumerics
 
 @dataclass(frozen=True)
 class Limits:
+    """Sizes a run may not exceed; `PERCUSSIM_MAX_CELLS`, `…_STEPS`, `…_NODE_STEPS` and
+    `…_OUTPUT_VALUES` set them, for the service and the command line alike."""
+
     max_cells: int = 100_000
     max_steps: int = 20_000_000
     max_node_steps: float = 2e10  # cells × steps: about a few minutes of kernel time
@@ -34,23 +37,27 @@ def check_limits(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits
     errors = []
     if numerics.cells > limits.max_cells:
         errors.append(FieldError(field="numerics.cells",
-                                 message=f"{numerics.cells} cells exceed the limit of {limits.max_cells}"))
+                                 message=f"{numerics.cells} cells exceed the limit of {limits.max_cells} "
+                                         "(PERCUSSIM_MAX_CELLS raises it)"))
     if numerics.steps > limits.max_steps:
         errors.append(FieldError(
             field="numerics.time_step",
             message=f"{numerics.steps} time steps (duration / time_step) exceed the limit of "
-                    f"{limits.max_steps}: raise numerics.time_step or shorten numerics.duration"))
+                    f"{limits.max_steps} (PERCUSSIM_MAX_STEPS raises it): raise numerics.time_step "
+                    "or shorten numerics.duration"))
     work = float(numerics.cells) * numerics.steps
     if numerics.model == "rod" and work > limits.max_node_steps:
         errors.append(FieldError(
             field="numerics",
             message=f"{work:.3g} node-steps (cells × steps) exceed the limit of "
-                    f"{limits.max_node_steps:.3g}: use fewer cells or a larger time_step"))
+                    f"{limits.max_node_steps:.3g} (PERCUSSIM_MAX_NODE_STEPS raises it): use fewer "
+                    "cells or a larger time_step"))
     values = output_values(case, numerics)
     if values > limits.max_output_values:
         errors.append(FieldError(
             field="outputs",
             message=f"the outputs would keep {values:.3g} numbers, over the limit of "
-                    f"{limits.max_output_values:.3g}: raise outputs.history_stride or outputs.field_stride"))
+                    f"{limits.max_output_values:.3g} (PERCUSSIM_MAX_OUTPUT_VALUES raises it): raise "
+                    "outputs.history_stride or outputs.field_stride"))
     if errors:
         raise CaseError(errors)

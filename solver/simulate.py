@@ -1,23 +1,30 @@
-"""One entry point for a run: limits first, then the rod or the lumped model, or a tolerance."""
+"""One entry point for a run: limits first, then a tolerance, the lumped model or a fixed grid, each
+with its error estimate (`solver.adaptive`)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
-from .adaptive import solve_to_tolerance
-from .case import Case
+from .adaptive import (DEFAULT_TOLERANCE, explicit_numerics, first_cells, fixed_estimate,
+                       lumped_estimate, solve_to_tolerance)
+from .case import Case, CaseError, FieldError, Numerics
 from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
 from .grid import ResolvedNumerics, resolve_numerics
 from .io import ResultWriter
 from .limits import Limits, check_limits
 from .lumped import simulate_lumped
 
+FIXED_SHARE = 0.75  # of a fixed grid's progress: the run asked for; its companions the rest
+
 
 def simulate(case: Case, model: str | None = None, progress: ProgressCallback | None = None,
              cancelled: CancelCheck | None = None, limits: Limits = Limits(),
              result_path: str | Path | None = None) -> Result:
-    """Solve `case` with `model` ('rod' or 'lumped'; default `case.numerics.model`), or, when the
-    case gives `numerics.tolerance`, with the model, scheme and grid chosen to meet it.
+    """Solve `case` with `model` ('rod' or 'lumped'; default `case.numerics.model`) to the accuracy
+    it asks: `numerics.tolerance`; the default accuracy (a tolerance of 0.01) when it gives neither
+    a grid nor a scheme; or the fixed grid it gives, whose error is estimated from two coarser
+    companion runs. Every summary carries `error_estimate` (or says in `warnings` why not).
 
     With `result_path` the result is written there (HDF5, atomically; nothing is left there if
     the run fails or is cancelled), the rod's outputs streamed to it as the run goes so that
@@ -34,29 +41,86 @@ def simulate(case: Case, model: str | None = None, progress: ProgressCallback | 
     return result
 
 
+def tolerance_of(numerics: Numerics) -> float | None:
+    """The tolerance a case is solved to: its own, or the default when it gives neither a grid
+    nor a scheme (and asks for the rod); None for a fixed grid or the lumped model."""
+    if numerics.tolerance is not None:
+        return numerics.tolerance
+    fixed = (numerics.cells, numerics.time_step, numerics.scheme)
+    if all(value is None for value in fixed) and numerics.model != "lumped":
+        return DEFAULT_TOLERANCE
+    return None
+
+
+def check_case(case: Case, limits: Limits) -> None:
+    """Refuse up front a case over the limits (`CaseError` naming each): the grid it gives, or,
+    under a tolerance, the first grid of its ladder (a later one over them ends the ladder)."""
+    tol = tolerance_of(case.numerics)
+    if tol is not None:
+        numerics = explicit_numerics(case, first_cells(case, tol))
+    else:
+        numerics = resolve_numerics(case)
+    check_limits(case, numerics, limits)
+
+
 def _solve(case: Case, progress: ProgressCallback | None, cancelled: CancelCheck | None,
            limits: Limits, recorder: Recorder | None) -> Result:
-    if case.numerics.tolerance is not None:
-        return solve_to_tolerance(case, progress=progress, cancelled=cancelled, limits=limits,
+    tol = tolerance_of(case.numerics)
+    if case.numerics.model == "lumped":
+        numerics = resolve_numerics(case)
+        check_limits(case, numerics, limits)
+        result = simulate_lumped(case, progress=progress, cancelled=cancelled)
+        return lumped_estimate(case, result)
+    if tol is not None:
+        return solve_to_tolerance(case, tol, progress=progress, cancelled=cancelled, limits=limits,
                                   recorder=recorder)
     numerics = resolve_numerics(case)
     check_limits(case, numerics, limits)
-    if numerics.model == "lumped":
-        result = simulate_lumped(case, progress=progress, cancelled=cancelled)
-    else:
-        result = simulate_rod(case, numerics=numerics, progress=progress, cancelled=cancelled,
-                              recorder=recorder)
+    share = None if progress is None else (lambda fraction: progress(FIXED_SHARE * fraction))
+    result = simulate_rod(case, numerics=numerics, progress=share, cancelled=cancelled,
+                          recorder=recorder)
+    refuse_chatter(result.summary, numerics)
     result.summary["why"] = fixed_choice(case, numerics)
+
+    def companion(coarse_case: Case, coarse: ResolvedNumerics) -> Result:
+        result = simulate_rod(coarse_case, numerics=coarse, cancelled=cancelled)
+        refuse_chatter(result.summary, coarse)
+        return result
+
+    result = fixed_estimate(case, numerics, result, companion, limits)
+    if progress is not None:
+        progress(1.0)
     return result
 
 
+CHATTER_STEPS = 5.0  # a contact resolved by fewer steps than this says nothing of the case
+
+
+def refuse_chatter(summary: dict, numerics: ResolvedNumerics) -> None:
+    """Refuse the run of a fixed grid whose ends carry a mass, or none, when of several contacts one
+    lasted less than `CHATTER_STEPS` steps: the contact chattered against an end that rings, and
+    the answer is the grid's, not the case's (the ends that integrate their own equations resolve
+    any contact with their own substeps)."""
+    if numerics.ends == "impedance" or summary["contacts_total"] < 2:
+        return  # one contact, however short, is no chatter: the estimate says how far off it is
+    finished = [c for c in summary["contacts"] if c["end"] is not None]
+    shortest = min(((c["end"] - c["start"]) / numerics.time_step for c in finished), default=math.inf)
+    if shortest < CHATTER_STEPS:
+        raise CaseError([FieldError(
+            field="contact",
+            message=f"the contact chattered on this grid ({summary['contacts_total']} contacts, the "
+                    f"shortest over {shortest:.2g} time steps of {numerics.time_step:.3g} s): its "
+                    f"stiffness or its damper is more than the scheme '{numerics.scheme}' with these "
+                    "ends can take on this grid. Leave numerics.cells, time_step and scheme out (the "
+                    "default accuracy takes any contact), or give numerics.scheme = 'explicit' with "
+                    "numerics.cells only")])
+
+
 def fixed_choice(case: Case, numerics: ResolvedNumerics) -> str:
-    """Why a run without a tolerance used its model and scheme: the case said so, or the default."""
+    """Why a run on a fixed grid used its scheme: the case said so."""
     num = case.numerics
-    if numerics.model == "lumped":
-        return "numerics.model = 'lumped' as asked: the two-mass model problem (21)–(25), DOP853"
     if num.scheme is not None:
-        return f"numerics.scheme = '{num.scheme}' as asked, on the grid given or its defaults"
-    return ("the default: the paper's weighted scheme (8) with γ = "
-            f"{num.gamma:g} on the grid given or its defaults; give numerics.tolerance to let the "
-            "solver choose model, scheme and grid")
+        return (f"numerics.scheme = '{num.scheme}' as asked, on the grid given or its defaults; its "
+                "error estimated from two companion runs on grids 2× and 4× coarser")
+    return (f"a grid was given, so the paper's weighted scheme (8) with γ = {num.gamma:g} on it; "
+            "its error estimated from two companion runs on grids 2× and 4× coarser")

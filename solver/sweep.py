@@ -21,9 +21,8 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from .case import Case, CaseError, FieldError, Outputs, parse_case
 from .controller import NumericalFailure
-from .grid import resolve_numerics
-from .limits import Limits, check_limits
-from .simulate import simulate
+from .limits import Limits
+from .simulate import check_case, simulate
 
 MAX_VARIANTS = 10_000
 MAX_ERRORS = 20  # bad variants named before giving up
@@ -38,7 +37,9 @@ COLUMNS = (
     ("max_tensile_stress", ("max_tensile_stress", "value")),
     ("striker_rebound_velocity", ("striker_rebound_velocity",)),
     ("energy_to_medium", ("energy", "to_medium")),
+    ("transfer_efficiency", ("energy", "transfer_efficiency")),
     ("contacts", ("contacts_total",)),
+    ("estimated_error", ("error_estimate", "worst")),  # the worst of the row's quantities
 )
 
 
@@ -90,7 +91,7 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
                 where = f"parameters[{name!r}][{k}]"
                 _set(tree, name, value)
             case = parse_case(tree)
-            check_limits(case, resolve_numerics(case), limits)
+            check_case(case, limits)
             found.append((values, case))
         except CaseError as error:
             for e in error.errors:
@@ -114,7 +115,7 @@ def table_row(summary: dict) -> dict[str, Any]:
     for column, path in COLUMNS:
         value: Any = summary
         for key in path:
-            value = value[key]
+            value = None if value is None else value[key]
         row[column] = value
     row["warnings"] = len(summary["warnings"])
     return row

@@ -1,0 +1,249 @@
+"""The headline quantities a summary's accuracy is stated for, and when one has no relative error.
+
+Every summary states the relative error of six headline quantities (`HEADLINE`). A quantity that
+is absent or negligible in a scene has no meaningful relative error and is left out of the
+estimate with the reason (`left_out`): a first contact that lasts the whole run has no co-impact
+time and no rebound; a tension or a rebound that is a small fraction of its natural scale, or the
+energy to a medium that takes almost nothing, would ask for an accuracy nobody needs at a cost
+nobody wants.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+HEADLINE = ("co_impact_time", "peak_contact_force", "max_compressive_stress", "max_tensile_stress",
+            "energy.to_medium", "striker_rebound_velocity")
+
+# Below these fractions of its scale a quantity is left out of the estimate
+TENSION_FRACTION = 0.02  # of the maximum compressive stress
+REBOUND_FRACTION = 0.02  # of the impact velocity W1
+MEDIUM_FRACTION = 0.01  # of the input energy (initial + external work)
+
+
+def headline(summary: dict) -> dict[str, float | None]:
+    """The headline quantities of a summary under their dotted names (None where it has none)."""
+    return {
+        "co_impact_time": summary["co_impact_time"],
+        "peak_contact_force": summary["peak_contact_force"]["value"],
+        "max_compressive_stress": summary["max_compressive_stress"]["value"],
+        "max_tensile_stress": summary["max_tensile_stress"]["value"],
+        "energy.to_medium": summary["energy"]["to_medium"],
+        "striker_rebound_velocity": summary["striker_rebound_velocity"],
+    }
+
+
+def left_out(values: dict[str, float | None], impact_velocity: float, input_energy: float,
+             has_medium: bool) -> dict[str, str]:
+    """The headline quantities without a meaningful relative error, each with the reason."""
+    reasons = {}
+    if values["co_impact_time"] is None:
+        reasons["co_impact_time"] = "the first contact lasts the whole run"
+        reasons["striker_rebound_velocity"] = "the striker never leaves the tool during the run"
+    elif abs(values["striker_rebound_velocity"]) < REBOUND_FRACTION * abs(impact_velocity):
+        reasons["striker_rebound_velocity"] = (
+            f"the striker leaves at {values['striker_rebound_velocity']:.3g} m/s, under "
+            f"{100 * REBOUND_FRACTION:g}% of its impact velocity")
+    compression = values["max_compressive_stress"] or 0.0
+    tension = values["max_tensile_stress"] or 0.0
+    if tension <= TENSION_FRACTION * compression:
+        reasons["max_tensile_stress"] = (
+            f"the tension, {tension / 1e6:.3g} MPa, is under {100 * TENSION_FRACTION:g}% of the "
+            "compression" if tension > 0 else "the tool is never in tension")
+    if not has_medium:
+        reasons["energy.to_medium"] = "no medium"
+    elif values["energy.to_medium"] < MEDIUM_FRACTION * input_energy:
+        reasons["energy.to_medium"] = (
+            f"under {100 * MEDIUM_FRACTION:g}% of the input energy reaches the medium")
+    if not values["peak_contact_force"]:
+        reasons["peak_contact_force"] = "the striker never presses on the tool"
+        reasons["max_compressive_stress"] = "the tool is never in compression"
+    return reasons
+
+
+def relative_change(fine: float | None, coarse: float | None) -> float:
+    """`|fine − coarse|/|fine|` (inf when only one of them exists, 0 when neither does)."""
+    if fine is None or coarse is None:
+        return 0.0 if fine is coarse else float("inf")
+    return abs(fine - coarse) / abs(fine) if fine else (0.0 if coarse == fine else float("inf"))
+
+
+# --- The error of the finest of several grids -------------------------------------------------
+#
+# Grids refined in h and τ together, coarse to fine. On the last three the differences of a
+# quantity give its observed order p (Q = Q* + C·h^p); the finest grid's error is then
+# `|Q_3 − Q_2|/((h_2/h_3)^p − 1)` (Richardson), with p no larger than the scheme's own order
+# (a faster apparent convergence is not relied on) and taken `SAFETY_FACTOR` larger (Roache's
+# factor for three-grid studies). Grids whose differences change sign, or shrink slower than
+# order `LOWEST_ORDER`, are not yet in their asymptotic range: the estimate is then the larger of
+# the two differences, taken as large, and says so.
+
+SAFETY_FACTOR = 1.25
+LOWEST_ORDER = 0.5
+
+
+def observed_order(h: tuple[float, float, float], q: tuple[float, float, float]) -> float | None:
+    """The order p with `(h2^p − h1^p)/(h3^p − h2^p) = (q2 − q1)/(q3 − q2)` (h1 > h2 > h3), or None
+    when the differences change sign or the finer one is not smaller."""
+    d1, d2 = q[1] - q[0], q[2] - q[1]
+    if d1 == 0.0 or d2 == 0.0 or (d1 > 0.0) != (d2 > 0.0) or abs(d2) >= abs(d1):
+        return None
+    target = d1 / d2
+
+    def ratio(p: float) -> float:
+        return (h[1] ** p - h[0] ** p) / (h[2] ** p - h[1] ** p)
+
+    lo, hi = 1e-3, 12.0  # the ratio grows with p
+    if ratio(hi) < target:
+        return hi
+    if ratio(lo) > target:
+        return lo
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if ratio(mid) < target else (lo, mid)
+    return 0.5 * (lo + hi)
+
+
+@dataclass(frozen=True)
+class QuantityError:
+    """The estimated relative error of one quantity on the finest grid, and how it was found."""
+
+    error: float
+    order: float | None  # observed; None with fewer than three grids or out of the asymptotic range
+    asymptotic: bool
+
+
+def quantity_error(h: list[float], values: list[float | None], formal_order: float) -> QuantityError:
+    """The finest grid's relative error of one quantity from its values on grids `h` (coarse to
+    fine, at least two)."""
+    fine = values[-1]
+    if fine is None or any(v is None for v in values[-3:]):
+        return QuantityError(math.inf, None, False)
+    scale = abs(fine) or math.inf
+    if len(values) == 2:
+        change = abs(values[1] - values[0])
+        bare = change / ((h[0] / h[1]) ** formal_order - 1.0)
+        return QuantityError(SAFETY_FACTOR * bare / scale, None, False)
+    h3, q3 = tuple(h[-3:]), tuple(values[-3:])
+    d1, d2 = q3[1] - q3[0], q3[2] - q3[1]
+    if d2 == 0.0:
+        return QuantityError(0.0 if d1 == 0.0 else SAFETY_FACTOR * abs(d1) / scale, None, d1 == 0.0)
+    order = observed_order(h3, q3)
+    if order is None or order < LOWEST_ORDER:
+        return QuantityError(SAFETY_FACTOR * max(abs(d1), abs(d2)) / scale, order, False)
+    used = min(order, formal_order)
+    bare = abs(d2) / ((h3[1] / h3[2]) ** used - 1.0)
+    return QuantityError(SAFETY_FACTOR * bare / scale, order, True)
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """The finest grid's error estimate: per quantity, the quantities left out (with why), and
+    whether the grids it rests on agree on the number of contacts."""
+
+    errors: dict[str, QuantityError]
+    left_out: dict[str, str]
+    same_contacts: bool
+    contacts: tuple[int, ...] = ()  # each grid's, coarse to fine
+    formal_order: float = 2.0
+
+    @property
+    def worst(self) -> float:
+        return max((e.error for e in self.errors.values()), default=0.0)
+
+    @property
+    def asymptotic(self) -> bool:
+        return all(e.asymptotic for e in self.errors.values())
+
+    def relative(self) -> dict[str, float]:
+        """The summary's `error_estimate`: each quantity's estimate and the worst."""
+        return {**{name: e.error for name, e in self.errors.items()}, "worst": self.worst}
+
+
+ESTIMATED = HEADLINE + ("energy.transfer_efficiency",)
+
+
+def estimated_values(summary: dict) -> dict[str, float | None]:
+    """The quantities an error is estimated for: the headline ones and the transfer efficiency."""
+    return {**headline(summary), "energy.transfer_efficiency": summary["energy"]["transfer_efficiency"]}
+
+
+def not_estimated(summary: dict, impact_velocity: float, has_medium: bool) -> dict[str, str]:
+    """The estimated quantities a run leaves out (`left_out`), the efficiency with the energy."""
+    energy = summary["energy"]
+    skip = left_out(headline(summary), impact_velocity,
+                    energy["initial"] + max(energy["external_work"], 0.0), has_medium)
+    if "energy.to_medium" in skip:
+        skip["energy.transfer_efficiency"] = skip["energy.to_medium"]
+    return skip
+
+
+def estimate(h: list[float], summaries: list[dict], formal_order: float, impact_velocity: float,
+             has_medium: bool) -> Estimate:
+    """The error of the finest of the runs `summaries` on grids of cell size `h` (coarse to
+    fine). What is left out is decided on the finest run."""
+    values = [estimated_values(s) for s in summaries]
+    skip = not_estimated(summaries[-1], impact_velocity, has_medium)
+    errors = {name: quantity_error(h, [v[name] for v in values], formal_order)
+              for name in ESTIMATED if name not in skip}
+    contacts = tuple(s["contacts_total"] for s in summaries[-3:])
+    return Estimate(errors, skip, all(c == contacts[-1] for c in contacts), contacts, formal_order)
+
+
+# --- What a summary says of its accuracy -------------------------------------------------------
+
+ERROR_WARNING = 0.01  # an estimated error above this is worth a warning
+ENERGY_WARNING = 0.01  # so is energy lost or created by the scheme, as a fraction of the input
+
+
+def _percent(fraction: float) -> str:
+    return f"{100 * fraction:.2g}%" if fraction < math.inf else "unknown (the grids do not agree)"
+
+
+def _listed(errors: dict[str, QuantityError], limit: float) -> str:
+    over = sorted(((e.error, name) for name, e in errors.items() if e.error > limit), reverse=True)
+    return ", ".join(f"{name} {_percent(error)}" for error, name in over)
+
+
+def accuracy_warnings(found: Estimate, summary: dict, tolerance: float | None, unmet: str = ""
+                      ) -> list[str]:
+    """The warnings an estimate calls for: a tolerance not met, an estimated error over 1% on a
+    fixed grid (with the grid that would meet 1%), grids that disagree on the contacts, and energy
+    the scheme lost or created beyond 1% of the input; each with the numbers and what to change."""
+    out = []
+    if tolerance is not None:
+        if unmet or found.worst > tolerance or not found.same_contacts:
+            reason = unmet or ("the grids disagree on the contacts" if found.worst <= tolerance
+                               else "the estimate stays above it")
+            out.append(f"the tolerance of {tolerance:g} is not met ({reason}): estimated errors "
+                       f"{_listed(found.errors, tolerance) or 'within it'}; the values are the finest "
+                       "grid's")
+    elif found.worst > ERROR_WARNING:
+        cells = summary["numerics"]["cells"]
+        order = min((e.order or found.formal_order) if e.asymptotic else 1.0
+                    for e in found.errors.values() if e.error > ERROR_WARNING)
+        needed = math.ceil(cells * (found.worst / (0.5 * ERROR_WARNING)) ** (1.0 / max(order, 0.5))) \
+            if found.worst < math.inf else None
+        grid = f" or about {needed} cells with the time step scaled alike" if needed else ""
+        out.append(f"estimated errors over {_percent(ERROR_WARNING)}: {_listed(found.errors, ERROR_WARNING)}; "
+                   f"leave out numerics.cells, time_step and scheme for the default accuracy (1%), give "
+                   f"numerics.tolerance{grid}")
+    if not found.same_contacts:
+        out.append(f"the grids this estimate rests on saw different numbers of contacts "
+                   f"({', '.join(map(str, found.contacts))}, coarse to fine): the later impacts, and "
+                   "the stresses they make, may be off by more than the estimate")
+    energy = summary["energy"]
+    budget = energy["initial"] + max(energy["external_work"], 0.0)
+    if budget > 0:
+        lost = energy["numerical"] / budget
+        created = energy["max_excess_fraction"]
+        fix = ("give numerics.tolerance or a finer grid" if tolerance is None
+               else "a tighter numerics.tolerance reduces it")
+        if lost > ENERGY_WARNING:
+            out.append(f"the scheme dissipated {_percent(lost)} of the input energy "
+                       f"(energy.numerical = {energy['numerical']:.4g} J): {fix}")
+        if max(-lost, created) > ENERGY_WARNING:
+            out.append(f"the scheme created {_percent(max(-lost, created))} of the input energy at "
+                       f"some instant: {fix}")
+    return out
