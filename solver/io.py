@@ -211,10 +211,20 @@ class ResultWriter:
         elif self._file is None:
             raise ValueError("a streamed result's arrays are only in the file it was streamed to")
         numerics = result.numerics.as_dict()
+        summary = result.summary
+        estimate = summary.get("error_estimate")
         attributes = {"format": FORMAT, "format_version": FORMAT_VERSION,
                       "solver_version": __version__, "case": result.case.model_dump_json(),
                       "numerics": json.dumps(numerics),
-                      **{f"numerics.{key}": value for key, value in numerics.items()}}
+                      **{f"numerics.{key}": value for key, value in numerics.items()},
+                      # what the summary says of its accuracy, readable without parsing it
+                      "error_estimate": json.dumps(estimate),
+                      "not_estimated": json.dumps(summary.get("not_estimated", {})),
+                      "warnings": json.dumps(summary["warnings"])}
+        if estimate is not None:
+            attributes["error_estimate.worst"] = float(estimate["worst"])
+        if summary.get("tolerance") is not None:
+            attributes["tolerance"] = float(summary["tolerance"])
         for name, value in attributes.items():
             _attribute(self._file.id, name, value)
         # pydantic's compiled encoder: the same text as json.dumps (NaN aside, which becomes null),

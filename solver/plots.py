@@ -277,11 +277,19 @@ def _energy(fig: Figure, src: _Source, times) -> None:
                 + src.history("energy/external_work", MAX_FILL_POINTS))
     terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in ENERGY_TERMS]
     numerical = supplied - np.sum(terms, axis=0)
-    ax.stackplot(t, *terms, numerical, labels=[*ENERGY_TERMS.values(), "numerical (the scheme)"],
-                 colors=[f"C{k}" for k in range(len(terms) + 1)], alpha=0.85, lw=0)
+    lost = numerical[-1] / supplied[-1] if supplied[-1] > 0 else 0.0
+    bands = ax.stackplot(t, *terms, numerical,
+                         labels=[*ENERGY_TERMS.values(), "lost by the scheme (numerical)"],
+                         colors=[f"C{k}" for k in range(len(terms))] + ["0.75"], alpha=0.85, lw=0)
+    bands[-1].set_hatch("////")  # what the scheme lost stands apart from the physics
+    bands[-1].set_edgecolor("firebrick")
     ax.plot(t, supplied, color="black", lw=1.4, ls="--", label="input: initial + external work")
+    ax.annotate(f"the scheme {'lost' if lost >= 0 else 'created'} {abs(100 * lost):.2g}% of the input",
+                xy=(t[-1], supplied[-1] - 0.5 * numerical[-1]), xytext=(-8, 0),
+                textcoords="offset points", ha="right", va="center", fontsize=9,
+                color="firebrick" if abs(lost) > 0.01 else "0.3")
     _decorate(ax, src.t_label(), "energy (J)")
-    ax.set_ylim(0, 1.06 * supplied.max())  # room above the input line, which tops the stack
+    ax.set_ylim(0, 1.06 * max(supplied.max(), np.sum(terms, axis=0).max()))
     fig.legend(loc="outside right upper", fontsize=9, frameon=False)
 
 

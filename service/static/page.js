@@ -329,11 +329,22 @@ function card(title, ...content) {
   return h("section", { class: "card" }, h("h3", {}, title), ...content);
 }
 
+// A quantity's estimated relative error, or why it has none (on hover).
+function errorCell(s, quantity) {
+  const estimate = (s.error_estimate || {})[quantity];
+  if (estimate !== undefined) {
+    const over = estimate > (s.tolerance ?? 0.01);
+    return h("td", { class: over ? "num error over" : "num error" }, `±${fmt(100 * estimate, 2)}%`);
+  }
+  const reason = (s.not_estimated || {})[quantity];
+  return h("td", { class: "num error muted", title: reason || "" }, reason ? "n/a" : "");
+}
+
 // A row of the pulse table; `quantity` names the summary's key, for whoever reads the page by machine.
-function pulseRow(label, quantity, value, unit, x = "", t = "") {
+function pulseRow(s, label, quantity, value, unit, x = "", t = "") {
   return h("tr", { "data-quantity": quantity },
     h("th", {}, label), h("td", { class: "num value" }, value), h("td", { class: "unit" }, unit),
-    h("td", { class: "num" }, x), h("td", { class: "num" }, t));
+    errorCell(s, quantity), h("td", { class: "num" }, x), h("td", { class: "num" }, t));
 }
 
 function pulseCard(s) {
@@ -341,15 +352,18 @@ function pulseCard(s) {
   const stress = (key) => (s[key] ? [fmt(s[key].value / 1e6), "MPa", fmt(s[key].x * 1e3), us(s[key].time)]
                                    : ["—", "MPa"]);
   const contacts = s.contacts || [];
+  const e = s.energy;
   return card("Pulse",
-    table("pulse", ["", "value", "unit", "at x (mm)", "at t (µs)"], [
-      pulseRow("Co-impact time", "co_impact_time", us(s.co_impact_time), "µs"),
-      pulseRow("Peak contact force", "peak_contact_force", fmt(peak.value / 1e3), "kN", "", us(peak.time)),
-      pulseRow("Max compressive stress", "max_compressive_stress", ...stress("max_compressive_stress")),
-      pulseRow("Max tensile stress", "max_tensile_stress", ...stress("max_tensile_stress")),
-      pulseRow("Striker rebound velocity", "striker_rebound_velocity", fmt(s.striker_rebound_velocity), "m/s",
+    table("pulse", ["", "value", "unit", "error (est.)", "at x (mm)", "at t (µs)"], [
+      pulseRow(s, "Co-impact time", "co_impact_time", us(s.co_impact_time), "µs"),
+      pulseRow(s, "Peak contact force", "peak_contact_force", fmt(peak.value / 1e3), "kN", "", us(peak.time)),
+      pulseRow(s, "Max compressive stress", "max_compressive_stress", ...stress("max_compressive_stress")),
+      pulseRow(s, "Max tensile stress", "max_tensile_stress", ...stress("max_tensile_stress")),
+      pulseRow(s, "Striker rebound velocity", "striker_rebound_velocity", fmt(s.striker_rebound_velocity), "m/s",
                "", contacts.length ? us(contacts[0].end) : ""),
-      pulseRow("Contacts", "contacts_total", String(s.contacts_total ?? contacts.length), ""),
+      pulseRow(s, "Energy to the medium", "energy.to_medium", fmt(e.to_medium), "J"),
+      pulseRow(s, "Transfer efficiency", "energy.transfer_efficiency", fmt(100 * e.transfer_efficiency), "%"),
+      pulseRow(s, "Contacts", "contacts_total", String(s.contacts_total ?? contacts.length), ""),
     ]),
     contacts.length > 1 && h("details", {},
       h("summary", {}, `All ${contacts.length} contact intervals`),
@@ -366,7 +380,7 @@ const ENERGY_TERMS = [
   ["medium_potential", "Medium, potential"],
   ["dissipated_contact", "Dissipated in the contact"],
   ["dissipated_medium", "Dissipated in the medium"],
-  ["numerical", "Dissipated by the scheme"],
+  ["numerical", "Lost by the scheme"],
 ];
 
 function energyCard(e) {
@@ -400,10 +414,10 @@ function modelCard(s) {
     n.scheme === "paper" && pair("γ", fmt(n.gamma, 3)), n.scheme === "sigma" && pair("σ", fmt(n.sigma, 3)),
     pair("Courant number", fmt(n.courant, 3)),
   ];
+  if (s.tolerance !== null && s.tolerance !== undefined) rows.push(pair("Tolerance", String(s.tolerance)));
   if (s.error_estimate) {
-    rows.push(pair("Tolerance", String(s.tolerance)),
-      pair("Error estimate", s.error_estimate.worst.toExponential(1)),
-      pair("Grids run", String((s.runs || []).length)));
+    rows.push(pair("Estimated error (worst)", `${fmt(100 * s.error_estimate.worst, 2)}%`),
+      pair("Grids run", (s.runs || []).map((r) => r.cells).join(", ")));
   }
   return card("Model and numerics", h("table", { class: "model" }, h("tbody", {}, rows)),
     h("p", { class: "why" }, h("strong", {}, "Why: "), s.why || "—"));
