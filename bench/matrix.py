@@ -1,0 +1,298 @@
+"""The accuracy guarantee, measured: a seeded random matrix of cases over the whole valid parameter
+space (`solver.matrix`), each against a converged reference from an independent method (the
+characteristics solver, `solver.characteristics`), at tolerances 1e-2 and 1e-3.
+
+    .venv/bin/python bench/matrix.py [--seed 1] [--count 64] [--processes 2] [--write]
+
+For every case:
+
+- the reference: the characteristics solution on grids doubled until the Richardson
+  extrapolations of successive triplets agree (`solver.matrix.converged_reference`);
+- the cheapest fixed grid that meets each tolerance, found in hindsight: the explicit scheme at
+  Courant number 1 on grids 2^(1/4) apart, the coarsest from which every finer one is within the
+  tolerance on every quantity the reference has (a grid that meets it by luck between two that
+  do not is not counted);
+- a run under each tolerance (`numerics.tolerance`): its true error on every quantity it
+  estimates, its own estimate, and its work (node-steps over all its grids) against that grid's.
+
+Then, for each preset, the time to a 1%-accurate answer (the default accuracy) after compilation,
+least of several runs, and its true error.
+
+`--write` writes `docs/matrix.md` and the figures quoted in README.md and docs/numerics.md (between
+their `matrix` markers). References are cached in `bench/.cache/` by case.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import inspect
+import json
+import math
+import statistics
+import sys
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+from solver import characteristics, controller, grid, kernel, matrix, parse_case  # noqa: E402
+from solver.accuracy import estimated_values  # noqa: E402
+from solver.adaptive import explicit_numerics  # noqa: E402
+from solver.controller import simulate_rod, warm_up  # noqa: E402
+from solver.matrix import converged_reference, draw_cases  # noqa: E402
+from solver.presets import preset_json, preset_names  # noqa: E402
+from solver.simulate import simulate  # noqa: E402
+
+TOLERANCES = (1e-2, 1e-3)
+CACHE = ROOT / "bench" / ".cache"
+REFERENCE_TARGET = 5e-5  # the references' aim: 20× below the tightest tolerance
+REFERENCE_CELLS = 110_000
+FIXED_WORK_CAP = 2e9  # node-steps: the fixed-grid search stops there
+PRESET_REPEATS = 20
+
+
+def _cached(kind: str, case: dict, sources: tuple) -> Path:
+    """Where a result for `case` is cached, keyed by the case and the source it depends on."""
+    text = json.dumps(case, sort_keys=True) + "".join(inspect.getsource(m) for m in sources)
+    return CACHE / f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.json"
+
+
+def reference(case: dict) -> dict:
+    """The case's converged reference, from the cache when the solver has not changed."""
+    path = _cached("reference", case, (characteristics, matrix))
+    if path.exists():
+        return json.loads(path.read_text())
+    start = time.perf_counter()
+    ref = converged_reference(parse_case(case), target=REFERENCE_TARGET, max_cells=REFERENCE_CELLS)
+    found = {"values": ref.values, "uncertainty": ref.uncertainty, "left_out": ref.left_out,
+             "cells": ref.cells, "contacts": ref.finest.contacts,
+             "seconds": time.perf_counter() - start}
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(found))
+    return found
+
+
+def true_errors(values: dict, ref: dict) -> dict[str, float]:
+    """Relative errors of `values` on the quantities the reference has (inf where a run lacks one)."""
+    errors = {}
+    for name, truth in ref["values"].items():
+        found = values.get(name)
+        errors[name] = math.inf if found is None else abs(found / truth - 1.0) if truth else 0.0
+    return errors
+
+
+def work(numerics) -> float:
+    return float((numerics.cells + 1) * (numerics.steps + 1))
+
+
+def fixed_grids(case_json: dict, ref: dict) -> list[dict]:
+    """The worst true error of the explicit scheme at Courant number 1 on grids 2^(1/4) apart,
+    from the cache when the kernel has not changed."""
+    path = _cached("fixed", case_json, (kernel, controller, grid, matrix))
+    if path.exists():
+        return json.loads(path.read_text())
+    case = parse_case(case_json)
+    rows = []
+    for k in range(80):
+        cells = max(2, round(2 * 2 ** (k / 4)))
+        if rows and cells == rows[-1]["cells"]:
+            continue
+        numerics = explicit_numerics(case, cells)
+        if work(numerics) > FIXED_WORK_CAP:
+            break
+        summary = simulate_rod(case, numerics=numerics).summary
+        worst = max(true_errors(estimated_values(summary), ref).values(), default=0.0)
+        rows.append({"cells": cells, "work": work(numerics), "worst": worst})
+        if len(rows) >= 4 and all(r["worst"] <= min(TOLERANCES) / 20 for r in rows[-4:]):
+            break
+    CACHE.mkdir(parents=True, exist_ok=True)
+    path.write_text(json.dumps(rows))
+    return rows
+
+
+def cheapest_fixed(rows: list[dict]) -> dict[float, dict | None]:
+    """For each tolerance, the least work of a fixed grid from which every finer one meets it
+    (None: not within FIXED_WORK_CAP)."""
+    found = {}
+    for tol in TOLERANCES:
+        best = None
+        for row in reversed(rows):
+            if row["worst"] > tol:
+                break
+            best = row
+        # a grid counts only if the search went finer than it while still meeting the tolerance
+        found[tol] = best if best is not None and best is not rows[-1] else None
+    return found
+
+
+def tolerance_run(case, tol: float, ref: dict) -> dict:
+    run_case = case.model_copy(update={"numerics": case.numerics.model_copy(update={"tolerance": tol})})
+    start = time.process_time()
+    summary = simulate(run_case).summary
+    seconds = time.process_time() - start
+    estimate = summary["error_estimate"]
+    errors = {name: e for name, e in true_errors(estimated_values(summary), ref).items()
+              if name in estimate}
+    return {"errors": errors, "estimate": {k: v for k, v in estimate.items() if k != "worst"},
+            "worst": max(errors.values(), default=0.0), "estimated": estimate["worst"],
+            "work": sum((r["cells"] + 1) * (r["steps"] + 1) for r in summary["runs"]),
+            "cells": [r["cells"] for r in summary["runs"]], "seconds": seconds,
+            "warnings": summary["warnings"],
+            "missed": [name for name in ref["values"] if name not in estimate]}
+
+
+def prepare(case_json: dict) -> dict:
+    """The case's reference and fixed grids, into the cache."""
+    ref = reference(case_json)
+    rows = fixed_grids(case_json, ref)
+    return {"name": case_json["name"], "reference_seconds": ref["seconds"], "fixed_grids": len(rows)}
+
+
+def measure(case_json: dict) -> dict:
+    case = parse_case(case_json)
+    ref = reference(case_json)
+    fixed = cheapest_fixed(fixed_grids(case_json, ref))
+    runs = {}
+    for tol in TOLERANCES:
+        run = tolerance_run(case, tol, ref)
+        best = fixed[tol]
+        run["cheapest_cells"] = best["cells"] if best else None
+        run["ratio"] = run["work"] / best["work"] if best else None
+        runs[str(tol)] = run
+    return {"name": case_json["name"], "case": case_json, "reference": ref, "runs": runs}
+
+
+def describe(case: dict) -> str:
+    """A case in a few words: tool shape, contact exponent and damping ratio ζ, medium, force."""
+    tool = case["tool"]
+    shape = "uniform" if "area" in tool else (
+        "tapered" if len(tool["profile"]["x"]) == 2 else
+        "stepped" if len(tool["profile"]["x"]) == 4 else "conical")
+    medium = "no medium" if "medium" not in case else f"c2 {case['medium']['stiffness']:.0e}"
+    force = case.get("force", {}).get("kind", "no force")
+    return (f"{case['striker']['mass']:.3g} kg at {case['striker']['velocity']:.3g} m/s, {shape} "
+            f"{tool['length']:.2g} m, α {case['contact']['exponent']:.2g}, c1 "
+            f"{case['contact']['stiffness']:.1e}, {medium}, {force}")
+
+
+def presets() -> list[dict]:
+    """Time to a 1%-accurate answer on each preset (the default accuracy), and its true error."""
+    rows = []
+    for name in preset_names():
+        data = preset_json(name)
+        data["numerics"] = {"duration": data["numerics"]["duration"]}
+        data.pop("outputs", None)
+        case = parse_case(data)
+        ref = reference(data)
+        simulate(case)
+        best = math.inf
+        for _ in range(PRESET_REPEATS):
+            start = time.perf_counter()
+            summary = simulate(case).summary
+            best = min(best, time.perf_counter() - start)
+        errors = true_errors(estimated_values(summary), ref)
+        rows.append({"name": name, "ms": 1e3 * best, "worst": max(errors.values()),
+                     "estimated": summary["error_estimate"]["worst"],
+                     "cells": [r["cells"] for r in summary["runs"]]})
+    return rows
+
+
+def summarise(results: list[dict]) -> dict:
+    out = {}
+    for tol in TOLERANCES:
+        runs = [r["runs"][str(tol)] for r in results]
+        ratios = [r["ratio"] for r in runs if r["ratio"] is not None]
+        worst = [r["worst"] / tol for r in runs]
+        out[str(tol)] = {
+            "cases": len(runs),
+            "worst_ratio_to_tol": max(worst),
+            "beyond_tol": sum(w > 1.0 for w in worst),
+            "beyond_1_5_tol": sum(w > 1.5 for w in worst),
+            "estimate_below_truth": sum(r["estimated"] < r["worst"] for r in runs),
+            "said_not_met": sum(any("not met" in w for w in r["warnings"]) for r in runs),
+            "cost_median": statistics.median(ratios) if ratios else None,
+            "cost_worst": max(ratios) if ratios else None,
+            "cost_counted": len(ratios),
+            "seconds_median": statistics.median(r["seconds"] for r in runs),
+        }
+    return out
+
+
+def table(results: list[dict], stats: dict, preset_rows: list[dict], seed: int) -> str:
+    lines = [
+        "# The accuracy guarantee on a random matrix of cases",
+        "",
+        f"`bench/matrix.py --seed {seed} --count {len(results)} --write` (the cases: `solver/matrix.py`; "
+        "the references: `solver/characteristics.py`, an independent method). A run's true error is "
+        "its largest relative error, over every quantity it estimates, against the reference; its "
+        "cost is its work (node-steps over all its grids) against the cheapest fixed grid that "
+        "meets the same tolerance, found in hindsight.",
+        "",
+        "| tolerance | cases | worst true error / tolerance | beyond it | beyond 1.5× | estimate below the truth | say 'not met' | cost: median | worst | cases with a cheapest grid |",
+        "|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for tol in TOLERANCES:
+        s = stats[str(tol)]
+        lines.append(f"| {tol:g} | {s['cases']} | {s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | "
+                     f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['said_not_met']} | "
+                     f"{s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | {s['cost_counted']} |")
+    lines += ["", "Each preset at the default accuracy (1%), after compilation, least of "
+              f"{PRESET_REPEATS} runs:", "", "| preset | time | true error | estimate | grids (cells) |",
+              "|---|---|---|---|---|"]
+    for p in preset_rows:
+        lines.append(f"| {p['name']} | {p['ms']:.2f} ms | {p['worst']:.1e} | {p['estimated']:.1e} | "
+                     f"{', '.join(map(str, p['cells']))} |")
+    lines += ["", "Every case (true error and estimate, worst over the quantities; cost against "
+              "the cheapest fixed grid, whose cells are given):", "",
+              "| case | reference contacts | 1e-2: true | estimate | cost (cells) | 1e-3: true | estimate | cost (cells) |",
+              "|---|---|---|---|---|---|---|---|"]
+    for r in results:
+        cells = []
+        for tol in TOLERANCES:
+            run = r["runs"][str(tol)]
+            ratio = f"{run['ratio']:.2f}× ({run['cheapest_cells']})" if run["ratio"] else "no fixed grid"
+            cells.append(f"{run['worst']:.1e} | {run['estimated']:.1e} | {ratio}")
+        lines.append(f"| {r['name']}: {describe(r['case'])} | {r['reference']['contacts']} | "
+                     + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--count", type=int, default=64)
+    parser.add_argument("--processes", type=int, default=2)
+    parser.add_argument("--write", action="store_true")
+    parser.add_argument("--prepare", action="store_true",
+                        help="only compute the references and fixed grids into the cache")
+    args = parser.parse_args()
+    warm_up()
+    cases = draw_cases(args.seed, args.count)
+    if args.prepare:
+        with ProcessPoolExecutor(args.processes) as pool:
+            for done in pool.map(prepare, cases):
+                print(done, flush=True)
+        return
+    with ProcessPoolExecutor(args.processes) as pool:
+        results = []
+        for result in pool.map(measure, cases):
+            runs = result["runs"]
+            print(result["name"], " ".join(
+                f"{tol}: true {runs[tol]['worst']:.1e} est {runs[tol]['estimated']:.1e} "
+                f"cost {runs[tol]['ratio'] or float('nan'):.2f} cells {runs[tol]['cells']}"
+                for tol in runs), flush=True)
+            results.append(result)
+    stats = summarise(results)
+    preset_rows = presets()
+    print(json.dumps(stats, indent=2))
+    for p in preset_rows:
+        print(p)
+    if args.write:
+        (ROOT / "docs" / "matrix.md").write_text(table(results, stats, preset_rows, args.seed))
+
+
+if __name__ == "__main__":
+    main()
