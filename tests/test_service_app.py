@@ -285,11 +285,13 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
     first = sweep["rows"][0]["job"]
     jobs.write_summary(first, json.dumps({
         "co_impact_time": 2e-4, "peak_contact_force": {"value": 4e5}, "max_compressive_stress": {"value": 5e7},
-        "max_tensile_stress": {"value": 1e7}, "striker_rebound_velocity": -0.4, "energy": {"to_medium": 1.7},
-        "contacts_total": 5, "warnings": []}))
+        "max_tensile_stress": {"value": 1e7}, "striker_rebound_velocity": -0.4,
+        "energy": {"to_medium": 1.7, "transfer_efficiency": 0.2}, "contacts_total": 5,
+        "error_estimate": {"peak_contact_force": 3e-3, "worst": 4e-3}, "warnings": []}))
     jobs.update(first, status=SUCCEEDED, progress=1.0, finished=now())
     row = client.get(f"/v1/sweeps/{sweep['id']}").json()["rows"][0]
     assert row["status"] == "succeeded" and row["peak_contact_force"] == 4e5 and row["contacts"] == 5
+    assert row["estimated_error"] == 4e-3 and row["transfer_efficiency"] == 0.2
 
 
 def test_a_sweep_with_a_bad_variant_is_refused_naming_the_parameter_and_queues_nothing(client, tmp_path):
