@@ -5,10 +5,10 @@ no scheme) the solver chooses the grid: the explicit scheme at Courant number 1,
 integrate their own equations (`kernel.struck_end_step`), on grids refined in h and τ together.
 It climbs from a coarse grid placed a priori (`first_cells`), each grid twice as fine as the last,
 so that every three in a row show the order they converge at (`accuracy.estimate`: the order
-observed, not an assumed one). Once the last three are in their asymptotic range the next grid
-is as fine as the estimate says is needed (at the order observed, aiming at `AIM`× the
+observed, not an assumed one, and confirmed by the three before). Once the last four are in
+their asymptotic range the next grid is as fine as the estimate says is needed (at the order observed, aiming at `AIM`× the
 tolerance, 1.2–4× finer). The ladder stops when every quantity's estimate on the finest grid is
-within the tolerance and the last three grids saw the same contacts. One that cannot (the grids
+within the tolerance and the two finest grids saw the same number of contacts. One that cannot (the grids
 keep disagreeing, the limits stop it, or `MAX_RUNS` grids were not enough) returns its finest run
 with the estimate it has and says so in `warnings`.
 
@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 from typing import Callable
 
-from .accuracy import ESTIMATED, Estimate, QuantityError, estimate, not_estimated
+from .accuracy import SAFETY_FACTOR, ESTIMATED, Estimate, QuantityError, estimate, not_estimated
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
@@ -34,10 +34,12 @@ from .limits import Limits, check_limits
 DEFAULT_TOLERANCE = 0.01  # when the case gives no grid and no scheme
 # The coarsest grid of a ladder resolves the contact's time scale (`time_scale`) by this many
 # steps at a tolerance of 1e-2, and by √(1e-2/tol) times as many at another.
-FIRST_POINTS = 8.0
-CLIMB = 2.0  # refinement from one grid to the next until three in a row are asymptotic
+FIRST_POINTS = 4.0
+CLIMB = 2.0  # refinement from one grid to the next until four in a row are asymptotic
+MIN_RUNS = 4  # an estimate from three grids, its order confirmed by the three before
 MIN_STEP, MAX_STEP = 1.2, 4.0  # refinement to a predicted grid
-AIM = 0.6  # a predicted grid aims its estimate at this fraction of the tolerance
+AIM = 0.6  # a predicted grid aims its bare estimate at this fraction of the tolerance
+SURE_ORDER = 1.5  # below this observed order a predicted grid is at most `CLIMB` finer
 MAX_RUNS = 14
 MIN_CELLS = 2
 COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
@@ -132,7 +134,7 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
     stopped = ""
     for stage in range(MAX_RUNS):
         numerics = explicit_numerics(case, cells)
-        final_candidate = stage >= 2
+        final_candidate = stage >= MIN_RUNS - 1
         run_case = case if final_candidate else _summary_only(case, numerics)
         try:
             check_limits(run_case, numerics, limits)
@@ -145,7 +147,7 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
         candidate = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
                                  cancelled=cancelled, recorder=recorder if final_candidate else None)
         runs.append((numerics, candidate.summary))
-        if len(runs) < 3:
+        if len(runs) < MIN_RUNS:
             cells = math.ceil(cells * CLIMB)
             continue
         result, found = candidate, _estimate(case, runs, order)
@@ -163,16 +165,22 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
 
 
 def next_refinement(found: Estimate, tol: float) -> float:
-    """How much finer the next grid is: `CLIMB` while the last three grids disagree on the
+    """How much finer the next grid is: `CLIMB` while the two finest grids disagree on the
     contacts, or a quantity still to be refined is not in its asymptotic range; otherwise as the
-    worst quantity's estimate asks at the order its grids showed (1–2), 1.2–4×."""
+    worst quantity's estimate asks at the order its grids showed (1–2), aiming its bare estimate
+    (without the safety factor, which the stopping test applies) at `AIM` of the tolerance:
+    1.2–4× finer, at most `CLIMB` where that order is below `SURE_ORDER` (a low order seen on
+    coarse grids is often not yet the one they converge at)."""
     wanting = [e for e in found.errors.values() if e.error > AIM * tol]
     if not found.same_contacts or not all(e.asymptotic for e in wanting):
         return CLIMB
-    needed = MIN_STEP
+    needed, cap = MIN_STEP, MAX_STEP
     for e in wanting:
-        needed = max(needed, (e.error / (AIM * tol)) ** (1.0 / max(1.0, min(e.order, 2.0))))
-    return min(needed, MAX_STEP)
+        order = max(1.0, min(e.order, 2.0))
+        needed = max(needed, (e.error / SAFETY_FACTOR / (AIM * tol)) ** (1.0 / order))
+        if e.order < SURE_ORDER:
+            cap = CLIMB
+    return min(needed, cap)
 
 
 def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,

@@ -39,34 +39,39 @@ def wave_speed(tool: Tool) -> float:
     return math.sqrt(tool.youngs_modulus / tool.density)
 
 
+def rigid_wall_depth(case: Case) -> float | None:
+    """The contact's deepest compression δ against a rigid wall (m): from the impact velocity, or
+    with none from the external force; None when neither acts."""
+    c1, p = case.contact.stiffness, 1.0 + case.contact.exponent  # p: the force's exponent
+    w1 = abs(case.striker.velocity)
+    if w1 > 0:
+        return ((p + 1.0) * case.striker.mass * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
+    if case.force is not None and case.force.amplitude != 0:
+        return (abs(case.force.amplitude) / c1) ** (1.0 / p)
+    return None
+
+
 def contact_time_estimate(case: Case) -> float:
     """Duration of the striker's contact with a rigid wall under the case's contact law (s).
 
     The tool yields, so the true contact is longer: a time step from this estimate errs on the
     fine side. With no impact velocity the external force sets the indentation instead.
     """
-    c1, alpha, m1 = case.contact.stiffness, case.contact.exponent, case.striker.mass
-    p = 1.0 + alpha  # force exponent
-    w1 = abs(case.striker.velocity)
-    if w1 > 0:
-        depth = ((p + 1.0) * m1 * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
-    elif case.force is not None and case.force.amplitude != 0:
-        depth = (abs(case.force.amplitude) / c1) ** (1.0 / p)
-    else:
+    depth = rigid_wall_depth(case)
+    if depth is None:
         return case.numerics.duration
-    stiffness = c1 * depth**alpha
+    stiffness = case.contact.stiffness * depth**case.contact.exponent
     # A depth that underflowed to 0 (a striker of a few yoctograms) leaves the contact too short
     # to estimate: 0, which the caller refuses as "no time step can be chosen".
-    return math.pi * math.sqrt(m1 / stiffness) if stiffness > 0 else 0.0
+    return math.pi * math.sqrt(case.striker.mass / stiffness) if stiffness > 0 else 0.0
 
 
 def contact_stiffness_estimate(case: Case) -> float:
-    """The contact's tangent stiffness `(1+α)·c1·δ^α` at the depth of a rigid-wall impact (N/m),
-    from the contact time estimate: `(1+α)·m1·(π/T)²`."""
-    period = contact_time_estimate(case)
-    if not period > 0.0:
-        return math.inf
-    return (1.0 + case.contact.exponent) * case.striker.mass * (math.pi / period) ** 2
+    """The contact's tangent stiffness `(1+α)·c1·δ^α` at the depth of a rigid-wall impact (N/m);
+    the contact's own stiffness c1 (α = 0) when nothing drives it."""
+    alpha = case.contact.exponent
+    depth = rigid_wall_depth(case)
+    return (1.0 + alpha) * case.contact.stiffness * (depth if depth is not None else 0.0) ** alpha
 
 
 # A contact or a medium this many times as stiff as the tool's end cell (E·S/h) makes the ends ring
@@ -91,14 +96,16 @@ def check_stiff_ends(case: Case, weights: Scheme, cells: int, end_areas: tuple[f
             ("medium.stiffness", case.medium.stiffness if case.medium else 0.0, end_areas[1])):
         end_cell = case.tool.youngs_modulus * area / h
         if stiffness > limit * end_cell:
-            needed = math.ceil(cells * stiffness / (limit * end_cell))
+            needed = cells * stiffness / (limit * end_cell)
+            # Extreme inputs (a velocity of 1e-300 m/s) overflow the estimate: no grid would do.
+            cells_hint = f"at least {math.ceil(needed)} cells" if needed < 1e15 else "a gentler case"
             what = "the contact's" if field.startswith("contact") else "the medium's"
             errors.append(FieldError(
                 field=field,
                 message=f"{what} stiffness, about {stiffness:.3g} N/m, is {stiffness / end_cell:.3g}× "
                         f"that of the tool's end cell on {cells} cells ({end_cell:.3g} N/m): the "
                         f"scheme '{weights.name}' would ring against it and the contact chatter. "
-                        f"{fix[0].upper() + fix[1:]}, or use at least {needed} cells"))
+                        f"{fix[0].upper() + fix[1:]}, or use {cells_hint}"))
     if errors:
         raise CaseError(errors)
 

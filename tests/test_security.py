@@ -117,8 +117,9 @@ def test_keys_logs_and_paths_on_the_live_stack(tmp_path):
         assert s.client.get(f"/v1/jobs/{job['id']}/result.h5").status_code == 200
         # A case over a configured limit is refused up front, naming it.
         over = s.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"numerics": {"cells": 200}}))
-        assert over.status_code == 422 and {"field": "numerics.cells",
-                                            "message": "200 cells exceed the limit of 150"} in over.json()["detail"]
+        assert over.status_code == 422 and {
+            "field": "numerics.cells",
+            "message": "200 cells exceed the limit of 150 (PERCUSSIM_MAX_CELLS raises it)"} in over.json()["detail"]
         for path in ("/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", "/v1/jobs/%2E%2E%2Fapi.log/summary",
                      "/v1/presets/..%2F..%2Fpyproject"):
             answer = s.client.get(path)
