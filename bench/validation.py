@@ -221,7 +221,7 @@ def saint_venant() -> list[str]:
     found = {"co_impact_time": summary["co_impact_time"],
              "peak_contact_force": summary["peak_contact_force"]["value"],
              "max_compressive_stress": summary["max_compressive_stress"]["value"]}
-    lines = [f"A {ref.m1:g}-kg mass at {ref.w1:g} m/s on a {ref.length:g}-m steel bar of "
+    lines = [f"A mass of {ref.m1:g} kg at {ref.w1:g} m/s on a {ref.length:g}-m steel bar of "
              f"{ref.area * 1e4:g} cm², its far end fixed: a contact 100× critically damped against the "
              "bar and a medium 100× stiffer than the contact stand for the rigid mass and the fixed end. "
              f"At the default accuracy ({len(summary['runs'])} grids, the finest "

@@ -27,6 +27,8 @@ from solver.sweep import COLUMNS, Sweep, run_sweep
 from test_cli import _percussim
 from test_live import LONG
 
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
+
 BAD = {"contact": {"exponent": 0.9}, "striker": {"mass": 0}}
 
 

@@ -15,6 +15,8 @@ from conftest import BASE_CASE, CHATTERS, merge
 from live_stack import RedisServer, Stack, children, command_line, wait_for
 from solver.presets import preset_json
 
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
+
 FINISHED = ("succeeded", "failed", "cancelled")
 # About 3 s of work: long enough to be killed or cut off in the middle.
 SECONDS_OF_WORK = merge(preset_json("fig3"), {"numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},

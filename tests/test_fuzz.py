@@ -19,6 +19,8 @@ from hypothesis.errors import Unsatisfiable
 from conftest import BASE_CASE
 from live_stack import Stack
 
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
+
 STATUSES: Counter = Counter()
 EXAMPLES = 100  # a generation mode and operation
 SMALL = {"PERCUSSIM_MAX_NODE_STEPS": "2e6", "PERCUSSIM_MAX_OUTPUT_VALUES": "1e6",

@@ -19,6 +19,8 @@ from solver import parse_case
 from solver.presets import load_preset, preset_json
 from solver.simulate import simulate
 
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
+
 # A job of several seconds: long enough to watch progress and to cancel it while it runs.
 LONG = {"numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
         "outputs": {"history_stride": 100, "probes": []}}

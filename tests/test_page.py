@@ -19,6 +19,8 @@ from conftest import merge
 from live_stack import Stack
 from solver.presets import preset_json
 
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
+
 KEY = "page-test-key"
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
 CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",

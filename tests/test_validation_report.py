@@ -7,7 +7,11 @@ from __future__ import annotations
 import importlib.util
 import re
 
+import pytest
+
 from live_stack import ROOT
+
+pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
 
 def _validation_module():
