@@ -332,7 +332,7 @@ def main() -> None:
             results.append(result)
     stats = summarise(results)
     preset_rows = presets()
-    print(json.dumps(stats, indent=2))
+    print(json.dumps(stats, indent=2, default=float))
     for p in preset_rows:
         print(p)
     if args.write:

@@ -77,7 +77,7 @@ def relative_change(fine: float | None, coarse: float | None) -> float:
 # (a faster apparent convergence is not relied on) and taken `SAFETY_FACTOR` larger (Roache's
 # factor for three-grid studies). Grids whose differences change sign, or shrink slower than
 # order `LOWEST_ORDER`, are not yet in their asymptotic range: the estimate is then the larger of
-# the two differences read at first order (each `d/(r − 1)`, r the refinement), ×`SAFETY_FACTOR`.
+# the two differences read at that order (each `d/(r^0.5 − 1)`, r the refinement), ×`SAFETY_FACTOR`.
 # With a fourth grid the order is trusted only as far as the three coarser grids confirm it (the
 # smaller of the two orders), and at most
 # `UNCONFIRMED_ORDER` where they are not in their asymptotic range (a tension behind a front can
@@ -136,9 +136,10 @@ def quantity_error(h: list[float], values: list[float | None], formal_order: flo
         return QuantityError(0.0 if d1 == 0.0 else SAFETY_FACTOR * abs(d1) / scale, None, d1 == 0.0)
     order = observed_order(h3, q3)
     if order is None or order < LOWEST_ORDER:
-        # Each difference read as a first-order one's (refinement r: error d/(r − 1)), the finer
-        # grid's error not taken to be smaller than the coarser's.
-        rough = max(abs(d1) / (h3[0] / h3[1] - 1.0), abs(d2) / (h3[1] / h3[2] - 1.0))
+        # Each difference read at the lowest order relied on (refinement r: error d/(r^p − 1)),
+        # the finer grid's error not taken to be smaller than the coarser's.
+        rough = max(abs(d1) / ((h3[0] / h3[1]) ** LOWEST_ORDER - 1.0),
+                    abs(d2) / ((h3[1] / h3[2]) ** LOWEST_ORDER - 1.0))
         return QuantityError(SAFETY_FACTOR * rough / scale, order, False)
     used, confirmed = min(order, formal_order), True
     if len(values) >= 4 and values[-4] is not None:

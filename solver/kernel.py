@@ -424,6 +424,11 @@ def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
         return target
+    # on one linear branch the root is direct (in separation, or for a linear contact)
+    if hi <= 0.0:
+        return target / (1.0 + compliance * c0)
+    if lo >= 0.0 and alpha == 0.0:
+        return target / (1.0 + compliance * c1)
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):

@@ -60,7 +60,13 @@ def test_grids_out_of_their_asymptotic_range_give_the_largest_change_and_say_so(
     h = [0.4, 0.2, 0.1]
     swinging = quantity_error(h, [1.00, 1.10, 1.05], formal_order=2.0)  # the differences change sign
     assert not swinging.asymptotic and swinging.order is None
-    assert swinging.error == pytest.approx(SAFETY_FACTOR * 0.10 / 1.05)
+    # the larger change read at order 0.5: an error that falls as √h leaves d/(√2 − 1) to go
+    assert swinging.error == pytest.approx(SAFETY_FACTOR * 0.10 / (math.sqrt(2.0) - 1.0) / 1.05)
+    # a triple that shows order 2 by chance is not trusted beyond first order when the three
+    # grids before it are out of their asymptotic range
+    lucky = quantity_error([0.8, 0.4, 0.2, 0.1], [1.10, 0.90, 0.98, 1.00], formal_order=2.0)
+    assert lucky.order == pytest.approx(2.0) and not lucky.asymptotic
+    assert lucky.error == pytest.approx(SAFETY_FACTOR * 0.02 / (2.0 - 1.0) / 1.00)
     missing = quantity_error(h, [None, 1.0, 1.0], formal_order=2.0)
     assert missing.error == math.inf and not missing.asymptotic
 
