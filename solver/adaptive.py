@@ -96,6 +96,11 @@ def first_cells(case: Case, tol: float) -> int:
     tool's profile resolved (`profile_cells`)."""
     points = FIRST_POINTS * math.sqrt(1e-2 / tol)
     tau = time_scale(case) / points
+    if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
+        raise CaseError([FieldError(
+            field="striker",
+            message=f"the contact of a {case.striker.mass:.3g}-kg striker at {case.striker.velocity:.3g} "
+                    "m/s lasts no time that a grid can resolve: give values of a real striker")])
     return max(MIN_CELLS, profile_cells(case),
                math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
 
