@@ -273,13 +273,18 @@ def contact_law(delta, c1, alpha, c0):
 
 
 @njit(cache=True, inline="always")
-def contact_spring_stiffness(delta, c1, alpha, c0):
-    """Φ''(δ): `(α+1)·c1·δ^α` in contact, `c0` in separation."""
+def contact_spring(delta, c1, alpha, c0):
+    """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
+    exponents without a power."""
     if delta >= 0.0:
         if alpha == 0.0:
-            return c1
-        return (alpha + 1.0) * c1 * delta**alpha
-    return c0
+            return c1 * delta, c1
+        if alpha == 0.5:
+            root = math.sqrt(delta)
+            return c1 * delta * root, 1.5 * c1 * root
+        power = delta**alpha
+        return c1 * delta * power, (alpha + 1.0) * c1 * power
+    return c0 * delta, c0
 
 
 @njit(cache=True, inline="always")
@@ -295,8 +300,23 @@ def quotient_force(delta, ref, ref_potential, c1, alpha, c0):
         f = (potential - ref_potential) * inverse
         return f, (spring - f) * inverse
     mid = 0.5 * (delta + ref)
-    return (contact_law(mid, c1, alpha, c0)[0],
-            0.5 * contact_spring_stiffness(mid, c1, alpha, c0))
+    spring, stiffness = contact_spring(mid, c1, alpha, c0)
+    return spring, 0.5 * stiffness
+
+
+@njit(cache=True, inline="always")
+def bracketed_newton_step(x, g, slope, lo, hi, scale):
+    """One Newton step on an increasing g, g(x) = `g`, g'(x) = `slope`, within the bracket [lo, hi]
+    narrowed by the sign of g; a step that leaves it is replaced by bisection. Returns the new x,
+    the bracket, and whether the step or the bracket is within `scale`."""
+    if g > 0.0:
+        hi = x
+    else:
+        lo = x
+    x_new = x - g / slope
+    if not lo < x_new < hi:
+        x_new = 0.5 * (lo + hi)
+    return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
 
 
 @njit(cache=True)
@@ -304,7 +324,7 @@ def solve_overlap(free, compliance, ref, ref_potential, guess, c1, alpha, c0, da
     """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
 
     F increases with δ (Φ is convex), so the root is unique and lies between `free` and
-    `free − compliance·F(free)`; Newton steps that leave that bracket are replaced by bisection.
+    `free − compliance·F(free)`, where `bracketed_newton_step` finds it.
     """
     f_free = quotient_force(free, ref, ref_potential, c1, alpha, c0)[0] + damper * (free - ref)
     other = free - compliance * f_free
@@ -318,17 +338,9 @@ def solve_overlap(free, compliance, ref, ref_potential, guess, c1, alpha, c0, da
         g = x + compliance * (f + damper * (x - ref)) - free
         if g == 0.0:
             return x
-        if g > 0.0:
-            hi = x
-        else:
-            lo = x
-        step = g / (1.0 + compliance * (df + damper))
-        x_new = x - step
-        if not lo < x_new < hi:
-            x_new = 0.5 * (lo + hi)
-        if abs(x_new - x) <= scale or hi - lo <= scale:
-            return x_new
-        x = x_new
+        x, lo, hi, done = bracketed_newton_step(x, g, 1.0 + compliance * (df + damper), lo, hi, scale)
+        if done:
+            return x
     return x
 
 
@@ -400,26 +412,11 @@ def substeps(rate, span, limit):
     return min(MAX_SUBSTEPS, max(1, math.ceil(rate * span / limit)))
 
 
-@njit(cache=True, inline="always")
-def contact_spring(delta, c1, alpha, c0):
-    """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
-    exponents without a power."""
-    if delta >= 0.0:
-        if alpha == 0.0:
-            return c1 * delta, c1
-        if alpha == 0.5:
-            root = math.sqrt(delta)
-            return c1 * delta * root, 1.5 * c1 * root
-        power = delta**alpha
-        return c1 * delta * power, (alpha + 1.0) * c1 * power
-    return c0 * delta, c0
-
-
 @njit(cache=True)
 def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
     """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
-    `target` and `target − compliance·Φ'(target)`; Newton steps that leave that bracket are
-    replaced by bisection."""
+    `target` and `target − compliance·Φ'(target)`, where `bracketed_newton_step` finds it (on one
+    linear branch, directly)."""
     other = target - compliance * contact_spring(target, c1, alpha, c0)[0]
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
@@ -436,16 +433,9 @@ def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
         g = x + compliance * spring - target
         if g == 0.0:
             return x
-        if g > 0.0:
-            hi = x
-        else:
-            lo = x
-        x_new = x - g / (1.0 + compliance * stiffness)
-        if not lo < x_new < hi:
-            x_new = 0.5 * (lo + hi)
-        if abs(x_new - x) <= scale or hi - lo <= scale:
-            return x_new
-        x = x_new
+        x, lo, hi, done = bracketed_newton_step(x, g, 1.0 + compliance * stiffness, lo, hi, scale)
+        if done:
+            return x
     return x
 
 
