@@ -41,6 +41,7 @@ MIN_STEP, MAX_STEP = 1.2, 4.0  # refinement to a predicted grid
 AIM = 0.75  # a predicted grid aims its bare estimate at this fraction of the tolerance
 SURE_ORDER = 1.5  # below this observed order a predicted grid is at most `CLIMB` finer
 MAX_RUNS = 14
+UNSETTLED_GRIDS = 3  # contacts that change over this many grids, with no gain, stop a ladder
 MIN_CELLS = 2
 SEGMENT_CELLS = 2  # cells over the shortest segment of the tool's profile, on the first grid
 STEP_FRACTION = 0.01  # of the tool's length: a shorter segment of the profile is a step
@@ -154,6 +155,7 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
     cells = first_cells(case, tol)
     result = None
     found: Estimate | None = None
+    worst: list[float] = []  # each estimate's, from the `MIN_RUNS`-th grid on
     stopped = ""
     for stage in range(MAX_RUNS):
         numerics = explicit_numerics(case, cells)
@@ -174,7 +176,15 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
             cells = math.ceil(cells * CLIMB)
             continue
         result, found = candidate, _estimate(case, runs, order)
+        worst.append(found.worst)
         if found.worst <= tol and found.same_contacts:
+            break
+        if unsettled([s["contacts_total"] for _, s in runs], worst):
+            stopped = (f"the number of contacts keeps changing with the grid ("
+                       f"{', '.join(str(s['contacts_total']) for _, s in runs[-UNSETTLED_GRIDS:])} on "
+                       f"{', '.join(str(n.cells) for n, _ in runs[-UNSETTLED_GRIDS:])} cells) while the "
+                       "estimate does not shrink: the sequence of impacts is sensitive to the smallest "
+                       "change, and finer grids do not settle it")
             break
         cells = math.ceil(cells * next_refinement(found, tol))
     else:
@@ -185,6 +195,15 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
             "grids refined until the error estimated from the last three is within the tolerance")
     return annotate(result, found, tolerance=tol, runs=[n for n, _ in runs], why=why,
                     unmet=stopped if stopped else "")
+
+
+def unsettled(contacts: list[int], worst: list[float]) -> bool:
+    """Whether refining has stopped helping: the last `UNSETTLED_GRIDS` grids saw different numbers
+    of contacts (`contacts`, each grid's) and the estimate (`worst`, each estimate's) is no smaller
+    than `UNSETTLED_GRIDS − 1` grids before. Repeated impacts whose sequence turns on the smallest
+    change (a chaotic rattle) settle on no grid."""
+    return (len(worst) >= UNSETTLED_GRIDS and len(set(contacts[-UNSETTLED_GRIDS:])) > 1
+            and worst[-1] >= worst[-UNSETTLED_GRIDS])
 
 
 def next_refinement(found: Estimate, tol: float) -> float:

@@ -157,6 +157,16 @@ def test_a_tolerance_the_limits_stop_short_of_returns_the_finest_grid_and_says_s
     assert "beyond the limits" in warning and "PERCUSSIM_MAX_NODE_STEPS" in warning
 
 
+def test_repeated_impacts_that_settle_on_no_grid_stop_the_ladder_and_say_why():
+    # Fig. 6's forced rattle: 17, 21, 19, ... contacts on successive grids, and peak forces that
+    # jump by tens of percent; refining to the limits (12 grids, 10240 cells) gains nothing
+    summary = simulate(parse_case(duration_only("fig6"))).summary
+    counts = [r["cells"] for r in summary["runs"]]
+    assert len(counts) < 8
+    [warning] = [w for w in summary["warnings"] if "not met" in w]
+    assert "number of contacts keeps changing" in warning and "finer grids do not settle it" in warning
+
+
 def test_a_tolerance_and_a_grid_together_are_refused():
     with pytest.raises(CaseError) as error:
         parse_case(merge(duration_only("fig3"), {"numerics": {"tolerance": 1e-2, "cells": 50}}))

@@ -1,0 +1,98 @@
+"""What the ladder's margins buy: the matrix of `bench/matrix.py` run under other settings of the
+estimator and the ladder, each changing one margin of the shipped one (then all of them at once),
+with the worst true error and the cost of each.
+
+    .venv/bin/python bench/ladder_trade.py [--count 72] [--processes 2] [--write]
+
+A setting changes the named constants of `solver.accuracy` and `solver.adaptive` in the processes
+that run the cases. The references and the cheapest fixed grids are `bench/matrix.py`'s, from its
+cache (run `bench/matrix.py --prepare` first on a fresh clone). `--write` writes
+`docs/ladder_trade.md`.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "bench"))
+
+import matrix as bench_matrix  # noqa: E402
+from solver import accuracy, adaptive  # noqa: E402
+from solver.controller import warm_up  # noqa: E402
+from solver.matrix import draw_cases  # noqa: E402
+
+LOOSE = {"MIN_RUNS": 3, "SAFETY_FACTOR": 1.0, "UNCONFIRMED_ORDER": 2.0, "LOWEST_ORDER": 1.0}
+SETTINGS = [
+    ("shipped", {}),
+    ("three grids, the order not confirmed by a fourth", {"MIN_RUNS": 3}),
+    ("no safety factor (1.25 → 1)", {"SAFETY_FACTOR": 1.0}),
+    ("an unconfirmed order trusted up to 2 (not 1)", {"UNCONFIRMED_ORDER": 2.0}),
+    ("grids out of their asymptotic range read at order 1 (not 0.5)", {"LOWEST_ORDER": 1.0}),
+    ("predicted grids aim at the tolerance (not 0.75×)", {"AIM": 1.0}),
+    ("a first grid of 2 steps over the contact (not 4)", {"FIRST_POINTS": 2.0}),
+    ("all four estimator margins loosened", LOOSE),
+]
+
+
+def apply(overrides: dict) -> None:
+    """Set the constants in the modules that hold them (both, where adaptive imported one)."""
+    for name, value in overrides.items():
+        for module in (accuracy, adaptive):
+            if hasattr(module, name):
+                setattr(module, name, value)
+
+
+def run_setting(overrides: dict, cases: list[dict], processes: int) -> dict:
+    with ProcessPoolExecutor(processes, initializer=apply, initargs=(overrides,)) as pool:
+        results = list(pool.map(bench_matrix.measure, cases))
+    return bench_matrix.summarise(results)
+
+
+def table(rows: list[tuple[str, dict]]) -> str:
+    lines = ["| setting | " + " | ".join(
+                f"{tol:g}: worst true / tol | beyond tol | beyond 1.5× | cost median"
+                for tol in bench_matrix.TOLERANCES) + " |",
+             "|---|" + "---|---|---|---|" * len(bench_matrix.TOLERANCES)]
+    for name, stats in rows:
+        cells = []
+        for tol in bench_matrix.TOLERANCES:
+            s = stats[str(tol)]
+            cells.append(f"{s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | {s['beyond_1_5_tol']} | "
+                         f"{s['cost_median']:.2f}×")
+        lines.append(f"| {name} | " + " | ".join(cells) + " |")
+    return "\n".join(lines) + "\n"
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--seed", type=int, default=1)
+    parser.add_argument("--count", type=int, default=72)
+    parser.add_argument("--processes", type=int, default=2)
+    parser.add_argument("--write", action="store_true")
+    args = parser.parse_args()
+    warm_up()
+    cases = draw_cases(args.seed, args.count)
+    rows = []
+    for name, overrides in SETTINGS:
+        rows.append((name, run_setting(overrides, cases, args.processes)))
+        print(table(rows[-1:]).splitlines()[-1], flush=True)
+    text = table(rows)
+    print(text)
+    if args.write:
+        (ROOT / "docs" / "ladder_trade.md").write_text(
+            "# What the ladder's margins buy\n\n"
+            f"Written by `bench/ladder_trade.py --write` on the matrix of `bench/matrix.py` "
+            f"(seed {args.seed}, {args.count} cases; the cases counted at each tolerance as there). "
+            "Each row changes the named margin of the shipped ladder; the last changes all four of "
+            "the estimator's. True error: a run's worst relative error against the reference; cost: "
+            "its work against the cheapest fixed grid that meets the same tolerance, found in "
+            "hindsight.\n\n" + text)
+
+
+if __name__ == "__main__":
+    main()
