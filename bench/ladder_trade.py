@@ -32,7 +32,7 @@ SETTINGS = [
     ("three grids, the order not confirmed by a fourth", {"MIN_RUNS": 3}),
     ("no safety factor (1.25 → 1)", {"SAFETY_FACTOR": 1.0}),
     ("an unconfirmed order trusted up to 2 (not 1)", {"UNCONFIRMED_ORDER": 2.0}),
-    ("grids out of their asymptotic range read at order 1 (not 0.5)", {"LOWEST_ORDER": 1.0}),
+    ("grids observed under order 1 (not 0.5) taken as out of their asymptotic range, and read at order 1", {"LOWEST_ORDER": 1.0}),
     ("predicted grids aim at the tolerance (not 0.75×)", {"AIM": 1.0}),
     ("a first grid of 2 steps over the contact (not 4)", {"FIRST_POINTS": 2.0}),
     ("all four estimator margins loosened", LOOSE),
