@@ -12,7 +12,6 @@ cache (run `bench/matrix.py --prepare` first on a fresh clone). `--write` writes
 
 from __future__ import annotations
 
-import argparse
 import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -69,12 +68,7 @@ def table(rows: list[tuple[str, dict]]) -> str:
 
 
 def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--count", type=int, default=72)
-    parser.add_argument("--processes", type=int, default=2)
-    parser.add_argument("--write", action="store_true")
-    args = parser.parse_args()
+    args = bench_matrix.matrix_parser(__doc__.split("\n\n")[0]).parse_args()
     warm_up()
     cases = draw_cases(args.seed, args.count)
     rows = []

@@ -305,12 +305,18 @@ def table(results: list[dict], stats: dict, preset_rows: list[dict], seed: int) 
     return "\n".join(lines) + "\n"
 
 
-def main() -> None:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+def matrix_parser(description: str) -> argparse.ArgumentParser:
+    """The options of a bench over the matrix: which cases, on how many processes, and --write."""
+    parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--seed", type=int, default=1)
     parser.add_argument("--count", type=int, default=72)
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--write", action="store_true")
+    return parser
+
+
+def main() -> None:
+    parser = matrix_parser(__doc__.split("\n\n")[0])
     parser.add_argument("--prepare", action="store_true",
                         help="only compute the references and fixed grids into the cache")
     args = parser.parse_args()
