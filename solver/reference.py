@@ -6,11 +6,13 @@
 - `RigidImpact`: Saint-Venant's problem, a rigid mass striking a uniform bar whose far end is
   fixed; the struck end's stress is `σ0·e^(−βt)` until the wave is back at 2L/a, then the
   reflected wave adds to it.
+- `recorded_force`: a run's recorded contact force against an independent solver's.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numpy as np
 
@@ -146,3 +148,24 @@ def true_errors(summary: dict, truth: dict[str, float]) -> dict[str, float]:
     """Relative errors of a run's headline quantities against `truth` (`LinearImpact.truth`)."""
     found = headline(summary)
     return {name: abs(found[name] / truth[name] - 1.0) for name in truth}
+
+
+class RecordedForce(NamedTuple):
+    """A run's recorded contact force against an independent solver's, as fractions of its peak."""
+
+    deviation: float  # the largest difference, once the reference's first sample is twice past
+    second_difference: float  # the largest second difference of the samples
+    alternating: float  # the share of second differences that alternate: a period-2τ ripple
+
+
+def recorded_force(history: dict[str, np.ndarray], peak: float,
+                   reference: dict[str, np.ndarray]) -> RecordedForce:
+    """Compare `history['contact/force']` (at `history['time']`) with the reference's `contact`
+    force (at its `time`), interpolated onto the run's instants; `peak` scales each figure."""
+    t, force = history["time"], history["contact/force"]
+    expected = np.interp(t, reference["time"], reference["contact"])
+    late = t > 2 * reference["time"][0]
+    second = force[2:] - 2.0 * force[1:-1] + force[:-2]
+    alternating = np.abs(second[1:] + second[:-1]) < 0.5 * np.abs(second[1:] - second[:-1])
+    return RecordedForce(float(np.abs(force - expected)[late].max() / peak),
+                         float(np.abs(second).max() / peak), float(alternating.mean()))
