@@ -29,11 +29,11 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from solver import CaseError, parse_case  # noqa: E402
-from solver.accuracy import estimated_values  # noqa: E402
-from solver.controller import simulate_rod, warm_up  # noqa: E402
-from solver.grid import resolve_numerics, wave_speed  # noqa: E402
-from solver.presets import preset_json  # noqa: E402
+from percussim.solver.case import CaseError, parse_case  # noqa: E402
+from percussim.solver.accuracy import estimated_values  # noqa: E402
+from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
+from percussim.solver.grid import resolve_numerics, wave_speed  # noqa: E402
+from percussim.solver.presets import preset_json  # noqa: E402
 
 _spec = importlib.util.spec_from_file_location("matrix_bench", ROOT / "bench" / "matrix.py")
 matrix_bench = importlib.util.module_from_spec(_spec)

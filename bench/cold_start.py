@@ -3,7 +3,7 @@
 
     .venv/bin/python bench/cold_start.py [--repeat 5]
 
-1. A fresh `percussim run examples/fig3.json`: wall time of the whole process, and inside a
+1. A fresh `percussim run fig3`: wall time of the whole process, and inside a
    fresh interpreter the time to import the solver, the first run (which loads the kernel from the
    cache) and a second one.
 2. A fresh `percussim worker` (Redis, the API running): the worker process is started, a Fig. 3
@@ -27,14 +27,14 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, redis_server, wait_for  # noqa: E402
-from solver.controller import warm_up  # noqa: E402
-from solver.presets import preset_json  # noqa: E402
+from percussim.solver.controller import warm_up  # noqa: E402
+from percussim.solver.presets import preset_json  # noqa: E402
 
 PROBE = """
 import json, time
 start = time.perf_counter()
-from solver.presets import load_preset
-from solver.simulate import simulate
+from percussim.solver.presets import load_preset
+from percussim.solver.simulate import simulate
 imported = time.perf_counter()
 case = load_preset("fig3")
 simulate(case)
@@ -53,12 +53,12 @@ def fresh_process(repeat: int) -> None:
     walls, phases = [], []
     for _ in range(repeat):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "solver", "run", "examples/fig3.json"], cwd=ROOT,
+        subprocess.run([sys.executable, "-m", "percussim", "run", "fig3"], cwd=ROOT,
                        check=True, capture_output=True)
         walls.append(time.perf_counter() - start)
         phases.append(json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=ROOT, check=True,
                                                 capture_output=True, text=True).stdout))
-    print("A fresh process (percussim run examples/fig3.json):")
+    print("A fresh process (percussim run fig3):")
     print(line("whole process, wall", walls))
     for phase in phases[0]:
         print(line(phase, [p[phase] for p in phases]))

@@ -71,12 +71,13 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import solve_banded
 from scipy.optimize import brentq
 
-from solver import kernel as K
-from solver import load_case, simulate_rod
-from solver.case import Case
-from solver.controller import MAX_CONTACTS, end_conditions, force_law
-from solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
-from solver.schemes import Scheme
+from percussim.solver import kernel as K
+from percussim.solver.case import load_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.case import Case
+from percussim.solver.controller import MAX_CONTACTS, end_conditions, force_law
+from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
+from percussim.solver.schemes import Scheme
 
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE = ROOT / "bench" / "kernel_c" / "step.c"
@@ -569,7 +570,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=7)
     args = parser.parse_args()
 
-    fig3 = load_case(ROOT / "examples" / "fig3.json")
+    fig3 = load_case(ROOT / "solver" / "presets" / "fig3.json")
     setups = [
         prepare("Fig. 3 preset: paper γ=0.5, 100 cells", "paper 100", fig3),
         prepare("Fig. 3, paper γ=0.5, 2000 cells, same τ", "paper 2000", fig3, cells=2000),

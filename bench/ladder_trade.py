@@ -21,9 +21,9 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import matrix as bench_matrix  # noqa: E402
-from solver import accuracy, adaptive  # noqa: E402
-from solver.controller import warm_up  # noqa: E402
-from solver.matrix import draw_cases  # noqa: E402
+from percussim.solver import accuracy, adaptive, grid  # noqa: E402
+from percussim.solver.controller import warm_up  # noqa: E402
+from percussim.solver.matrix import draw_cases  # noqa: E402
 
 LOOSE = {"MIN_RUNS": 3, "SAFETY_FACTOR": 1.0, "UNCONFIRMED_ORDER": 2.0, "LOWEST_ORDER": 1.0}
 SETTINGS = [
@@ -39,9 +39,9 @@ SETTINGS = [
 
 
 def apply(overrides: dict) -> None:
-    """Set the constants in the modules that hold them (both, where adaptive imported one)."""
+    """Set the constants in the modules that hold them (each, where one module imported another's)."""
     for name, value in overrides.items():
-        for module in (accuracy, adaptive):
+        for module in (accuracy, adaptive, grid):
             if hasattr(module, name):
                 setattr(module, name, value)
 

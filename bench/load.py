@@ -30,9 +30,9 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, redis_server  # noqa: E402
-from solver.controller import warm_up  # noqa: E402
-from solver.presets import load_preset, preset_json  # noqa: E402
-from solver.simulate import simulate  # noqa: E402
+from percussim.solver.controller import warm_up  # noqa: E402
+from percussim.solver.presets import load_preset, preset_json  # noqa: E402
+from percussim.solver.simulate import simulate  # noqa: E402
 
 FINISHED = ("succeeded", "failed", "cancelled")
 

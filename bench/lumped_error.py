@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from solver import parse_case, simulate_rod
-from solver.accuracy import estimated_values, not_estimated
-from solver.adaptive import LUMPED_ERROR, explicit_numerics, rigidity
-from solver.grid import contact_time_estimate, wave_speed
-from solver.lumped import simulate_lumped
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.accuracy import estimated_values, not_estimated
+from percussim.solver.adaptive import LUMPED_ERROR, explicit_numerics, rigidity
+from percussim.solver.grid import contact_time_estimate, wave_speed
+from percussim.solver.lumped import simulate_lumped
 
 BASE = {
     "striker": {"mass": 13.0, "velocity": 5.0},

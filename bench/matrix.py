@@ -39,14 +39,15 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from solver import characteristics, matrix, parse_case  # noqa: E402
-from solver.accuracy import estimated_values  # noqa: E402
-from solver.adaptive import explicit_numerics  # noqa: E402
-from solver.grid import wave_speed  # noqa: E402
-from solver.controller import simulate_rod, warm_up  # noqa: E402
-from solver.matrix import converged_reference, draw_cases, reference_cells  # noqa: E402
-from solver.presets import preset_json, preset_names  # noqa: E402
-from solver.simulate import simulate  # noqa: E402
+from percussim.solver import characteristics, matrix  # noqa: E402
+from percussim.solver.case import parse_case
+from percussim.solver.accuracy import estimated_values  # noqa: E402
+from percussim.solver.adaptive import explicit_numerics  # noqa: E402
+from percussim.solver.grid import wave_speed  # noqa: E402
+from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
+from percussim.solver.matrix import converged_reference, draw_cases, reference_cells  # noqa: E402
+from percussim.solver.presets import preset_json, preset_names  # noqa: E402
+from percussim.solver.simulate import simulate  # noqa: E402
 
 TOLERANCES = (1e-2, 1e-3)
 CACHE = ROOT / "bench" / ".cache"

@@ -45,10 +45,10 @@ def bench_case(cells: int, steps: int, field_stride: int) -> dict:
 
 def child(cells: int, steps: int, field_stride: int) -> None:
     """Run one case streamed to a temporary file; print its figures as JSON."""
-    from solver import parse_case
-    from solver.controller import warm_up
-    from solver.limits import output_values
-    from solver.simulate import simulate
+    from percussim.solver.case import parse_case
+    from percussim.solver.controller import warm_up
+    from percussim.solver.limits import output_values
+    from percussim.solver.simulate import simulate
 
     case = parse_case(bench_case(cells, steps, field_stride))
     warm_up()  # the kernel loaded from Numba's cache before the clock starts
@@ -86,7 +86,7 @@ def main() -> None:
         return
 
     # Compiled once beforehand, so that no measured process holds the compiler's memory.
-    subprocess.run([sys.executable, "-c", "from solver.controller import warm_up; warm_up()"],
+    subprocess.run([sys.executable, "-c", "from percussim.solver.controller import warm_up; warm_up()"],
                    check=True, cwd=ROOT)
     base = measure(**BASELINE)
     run = measure(args.cells, args.steps, args.field_stride)

@@ -13,8 +13,8 @@ import statistics
 import time
 from pathlib import Path
 
-from solver import load_case, simulate_rod
-from solver.controller import warm_up
+from percussim.solver.presets import load_preset
+from percussim.solver.controller import simulate_rod, warm_up
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -24,7 +24,7 @@ def main() -> None:
     parser.add_argument("--repeat", type=int, default=20)
     args = parser.parse_args()
 
-    case = load_case(ROOT / "examples" / "fig3.json")
+    case = load_preset("fig3")
     warm_up()
     times = []
     for _ in range(args.repeat):

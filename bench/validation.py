@@ -27,9 +27,11 @@ from pathlib import Path
 import numpy as np
 from matplotlib.figure import Figure
 
-from solver import load_case, parse_case, simulate_rod
-from solver.lumped import simulate_lumped
-from solver.reference import LinearImpact, observed_order
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.lumped import simulate_lumped
+from percussim.solver.presets import load_preset
+from percussim.solver.reference import LinearImpact, observed_order
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMES = ("paper", "sigma", "explicit")
@@ -164,7 +166,7 @@ def rigid_limit(figures: dict[str, Figure]) -> list[str]:
 
 
 def fig3() -> list[str]:
-    s = simulate_rod(load_case(ROOT / "examples" / "fig3.json")).summary
+    s = simulate_rod(load_preset("fig3")).summary
     return [f"Fig. 3 preset (100 cells, τ = 8.3e-7 s): co-impact time {s['co_impact_time'] * 1e6:.1f} µs "
             f"(model.md: near 335 µs), peak contact force {s['peak_contact_force']['value'] / 1e3:.1f} kN "
             f"(model.md: near 860 kN)."]
@@ -207,9 +209,9 @@ def damped_contact() -> list[str]:
 
 
 def saint_venant() -> list[str]:
-    from solver.characteristics import solve
-    from solver.reference import RigidImpact
-    from solver.simulate import simulate
+    from percussim.solver.characteristics import solve
+    from percussim.solver.reference import RigidImpact
+    from percussim.solver.simulate import simulate
 
     ref = RigidImpact()
     case = parse_case(ref.case())
@@ -240,9 +242,9 @@ def saint_venant() -> list[str]:
 
 
 def stiff_contacts() -> list[str]:
-    from solver import CaseError
-    from solver.characteristics import solve
-    from solver.simulate import simulate
+    from percussim.solver.case import CaseError
+    from percussim.solver.characteristics import solve
+    from percussim.solver.simulate import simulate
 
     base = LinearImpact(zeta=0.3, m1=20.0, length=1.0, area=0.01)
     lines = ["A 20-kg striker at 5 m/s on a 1-m bar through linear contacts ζ times critically damped "
@@ -273,10 +275,10 @@ def stiff_contacts() -> list[str]:
 
 
 def recorded_force_report() -> list[str]:
-    from solver.characteristics import solve
-    from solver.presets import preset_json
-    from solver.reference import recorded_force
-    from solver.simulate import simulate
+    from percussim.solver.characteristics import solve
+    from percussim.solver.presets import preset_json
+    from percussim.solver.reference import recorded_force
+    from percussim.solver.simulate import simulate
 
     data = preset_json("fig9")
     data["numerics"] = {"duration": data["numerics"]["duration"]}

@@ -11,11 +11,11 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from solver import parse_case
-from solver.io import write_result
-from solver.plots import write_plots
-from solver.presets import preset_json
-from solver.simulate import simulate
+from percussim.solver.case import parse_case
+from percussim.solver.io import write_result
+from percussim.solver.plots import write_plots
+from percussim.solver.presets import preset_json
+from percussim.solver.simulate import simulate
 
 
 def main() -> None:

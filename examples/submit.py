@@ -5,7 +5,7 @@ pulse summary, read its full histories as arrays and download the HDF5 result.
 
 `PERCUSSIM_API_KEY` is sent as the API key when set. The same in a few lines:
 
-    from service.client import Client
+    from percussim.client import Client
 
     with Client("http://127.0.0.1:8000") as api:
         summary = api.run(api.preset("fig3"))
@@ -17,7 +17,7 @@ import argparse
 import json
 import os
 
-from service.client import Client
+from percussim.client import Client
 
 
 def main() -> None:

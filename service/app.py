@@ -10,8 +10,8 @@ from fastapi import Depends, FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse
 
-from worker.settings import Settings, settings as env_settings
-from worker.store import WorkerRegistry
+from percussim.worker.settings import Settings, settings as env_settings
+from percussim.worker.store import WorkerRegistry
 
 from . import errors, page, presets
 from .auth import authenticate

@@ -12,7 +12,7 @@ from typing import Annotated
 
 from fastapi import Header, HTTPException, Request
 
-from worker.settings import Settings
+from percussim.worker.settings import Settings
 
 
 def key_id(key: str) -> str:

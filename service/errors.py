@@ -15,8 +15,8 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel
 from starlette.exceptions import HTTPException
 
-from solver.case import CaseError, FieldError, describe, field_path
-from worker.store import UnknownJob, UnknownSweep
+from percussim.solver.case import CaseError, FieldError, describe, field_path
+from percussim.worker.store import UnknownJob, UnknownSweep
 
 
 class FieldErrors(BaseModel):

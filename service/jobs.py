@@ -13,11 +13,12 @@ from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
-from solver.case import Case, CaseError, FieldError
-from solver.simulate import check_case
-from solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
-from worker.settings import Settings
-from worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
+from percussim.solver.case import Case, CaseError, FieldError
+from percussim.solver.limits import check_case
+from percussim.solver.summary import Summary
+from percussim.solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
+from percussim.worker.settings import Settings
+from percussim.worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
 
 from .errors import FieldErrors, Problem
 from .queue import JobQueue
@@ -159,7 +160,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         """A job's status, progress (0..1), timestamps and error."""
         return _view(request, store(request).get(job_id))
 
-    @router.get("/{job_id}/summary", responses=not_found | not_ready)
+    @router.get("/{job_id}/summary", response_model=Summary, responses=not_found | not_ready)
     def get_summary(request: Request, job_id: str) -> dict:
         """The pulse summary of a succeeded job."""
         jobs = store(request)

@@ -19,8 +19,8 @@ import time
 
 import uvicorn
 
-from worker.settings import Settings, settings
-from worker.store import FAILED, QUEUED, RUNNING, JobStore, now
+from percussim.worker.settings import Settings, settings
+from percussim.worker.store import FAILED, QUEUED, RUNNING, JobStore, now
 
 from .queue import JobQueue
 
@@ -37,7 +37,7 @@ def _stop_requested(signum: int, frame) -> None:
 
 
 def _start_worker(name: str) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "solver", "worker", "--name", name])
+    return subprocess.Popen([sys.executable, "-m", "percussim", "worker", "--name", name])
 
 
 def _back_to_queue(jobs: JobStore, worker: str, death: str) -> list[str]:
@@ -166,6 +166,6 @@ def run_service(host: str = "127.0.0.1", port: int = 8000, workers: int | None =
         signal.signal(signum, _stop_requested)
     children = _Workers(count, s)
     try:
-        uvicorn.run("service.app:app", host=host, port=port)
+        uvicorn.run("percussim.service.app:app", host=host, port=port)
     finally:
         children.stop()

@@ -7,7 +7,7 @@ from typing import Any
 from fastapi import APIRouter, HTTPException
 from pydantic import BaseModel
 
-from solver.presets import preset_json, preset_names
+from percussim.solver.presets import preset_json, preset_names
 
 from .errors import Problem
 

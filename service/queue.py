@@ -16,9 +16,9 @@ from celery import Celery, group
 from kombu.exceptions import OperationalError
 from kombu.utils.url import maybe_sanitize_url
 
-from worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
-from worker.settings import Settings
-from worker.store import FAILED, JobStore, now
+from percussim.worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
+from percussim.worker.settings import Settings
+from percussim.worker.store import FAILED, JobStore, now
 
 # What publishing raises when the broker cannot be reached (kombu wraps most of them).
 BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError,

@@ -10,10 +10,10 @@ from typing import Annotated, Any
 from fastapi import APIRouter, Body, Request, Response
 from pydantic import BaseModel
 
-from solver.presets import preset_json, preset_names
-from solver.sweep import COLUMNS, Sweep, table_row, variants
-from worker.settings import Settings
-from worker.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
+from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.sweep import COLUMNS, Sweep, table_row, variants
+from percussim.worker.settings import Settings
+from percussim.worker.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
 
 from .errors import FieldErrors, Problem
 from .jobs import cancel, queue_jobs

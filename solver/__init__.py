@@ -1,12 +1,12 @@
-"""percussim solver: the discrete–continuous percussion model, pure numerics."""
+"""percussim.solver: the discrete–continuous percussion model, pure numerics.
 
-from .case import Case, CaseError, FieldError, load_case, parse_case
-from .controller import Cancelled, NumericalFailure, Result, simulate_rod
-from .grid import resolve_numerics, tool_mass
+case → grid → kernel → controller → summary → io, with `adaptive` choosing grids to a tolerance
+and `simulate` the one entry point. Importing this package imports nothing else: validating a
+case (`case`) needs no Numba, and the kernel is compiled or loaded only when a run needs it.
+The public API is the `percussim` package above this one.
+"""
 
-__version__ = "0.1.0"
-__all__ = [
-    "Case", "CaseError", "FieldError", "load_case", "parse_case",
-    "Cancelled", "NumericalFailure", "Result", "simulate_rod",
-    "resolve_numerics", "tool_mass", "__version__",
-]
+# The folder is installed as percussim.solver; loaded under its folder's name (the repository on
+# sys.path) its modules would exist twice, with two sets of classes that compare unequal.
+if __name__ != "percussim.solver":
+    raise ImportError(f"import percussim.solver, not {__name__} (the folder solver/ is that package)")

@@ -27,14 +27,12 @@ from typing import Callable
 
 from .accuracy import SAFETY_FACTOR, ESTIMATED, Estimate, QuantityError, estimate, not_estimated
 from .case import Case, CaseError, FieldError, Outputs
-from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
-from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_mass, wave_speed
+from .controller import simulate_rod
+from .grid import MIN_CELLS, ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, rigidity
 from .limits import Limits, check_limits
+from .result import CancelCheck, ProgressCallback, Recorder, Result
+from .summary import add_accuracy
 
-DEFAULT_TOLERANCE = 0.01  # when the case gives no grid and no scheme
-# The coarsest grid of a ladder resolves the contact's time scale (`time_scale`) by this many
-# steps at a tolerance of 1e-2, and by √(1e-2/tol) times as many at another.
-FIRST_POINTS = 4.0
 CLIMB = 2.0  # refinement from one grid to the next until four in a row are asymptotic
 MIN_RUNS = 4  # an estimate from three grids, its order confirmed by the three before
 MIN_STEP, MAX_STEP = 1.2, 4.0  # refinement to a predicted grid
@@ -42,75 +40,8 @@ AIM = 0.75  # a predicted grid aims its bare estimate at this fraction of the to
 SURE_ORDER = 1.5  # below this observed order a predicted grid is at most `CLIMB` finer
 MAX_RUNS = 14
 UNSETTLED_GRIDS = 3  # contacts that change over this many grids, with no gain, stop a ladder
-MIN_CELLS = 2
-SEGMENT_CELLS = 2  # cells over the shortest segment of the tool's profile, on the first grid
-STEP_FRACTION = 0.01  # of the tool's length: a shorter segment of the profile is a step
 COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
-
-
-def rigidity(case: Case) -> float:
-    """ε: the two-mass system's highest frequency over the tool's lowest elastic one, `πa/(2L)`.
-
-    The contact is linearised at the depth of a rigid-wall impact (the estimate the time step
-    starts from too): tangent stiffness `(1+α)·c1·depth^α`.
-    """
-    alpha, m1 = case.contact.exponent, case.striker.mass
-    m2 = tool_mass(case.tool)
-    period = contact_time_estimate(case)
-    k_contact = (1.0 + alpha) * m1 * (math.pi / period) ** 2  # = (1+α)·G at the rigid-wall depth
-    k_medium = case.medium.stiffness if case.medium else 0.0
-    # The larger root of det(K − ω²M) = 0 for K = [[k, −k], [−k, k + k_medium]], M = diag(m1, m2):
-    # a quadratic whose roots are real and whose larger one suffers no cancellation.
-    half_trace = 0.5 * (k_contact / m1 + (k_contact + k_medium) / m2)
-    omega2 = half_trace + math.sqrt(max(half_trace**2 - k_contact * k_medium / (m1 * m2), 0.0))
-    return math.sqrt(omega2) / (math.pi * wave_speed(case.tool) / (2.0 * case.tool.length))
-
-
-def time_scale(case: Case) -> float:
-    """The time the contact force's shape is drawn over: the rigid-wall contact time, or, for a
-    contact stiff against the tool (its damping ratio on the tool's impedance Z above about 1),
-    the time the tool brakes the striker in, m1/Z (Saint-Venant's 1/β): the contact's own quick
-    rise is left to the ends' substeps."""
-    tool = case.tool
-    area = tool.area if tool.area is not None else tool.profile.area[0]
-    braking = case.striker.mass / (tool.density * wave_speed(tool) * area)
-    return max(contact_time_estimate(case), braking)
-
-
-def profile_cells(case: Case) -> int:
-    """The fewest cells that give each segment of the tool's profile `SEGMENT_CELLS`: on coarser
-    grids the waves reflected inside the tool are not yet the tool's, and their differences say
-    nothing of the error (a 5-mm taper in a 0.1-m tool left the tension 6% off on 4, 8 and 16
-    cells, each within 0.7% of the next). A segment under `STEP_FRACTION` of the tool's length is
-    a step, which any grid takes."""
-    if case.tool.profile is None:
-        return MIN_CELLS
-    length = case.tool.length
-    x = case.tool.profile.x
-    segments = [b - a for a, b in zip(x, x[1:]) if b - a >= STEP_FRACTION * length]
-    return math.ceil(SEGMENT_CELLS * length / min(segments)) if segments else MIN_CELLS
-
-
-def first_cells(case: Case, tol: float) -> int:
-    """The coarsest grid of a ladder: `FIRST_POINTS` steps over the contact's time scale, and the
-    tool's profile resolved (`profile_cells`)."""
-    points = FIRST_POINTS * math.sqrt(1e-2 / tol)
-    tau = time_scale(case) / points
-    if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
-        raise CaseError([FieldError(
-            field="striker",
-            message=f"the contact of a {case.striker.mass:.3g}-kg striker at {case.striker.velocity:.3g} "
-                    "m/s lasts no time that a grid can resolve: give values of a real striker")])
-    return max(MIN_CELLS, profile_cells(case),
-               math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
-
-
-def explicit_numerics(case: Case, cells: int) -> ResolvedNumerics:
-    """The explicit scheme at Courant number 1 on `cells` cells."""
-    h = case.tool.length / cells
-    return resolve_numerics(case, model="rod", scheme="explicit", cells=cells,
-                            time_step=h / wave_speed(case.tool))
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -226,10 +157,10 @@ def next_refinement(found: Estimate, tol: float) -> float:
 
 
 def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,
-                   run: Callable[[Case, ResolvedNumerics], Result], limits: Limits) -> Result:
+                   run: Callable[[Case, ResolvedNumerics], Result], why: str) -> Result:
     """The error of a run on a fixed grid, from companion runs `COMPANIONS` times coarser in h and
     τ (as many of them as the grid allows) at the scheme's order; `run` solves a case on given
-    numerics."""
+    numerics, `why` says why the grid is the one it is."""
     companions, missing = [], []
     for factor in COMPANIONS:
         cells = round(numerics.cells / factor)
@@ -243,18 +174,15 @@ def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,
         except CaseError as error:  # a grid too coarse for a stiff contact or medium
             missing.append(f"{factor}× coarser: {error.errors[0].message.split(':')[0]}")
     if not companions:
-        result.summary["warnings"].append(
+        return annotate(result, None, tolerance=None, runs=[numerics], why=why, notes=[
             f"no error estimate: no coarser grid to compare {numerics.cells} cells with "
             f"({'; '.join(missing)}); leave numerics.cells, time_step and scheme out for the "
-            "default accuracy, which estimates its error, or give numerics.tolerance")
-        return annotate(result, None, tolerance=None, runs=[numerics], why=result.summary["why"])
-    if missing:
-        result.summary["warnings"].append(
-            f"the error estimate rests on one coarser grid, at the scheme's order ({'; '.join(missing)})")
+            "default accuracy, which estimates its error, or give numerics.tolerance"])
+    notes = [f"the error estimate rests on one coarser grid, at the scheme's order "
+             f"({'; '.join(missing)})"] if missing else []
     runs = companions + [(numerics, result.summary)]
     found = _estimate(case, runs, numerics.weights().order)
-    return annotate(result, found, tolerance=None, runs=[n for n, _ in runs],
-                    why=result.summary["why"])
+    return annotate(result, found, tolerance=None, runs=[n for n, _ in runs], why=why, notes=notes)
 
 
 def lumped_estimate(case: Case, result: Result) -> Result:
@@ -271,20 +199,15 @@ def lumped_estimate(case: Case, result: Result) -> Result:
 
 
 def annotate(result: Result, found: Estimate | None, tolerance: float | None,
-             runs: list[ResolvedNumerics], why: str, unmet: str = "") -> Result:
-    """Write the estimate, the tolerance, the grids and why into the result's summary, with the
-    warnings the estimate calls for (`accuracy.accuracy_warnings`)."""
+             runs: list[ResolvedNumerics], why: str, unmet: str = "", notes: list[str] = ()) -> Result:
+    """Complete the result's summary with the estimate, the tolerance, the grids and why, and as
+    warnings `notes` and what the estimate calls for (`accuracy.accuracy_warnings`)."""
     from .accuracy import accuracy_warnings
 
-    summary = result.summary
-    summary.update({
-        "tolerance": tolerance,
-        "error_estimate": found.relative() if found else None,
-        "not_estimated": dict(found.left_out) if found else {},
-        "why": why,
-        "runs": [{"model": n.model, "scheme": n.scheme, "cells": n.cells,
-                  "time_step": n.time_step, "steps": n.steps} for n in runs],
-    })
+    warnings = list(notes)
     if found is not None:
-        summary["warnings"].extend(accuracy_warnings(found, summary, tolerance, unmet))
+        warnings += accuracy_warnings(found, result.summary, tolerance, unmet)
+    add_accuracy(result.summary, tolerance=tolerance, error_estimate=found.relative() if found else None,
+                 not_estimated=dict(found.left_out) if found else {}, why=why, runs=runs,
+                 warnings=warnings)
     return result

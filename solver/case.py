@@ -8,6 +8,7 @@ field path instead of being silently ignored. `parse_case` turns pydantic's erro
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Annotated, Any, Literal, Union
 
@@ -346,7 +347,16 @@ def parse_case(data: dict | str | bytes) -> Case:
         raise CaseError(describe_errors(error)) from None
 
 
-def load_case(path: str | Path) -> Case:
+def as_case(case: Case | dict | str | os.PathLike) -> Case:
+    """A case given as a `Case`, as case JSON in a dict, or as the path of a case JSON file."""
+    if isinstance(case, Case):
+        return case
+    if isinstance(case, dict):
+        return parse_case(case)
+    return load_case(case)
+
+
+def load_case(path: str | os.PathLike) -> Case:
     """Read and validate a case JSON file."""
     text = Path(path).read_text()
     try:

@@ -7,21 +7,16 @@ layers go to a `Recorder`: held in memory (`MemoryRecorder`), or streamed to an 
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-from typing import Callable, Protocol
-
 import numpy as np
 
 from . import kernel as K
 from .case import Case
+from .errors import Cancelled, NumericalFailure
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
-from .summary import FORCE_HISTORY, build_summary, force_history_rows
+from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
+from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows
 
-MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
-
-ProgressCallback = Callable[[float], None]
-CancelCheck = Callable[[], bool]
 
 # History columns as stored under their HDF5 paths.
 HISTORY_PATHS = {
@@ -43,111 +38,6 @@ HISTORY_PATHS = {
     "energy/contact_potential": K.H_CONTACT_POTENTIAL,
     "energy/medium_potential": K.H_MEDIUM_POTENTIAL,
 }
-FIELD_NAMES = ("x", "time", "displacement", "stress")  # stored as fields/<name>
-
-
-class Cancelled(Exception):
-    """The run was cancelled between two chunks."""
-
-
-class NumericalFailure(RuntimeError):
-    """A non-finite value appeared; carries the time and what to change."""
-
-    def __init__(self, time: float, numerics: ResolvedNumerics):
-        self.time = time
-        super().__init__(
-            f"the solution became non-finite at t = {time:.6g} s (scheme '{numerics.scheme}', time "
-            f"step {numerics.time_step:.3g} s, {numerics.cells} cells); likely cause: a contact or "
-            "medium far stiffer than the time step resolves. Reduce numerics.time_step."
-        )
-
-
-@dataclass
-class Fields:
-    """Displacement and stress along the tool at the sampled times."""
-
-    x: np.ndarray
-    time: np.ndarray
-    displacement: np.ndarray  # (samples, N + 1)
-    stress: np.ndarray  # (samples, N + 1)
-
-
-@dataclass
-class Result:
-    """A finished run: the case, the numerics used, histories, probes, fields, summary.
-
-    A run streamed to a file (`streamed`) carries its case, numerics, probe stations and summary
-    only: `history` is empty, `probe_stress` has no rows and `fields` is None; the arrays are in
-    the file (`solver.io.read_result`).
-    """
-
-    case: Case
-    numerics: ResolvedNumerics
-    history: dict[str, np.ndarray]
-    probe_x: np.ndarray
-    probe_stress: np.ndarray  # (samples, probes)
-    fields: Fields | None
-    summary: dict
-    streamed: bool = False
-    summary_json: str | None = field(default=None, repr=False)  # as written to a result file
-
-    @classmethod
-    def from_arrays(cls, case: Case, numerics: ResolvedNumerics, arrays: dict[str, np.ndarray],
-                    summary: dict) -> Result:
-        """The result from its arrays under their HDF5 names; all but probes and fields are history."""
-        history = dict(arrays)
-        fields = (Fields(*(history.pop(f"fields/{k}") for k in FIELD_NAMES))
-                  if "fields/x" in history else None)
-        probe_x, probe_stress = history.pop("probes/x"), history.pop("probes/stress")
-        return cls(case=case, numerics=numerics, history=history, probe_x=probe_x,
-                   probe_stress=probe_stress, fields=fields, summary=summary)
-
-    def arrays(self) -> dict[str, np.ndarray]:
-        """The arrays under their HDF5 names (the inverse of `from_arrays`)."""
-        arrays = {**self.history, "probes/x": self.probe_x, "probes/stress": self.probe_stress}
-        if self.fields is not None:
-            arrays.update({f"fields/{k}": getattr(self.fields, k) for k in FIELD_NAMES})
-        return arrays
-
-
-class Recorder(Protocol):
-    """Where a run's outputs go, under their HDF5 names.
-
-    `start` begins a run (anything recorded before is dropped), `create` makes a dataset at its
-    final shape, and `append` fills it with its next rows.
-    """
-
-    def start(self) -> None: ...
-
-    def create(self, name: str, shape: tuple[int, ...], dtype: np.dtype = np.dtype(float)) -> None: ...
-
-    def append(self, name: str, rows: np.ndarray) -> None: ...
-
-    def held(self) -> dict[str, np.ndarray] | None:
-        """The datasets when held in memory; None when they went elsewhere."""
-
-
-class MemoryRecorder:
-    """Holds every dataset in memory, allocated at its final shape."""
-
-    def __init__(self) -> None:
-        self.start()
-
-    def start(self) -> None:
-        self.arrays: dict[str, np.ndarray] = {}
-        self.filled: dict[str, int] = {}
-
-    def create(self, name: str, shape: tuple[int, ...], dtype: np.dtype = np.dtype(float)) -> None:
-        self.arrays[name] = np.empty(shape, dtype)
-        self.filled[name] = 0
-
-    def append(self, name: str, rows: np.ndarray) -> None:
-        first = self.filled[name]
-        self.arrays[name][first:first + len(rows)] = rows
-        self.filled[name] = first + len(rows)
-
-    def held(self) -> dict[str, np.ndarray]:
-        return self.arrays
 
 
 def _kept(first: int, last: int, stride: int) -> int:

@@ -16,6 +16,7 @@ import json
 import os
 import secrets
 from functools import lru_cache
+from importlib.metadata import version
 from math import prod
 from pathlib import Path
 from typing import BinaryIO
@@ -26,8 +27,8 @@ import pydantic_core
 from h5py import h5a, h5d, h5p, h5s, h5t
 
 from .case import Case
-from .controller import Result
 from .grid import ResolvedNumerics
+from .result import Result
 
 FORMAT = "percussim-result"
 FORMAT_VERSION = 1
@@ -201,8 +202,6 @@ class ResultWriter:
 
     def commit(self, result: Result) -> Path:
         """Complete the file with `result`, and its arrays unless it was streamed here; rename it."""
-        from . import __version__
-
         if not result.streamed:
             self.start()
             for name, data in result.arrays().items():
@@ -214,7 +213,7 @@ class ResultWriter:
         summary = result.summary
         estimate = summary.get("error_estimate")
         attributes = {"format": FORMAT, "format_version": FORMAT_VERSION,
-                      "solver_version": __version__, "case": result.case.model_dump_json(),
+                      "solver_version": version("percussim"), "case": result.case.model_dump_json(),
                       "numerics": json.dumps(numerics),
                       **{f"numerics.{key}": value for key, value in numerics.items()},
                       # what the summary says of its accuracy, readable without parsing it

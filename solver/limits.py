@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 from . import kernel as K
 from .case import Case, CaseError, FieldError
-from .grid import ResolvedNumerics
+from .grid import ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, tolerance_of
 
 
 @dataclass(frozen=True)
@@ -61,3 +61,14 @@ def check_limits(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits
                     "outputs.history_stride or outputs.field_stride"))
     if errors:
         raise CaseError(errors)
+
+
+def check_case(case: Case, limits: Limits) -> None:
+    """Refuse up front a case over the limits (`CaseError` naming each): the grid it gives, or,
+    under a tolerance, the first grid of its ladder (a later one over them ends the ladder)."""
+    tol = tolerance_of(case.numerics)
+    if tol is not None:
+        numerics = explicit_numerics(case, first_cells(case, tol))
+    else:
+        numerics = resolve_numerics(case)
+    check_limits(case, numerics, limits)

@@ -29,11 +29,12 @@ import numpy as np
 
 from . import kernel as K
 from .case import Case, Force
-from .controller import (HISTORY_PATHS, MAX_CONTACTS, CancelCheck, Cancelled, NumericalFailure,
-                         ProgressCallback, Result)
+from .controller import HISTORY_PATHS
+from .errors import Cancelled, NumericalFailure
 from .grid import (ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass,
                    tool_mass_ahead)
-from .summary import build_summary
+from .result import CancelCheck, ProgressCallback, Result
+from .summary import MAX_CONTACTS, build_summary
 
 # scipy (about 40 MB resident) is imported where the model runs, so that a process running only
 # the rod, such as a worker, does not carry it.

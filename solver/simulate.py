@@ -1,27 +1,36 @@
-"""One entry point for a run: limits first, then a tolerance, the lumped model or a fixed grid, each
-with its error estimate (`solver.adaptive`)."""
+"""The entry points of a run: `simulate` (limits first, then a tolerance, the lumped model or a fixed
+grid, each with its error estimate, `adaptive`) and `run_sweep` (every variant of a sweep)."""
 
 from __future__ import annotations
 
+import contextlib
+import functools
 import math
-from pathlib import Path
+import os
+from concurrent.futures import ProcessPoolExecutor
+from typing import Any, Callable
 
-from .adaptive import (DEFAULT_TOLERANCE, explicit_numerics, first_cells, fixed_estimate,
-                       lumped_estimate, solve_to_tolerance)
-from .case import Case, CaseError, FieldError, Numerics
-from .controller import CancelCheck, ProgressCallback, Recorder, Result, simulate_rod
-from .grid import ResolvedNumerics, resolve_numerics
+from pydantic import ValidationError
+
+from .adaptive import fixed_estimate, lumped_estimate, solve_to_tolerance
+from .case import Case, CaseError, FieldError, as_case, describe_errors
+from .controller import simulate_rod
+from .errors import NumericalFailure
+from .grid import ResolvedNumerics, resolve_numerics, tolerance_of
 from .io import ResultWriter
 from .limits import Limits, check_limits
 from .lumped import simulate_lumped
+from .result import CancelCheck, ProgressCallback, Recorder, Result
+from .sweep import TABLE_OUTPUTS, Sweep, table_row, variants
 
 FIXED_SHARE = 0.75  # of a fixed grid's progress: the run asked for; its companions the rest
 
 
-def simulate(case: Case, model: str | None = None, progress: ProgressCallback | None = None,
-             cancelled: CancelCheck | None = None, limits: Limits = Limits(),
-             result_path: str | Path | None = None) -> Result:
-    """Solve `case` with `model` ('rod' or 'lumped'; default `case.numerics.model`) to the accuracy
+def simulate(case: Case | dict | str | os.PathLike, model: str | None = None,
+             progress: ProgressCallback | None = None, cancelled: CancelCheck | None = None,
+             limits: Limits = Limits(), result_path: str | os.PathLike | None = None) -> Result:
+    """Solve `case` (a `Case`, case JSON as a dict, or a case file's path; `CaseError` names each
+    bad field) with `model` ('rod' or 'lumped'; default `case.numerics.model`) to the accuracy
     it asks: `numerics.tolerance`; the default accuracy (a tolerance of 0.01) when it gives neither
     a grid nor a scheme; or the fixed grid it gives, whose error is estimated from two coarser
     companion runs. Every summary carries `error_estimate` (or says in `warnings` why not).
@@ -31,6 +40,7 @@ def simulate(case: Case, model: str | None = None, progress: ProgressCallback | 
     memory stays O(cells) whatever they are: the result returned is then `streamed`, without its
     arrays.
     """
+    case = as_case(case)
     if model is not None:
         case = case.model_copy(update={"numerics": case.numerics.model_copy(update={"model": model})})
     if result_path is None:
@@ -39,28 +49,6 @@ def simulate(case: Case, model: str | None = None, progress: ProgressCallback | 
         result = _solve(case, progress, cancelled, limits, recorder=writer)
         writer.commit(result)
     return result
-
-
-def tolerance_of(numerics: Numerics) -> float | None:
-    """The tolerance a case is solved to: its own, or the default when it gives neither a grid
-    nor a scheme (and asks for the rod); None for a fixed grid or the lumped model."""
-    if numerics.tolerance is not None:
-        return numerics.tolerance
-    fixed = (numerics.cells, numerics.time_step, numerics.scheme)
-    if all(value is None for value in fixed) and numerics.model != "lumped":
-        return DEFAULT_TOLERANCE
-    return None
-
-
-def check_case(case: Case, limits: Limits) -> None:
-    """Refuse up front a case over the limits (`CaseError` naming each): the grid it gives, or,
-    under a tolerance, the first grid of its ladder (a later one over them ends the ladder)."""
-    tol = tolerance_of(case.numerics)
-    if tol is not None:
-        numerics = explicit_numerics(case, first_cells(case, tol))
-    else:
-        numerics = resolve_numerics(case)
-    check_limits(case, numerics, limits)
 
 
 def _solve(case: Case, progress: ProgressCallback | None, cancelled: CancelCheck | None,
@@ -80,14 +68,13 @@ def _solve(case: Case, progress: ProgressCallback | None, cancelled: CancelCheck
     result = simulate_rod(case, numerics=numerics, progress=share, cancelled=cancelled,
                           recorder=recorder)
     refuse_chatter(result.summary, numerics)
-    result.summary["why"] = fixed_choice(case, numerics)
 
     def companion(coarse_case: Case, coarse: ResolvedNumerics) -> Result:
         result = simulate_rod(coarse_case, numerics=coarse, cancelled=cancelled)
         refuse_chatter(result.summary, coarse)
         return result
 
-    result = fixed_estimate(case, numerics, result, companion, limits)
+    result = fixed_estimate(case, numerics, result, companion, why=fixed_choice(case, numerics))
     if progress is not None:
         progress(1.0)
     return result
@@ -124,3 +111,38 @@ def fixed_choice(case: Case, numerics: ResolvedNumerics) -> str:
                 "error estimated from two companion runs on grids 2× and 4× coarser")
     return (f"a grid was given, so the paper's weighted scheme (8) with γ = {num.gamma:g} on it; "
             "its error estimated from two companion runs on grids 2× and 4× coarser")
+
+
+def _sweep_row(case: Case, limits: Limits) -> dict[str, Any]:
+    try:
+        return table_row(simulate(case, limits=limits).summary)
+    except (NumericalFailure, CaseError) as error:  # this variant fails, the sweep goes on
+        return {"error": str(error)}
+
+
+def run_sweep(sweep: Sweep | dict, processes: int | None = None,
+              progress: Callable[[int, int], None] | None = None,
+              limits: Limits = Limits()) -> list[dict[str, Any]]:
+    """Solve every variant, `processes` at once (default: one a core); one row each, in the order
+    of `variants`: the parameter values, then the summary's columns (or `error`). `sweep` is a
+    `Sweep` or its JSON as a dict (`{"case": …, "parameters": {"striker.velocity": [3, 5]}}`)."""
+    if not isinstance(sweep, Sweep):
+        try:
+            sweep = Sweep.model_validate(sweep)
+        except ValidationError as error:
+            raise CaseError(describe_errors(error)) from None
+    table_only = sweep.case.model_copy(update={"outputs": TABLE_OUTPUTS})
+    found = variants(sweep.model_copy(update={"case": table_only}), limits=limits)
+    processes = processes or os.cpu_count() or 1
+    cases = [case for _, case in found]
+    solve = functools.partial(_sweep_row, limits=limits)
+    rows = []
+    with ProcessPoolExecutor(processes) if processes > 1 else contextlib.nullcontext() as pool:
+        # Batches large enough to hide the pipe, small enough to keep every process busy.
+        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (64 * processes)))
+                  if pool else map(solve, cases))
+        for (values, _), row in zip(found, solved):
+            rows.append(values | row)
+            if progress is not None:
+                progress(len(rows), len(found))
+    return rows

@@ -1,18 +1,113 @@
-"""The pulse summary (the contract's JSON) from what a run observed."""
+"""The pulse summary: its response model (`Summary`, every field with its unit), and the one place
+it is assembled: `build_summary` from what a run observed, `add_accuracy` from what its error
+estimate says. Built as a plain dict (a sweep builds thousands a second); `Summary` validates it
+wherever it is served or tested."""
 
 from __future__ import annotations
 
 import math
+from typing import Literal
 
 import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
 
 from . import kernel as K
 from .case import Case
 from .grid import ResolvedNumerics
 
+MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 FORCE_HISTORY_POINTS = 2000
 # The summary's force history: its keys and the history paths they come from
 FORCE_HISTORY = {"time": "time", "contact": "contact/force", "medium": "medium/force"}
+
+
+class _Part(BaseModel):
+    model_config = ConfigDict(extra="forbid")
+
+
+class NumericsUsed(_Part):
+    model: Literal["rod", "lumped"] = Field(description="the tool as an elastic rod, or the two-mass model (21)–(25)")
+    scheme: str = Field(description="'paper' (the weighted scheme (8), γ), 'sigma' (σ), 'explicit'; 'dop853' for the lumped model")
+    time_step: float = Field(description="τ, s")
+    cells: int = Field(description="N, cells along the tool (0 for the lumped model)")
+    gamma: float = Field(description="γ, the paper's weight of the new layer")
+    sigma: float = Field(description="σ, the weight of the σ-scheme")
+    end_masses: bool = Field(description="whether the tool's end nodes carry their half-cell mass")
+    steps: int = Field(description="M, time steps")
+    courant: float = Field(description="a·τ/h, 1")
+    ends: str = Field(description="how the tool's ends are solved: 'impedance', 'mass', 'massless' or 'none'")
+
+
+class Contact(_Part):
+    start: float = Field(description="s")
+    end: float | None = Field(description="s; null while the contact lasts at the end of the run")
+
+
+class PeakForce(_Part):
+    value: float = Field(description="N")
+    time: float = Field(description="s")
+
+
+class PeakStress(_Part):
+    value: float = Field(description="Pa, as a magnitude")
+    x: float = Field(description="m from the struck end")
+    time: float = Field(description="s")
+
+
+class Energy(_Part):
+    initial: float = Field(description="the striker's kinetic energy at impact, J")
+    external_work: float = Field(description="work of the external force, J")
+    to_medium: float = Field(description="stored in and dissipated by the medium, J")
+    transfer_efficiency: float = Field(description="to_medium over the energy supplied, 1")
+    dissipated_contact: float = Field(description="by the contact's damper b1, J")
+    dissipated_medium: float = Field(description="by the medium's damper b2, J")
+    numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated), J")
+    striker_kinetic: float = Field(description="J, at the end of the run")
+    tool_kinetic: float = Field(description="J, at the end of the run")
+    tool_strain: float = Field(description="J, at the end of the run")
+    contact_potential: float = Field(description="Φ(δ), J, at the end of the run")
+    medium_potential: float = Field(description="J, at the end of the run")
+    max_excess_fraction: float = Field(description="largest energy created over the energy supplied, 1 (0 for a stable scheme)")
+
+
+class ForceHistory(_Part):
+    time: list[float] = Field(description=f"s; at most {FORCE_HISTORY_POINTS} points spread over the run")
+    contact: list[float] = Field(description="contact force, N")
+    medium: list[float] = Field(description="medium force, N")
+
+
+class RunGrid(_Part):
+    model: str
+    scheme: str
+    cells: int
+    time_step: float = Field(description="s")
+    steps: int
+
+
+class Summary(_Part):
+    """The pulse summary of a run (`GET /v1/jobs/{id}/summary`, `Result.summary`)."""
+
+    name: str | None = Field(description="the case's name")
+    model: Literal["rod", "lumped"]
+    scheme: str
+    numerics: NumericsUsed
+    co_impact_time: float | None = Field(description="end of the first contact, s; null if it never ends")
+    contacts: list[Contact] = Field(description=f"the contact intervals (the first {MAX_CONTACTS})")
+    contacts_total: int = Field(description="how many contacts, counting those not listed")
+    peak_contact_force: PeakForce
+    max_compressive_stress: PeakStress
+    max_tensile_stress: PeakStress
+    striker_rebound_velocity: float | None = Field(
+        description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)")
+    energy: Energy
+    force_history: ForceHistory
+    warnings: list[str] = Field(description="what the answer cannot promise, in words")
+    why: str = Field(description="why this model, scheme and grid")
+    tolerance: float | None = Field(description="the relative accuracy asked, 1; null for a fixed grid")
+    error_estimate: dict[str, float | None] | None = Field(
+        description="each estimated quantity's relative error, 1, and 'worst'; null when none could be made")
+    not_estimated: dict[str, str] = Field(description="quantity → why its error is not estimated")
+    runs: list[RunGrid] = Field(description="the grids solved for this answer, coarse to fine")
 
 
 def _number(value: float) -> float | None:
@@ -96,3 +191,18 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
         "force_history": _downsample(history),
         "warnings": list(extra_warnings or []),
     }
+
+
+def add_accuracy(summary: dict, *, tolerance: float | None, error_estimate: dict[str, float] | None,
+                 not_estimated: dict[str, str], why: str, runs: list[ResolvedNumerics],
+                 warnings: list[str]) -> None:
+    """Complete `summary` with what its error estimate says (`adaptive.annotate`)."""
+    summary.update({
+        "tolerance": tolerance,
+        "error_estimate": error_estimate,
+        "not_estimated": not_estimated,
+        "why": why,
+        "runs": [{"model": n.model, "scheme": n.scheme, "cells": n.cells,
+                  "time_step": n.time_step, "steps": n.steps} for n in runs],
+    })
+    summary["warnings"].extend(warnings)

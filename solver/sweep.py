@@ -1,28 +1,22 @@
 """Parameter sweeps: a base case, the values to give some of its fields, one row of results each.
 
 Every combination of the values is one variant (a full factorial grid). `variants` validates them
-all before anything runs, naming the parameter and value a bad variant came from; `run_sweep`
-solves them on every core (one process a core: the kernel is serial and each process loads it from
+all before anything runs, naming the parameter and value a bad variant came from;
+`simulate.run_sweep` solves them on every core (one process a core: the kernel is serial and each process loads it from
 Numba's cache) and returns one table.
 """
 
 from __future__ import annotations
 
-import contextlib
 import copy
-import functools
 import itertools
 import math
-import os
-from concurrent.futures import ProcessPoolExecutor
-from typing import Any, Callable
+from typing import Any
 
 from pydantic import BaseModel, ConfigDict, Field
 
 from .case import Case, CaseError, FieldError, Outputs, parse_case
-from .controller import NumericalFailure
-from .limits import Limits
-from .simulate import check_case, simulate
+from .limits import Limits, check_case
 
 MAX_VARIANTS = 10_000
 MAX_ERRORS = 20  # bad variants named before giving up
@@ -119,32 +113,3 @@ def table_row(summary: dict) -> dict[str, Any]:
         row[column] = value
     row["warnings"] = len(summary["warnings"])
     return row
-
-
-def _solve(case: Case, limits: Limits) -> dict[str, Any]:
-    try:
-        return table_row(simulate(case, limits=limits).summary)
-    except (NumericalFailure, CaseError) as error:  # this variant fails, the sweep goes on
-        return {"error": str(error)}
-
-
-def run_sweep(sweep: Sweep, processes: int | None = None,
-              progress: Callable[[int, int], None] | None = None,
-              limits: Limits = Limits()) -> list[dict[str, Any]]:
-    """Solve every variant, `processes` at once (default: one a core); one row each, in the order
-    of `variants`: the parameter values, then the summary's columns (or `error`)."""
-    table_only = sweep.case.model_copy(update={"outputs": TABLE_OUTPUTS})
-    found = variants(sweep.model_copy(update={"case": table_only}), limits=limits)
-    processes = processes or os.cpu_count() or 1
-    cases = [case for _, case in found]
-    solve = functools.partial(_solve, limits=limits)
-    rows = []
-    with ProcessPoolExecutor(processes) if processes > 1 else contextlib.nullcontext() as pool:
-        # Batches large enough to hide the pipe, small enough to keep every process busy.
-        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (64 * processes)))
-                  if pool else map(solve, cases))
-        for (values, _), row in zip(found, solved):
-            rows.append(values | row)
-            if progress is not None:
-                progress(len(rows), len(found))
-    return rows

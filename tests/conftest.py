@@ -6,7 +6,7 @@ import copy
 
 import pytest
 
-from solver.reference import LinearImpact
+from percussim.solver.reference import LinearImpact
 
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
 

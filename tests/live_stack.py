@@ -122,7 +122,7 @@ class Stack:
         self.url = f"http://127.0.0.1:{self.port}"
         self.processes: list[Process] = []
         self.workers: dict[str, Process] = {}  # by Celery node name
-        serve = [sys.executable, "-m", "solver", "serve", "--port", str(self.port)]
+        serve = [sys.executable, "-m", "percussim", "serve", "--port", str(self.port)]
         self.serve_api = [*serve, "--no-worker"]
         if broker_url:  # the API alone, workers as separate processes
             self.processes.append(Process(self.serve_api, self.env, folder / "api.log"))
@@ -136,7 +136,7 @@ class Stack:
                  f"the API and {workers} worker(s)")
 
     def add_worker(self, name: str) -> Process:
-        worker = Process([sys.executable, "-m", "solver", "worker", "--name", f"{name}@percussim"],
+        worker = Process([sys.executable, "-m", "percussim", "worker", "--name", f"{name}@percussim"],
                          self.env | self.worker_env, self.folder / f"worker-{name}.log")
         self.processes.append(worker)
         self.workers[f"{name}@percussim"] = worker

@@ -6,21 +6,19 @@ import math
 import os
 import subprocess
 import sys
-from pathlib import Path
 
 import pytest
 
 from conftest import merge
-from solver import CaseError, parse_case
-from solver.accuracy import (ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order,
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.accuracy import (ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order,
                              quantity_error)
-from solver.limits import Limits
-from solver.matrix import converged_reference
-from solver.presets import preset_json
-from solver.reference import LinearImpact, true_errors
-from solver.simulate import simulate
+from percussim.solver.limits import Limits
+from percussim.solver.matrix import converged_reference
+from percussim.solver.presets import preset_json
+from percussim.solver.reference import LinearImpact, true_errors
+from percussim.solver.simulate import simulate
 
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def truth_of(case: dict) -> dict[str, float]:
@@ -175,7 +173,7 @@ def test_a_tolerance_and_a_grid_together_are_refused():
 
 def test_local_runs_read_the_limits_and_say_how_to_raise_them(tmp_path):
     """`PERCUSSIM_MAX_*` set the limits of the command line as of the service."""
-    command = [sys.executable, "-m", "solver", "run", str(ROOT / "examples" / "fig3.json")]
+    command = [sys.executable, "-m", "percussim", "run", "fig3"]
     small = {**os.environ, "PERCUSSIM_MAX_CELLS": "50"}
     refused = subprocess.run(command, capture_output=True, text=True, env=small, cwd=tmp_path)
     assert refused.returncode == 2

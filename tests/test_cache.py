@@ -7,8 +7,10 @@ from pathlib import Path
 
 PROBE = """
 import json
-from solver import kernel, load_case, simulate_rod
-simulate_rod(load_case("examples/fig3.json"))
+from percussim.solver import kernel
+from percussim.solver.presets import load_preset
+from percussim.solver.controller import simulate_rod
+simulate_rod(load_preset("fig3"))
 s = kernel.advance.stats
 print(json.dumps({"hits": sum(s.cache_hits.values()), "misses": sum(s.cache_misses.values())}))
 """

@@ -5,8 +5,9 @@ import json
 import pytest
 
 from conftest import BASE_CASE, merge
-from solver import CaseError, parse_case, resolve_numerics
-from solver.limits import Limits, check_limits
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.grid import resolve_numerics
+from percussim.solver.limits import Limits, check_limits
 
 PROFILE = {"area": None, "profile": {"x": [0.0, 0.5, 1.0, 1.2], "area": [0.01, 0.01, 0.005, 0.004]}}
 

@@ -10,10 +10,11 @@ import h5py
 from conftest import BASE_CASE, merge
 
 ROOT = Path(__file__).resolve().parents[1]
+PRESETS = ROOT / "solver" / "presets"  # the presets as shipped
 
 
 def _percussim(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "solver", *args], cwd=cwd, capture_output=True,
+    return subprocess.run([sys.executable, "-m", "percussim", *args], cwd=cwd, capture_output=True,
                           text=True, env=None, timeout=120)
 
 
@@ -46,7 +47,7 @@ def test_invalid_case_exits_2_with_the_field(tmp_path):
 def test_files_are_written_even_when_stdout_closes_early(tmp_path):
     case = tmp_path / "case.json"
     case.write_text(json.dumps(merge(BASE_CASE, {"numerics": {"duration": 5e-4}})))
-    reader = subprocess.Popen([sys.executable, "-m", "solver", "run", str(case), "--summary", "s.json",
+    reader = subprocess.Popen([sys.executable, "-m", "percussim", "run", str(case), "--summary", "s.json",
                                "--output", "r.h5"], cwd=tmp_path, stdout=subprocess.PIPE,
                               stderr=subprocess.DEVNULL)
     reader.stdout.close()  # like `| head -0`: nobody reads the summary
@@ -57,7 +58,7 @@ def test_files_are_written_even_when_stdout_closes_early(tmp_path):
 
 
 def test_model_lumped_runs_the_model_problem():
-    done = _percussim("run", "examples/fig3.json", "--model", "lumped", cwd=ROOT)
+    done = _percussim("run", "fig3", "--model", "lumped", cwd=ROOT)
     assert done.returncode == 0, done.stderr
     summary = json.loads(done.stdout)
     assert summary["model"] == "lumped" and summary["numerics"]["cells"] == 0
@@ -75,21 +76,21 @@ def test_presets_are_listed_printed_and_written(tmp_path):
     assert [line.split()[0] for line in lines] == [f"fig{k}" for k in range(3, 10)]
     assert lines[0].startswith("fig3  Fig. 3 of the paper: a 20-kg striker")
     assert json.loads(_percussim("presets", "fig9", cwd=tmp_path).stdout) == json.loads(
-        (ROOT / "examples" / "fig9.json").read_text())
+        (PRESETS / "fig9.json").read_text())
     assert _percussim("presets", "fig3", "-o", "f.json", cwd=tmp_path).returncode == 0
     assert json.loads((tmp_path / "f.json").read_text())["name"] == "fig3"
     assert _percussim("presets", "--write", "all", cwd=tmp_path).returncode == 0
-    for path in (ROOT / "examples").glob("*.json"):
+    for path in PRESETS.glob("*.json"):
         assert json.loads((tmp_path / "all" / path.name).read_text()) == json.loads(path.read_text())
     unknown = _percussim("presets", "fig99", cwd=tmp_path)
     assert unknown.returncode == 2 and "unknown preset 'fig99'" in unknown.stderr
 
 
 def test_run_progress_goes_to_stderr_and_stdout_stays_the_summary(tmp_path):
-    forced = _percussim("run", "examples/fig9.json", "--progress", cwd=ROOT)
+    forced = _percussim("run", str(PRESETS / "fig9.json"), "--progress", cwd=ROOT)
     assert forced.returncode == 0, forced.stderr
     assert json.loads(forced.stdout)["name"] == "fig9"
     assert "percussim: 100%|" in forced.stderr
     # Not a terminal, and short: no bar unless forced.
-    quiet = _percussim("run", "examples/fig9.json", cwd=ROOT)
+    quiet = _percussim("run", "fig9", cwd=ROOT)
     assert "%|" not in quiet.stderr and json.loads(quiet.stdout) == json.loads(forced.stdout)

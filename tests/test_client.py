@@ -18,12 +18,12 @@ import pytest
 
 from conftest import BASE_CASE, CHATTERS, merge
 from live_stack import ROOT, Stack, wait_for
-from service.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
-from solver import load_case
-from solver.io import read_result
-from solver.presets import load_preset, preset_json
-from solver.simulate import simulate
-from solver.sweep import COLUMNS, Sweep, run_sweep
+from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
+from percussim.solver.case import load_case
+from percussim.solver.io import read_result
+from percussim.solver.presets import load_preset, preset_json
+from percussim.solver.simulate import run_sweep, simulate
+from percussim.solver.sweep import COLUMNS, Sweep
 from test_cli import _percussim
 from test_live import LONG
 
@@ -81,7 +81,7 @@ def test_a_preset_runs_to_the_local_summary_and_arrays(api, tmp_path):
 
 
 def test_a_case_file_and_a_case_object_are_submitted_as_they_are(api, tmp_path):
-    assert api.run(ROOT / "examples" / "fig3.json") == api.run(load_case(ROOT / "examples" / "fig3.json"))
+    assert api.run(ROOT / "solver" / "presets" / "fig3.json") == api.run(load_case(ROOT / "solver" / "presets" / "fig3.json"))
     broken = tmp_path / "broken.json"
     broken.write_text("{not json")
     with pytest.raises(Refused) as refused:
@@ -217,7 +217,7 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
     # SIGINT at its default in the child, as in a terminal: a shell's background job inherits it
     # ignored, and Python then never turns it into KeyboardInterrupt.
-    submit = subprocess.Popen([sys.executable, "-m", "solver", "submit", str(case), "--url", stack.url],
+    submit = subprocess.Popen([sys.executable, "-m", "percussim", "submit", str(case), "--url", stack.url],
                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                               preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     try:
@@ -238,7 +238,7 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
 def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_path):
     case = tmp_path / "long.json"
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
-    sweep = subprocess.Popen([sys.executable, "-m", "solver", "sweep", str(case), "--vary",
+    sweep = subprocess.Popen([sys.executable, "-m", "percussim", "sweep", str(case), "--vary",
                               "striker.velocity=4,5", "--url", stack.url],
                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
@@ -289,9 +289,9 @@ def test_the_key_is_sent_and_a_401_says_so():
 
 
 def test_the_client_imports_without_the_service_or_the_solver():
-    loaded = subprocess.run([sys.executable, "-c", "import sys, service.client; print(*sorted(sys.modules))"],
+    loaded = subprocess.run([sys.executable, "-c", "import sys, percussim.client; print(*sorted(sys.modules))"],
                             cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
-    assert not {"fastapi", "celery", "numba", "numpy", "solver"} & set(loaded)
+    assert not {"fastapi", "celery", "numba", "numpy", "percussim.solver", "percussim.service"} & set(loaded)
 
 
 def test_the_worked_example_runs_a_preset_and_downloads_its_result(stack, tmp_path):

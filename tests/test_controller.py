@@ -4,13 +4,15 @@ and a streamed run's memory stays bounded."""
 import numpy as np
 import pytest
 
-import solver.controller as controller
+import percussim.solver.controller as controller
 from conftest import BASE_CASE, merge
-from solver import Cancelled, parse_case, simulate_rod
-from solver.io import read_result
-from solver.limits import output_values
-from solver.simulate import simulate
-from solver.summary import FORCE_HISTORY_POINTS, _downsample
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.errors import Cancelled
+from percussim.solver.io import read_result
+from percussim.solver.limits import output_values
+from percussim.solver.simulate import simulate
+from percussim.solver.summary import FORCE_HISTORY_POINTS, _downsample
 
 CASE = merge(BASE_CASE, {"numerics": {"duration": 1e-3},
                          "outputs": {"probes": [0.3], "fields": True, "field_stride": 7}})

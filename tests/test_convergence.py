@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from conftest import merge
-from solver import parse_case, simulate_rod
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
 
 TAPERED = json.loads((Path(__file__).parent / "cases" / "tapered_hertz.json").read_text())
 WAVE_SPEED = math.sqrt(2.1e11 / 7800.0)

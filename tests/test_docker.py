@@ -136,7 +136,8 @@ def test_two_stages_on_the_slim_python_image(stages):
 def test_the_builder_installs_the_project_not_editable(stages):
     builder = stages[0]
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    needed = {"pyproject.toml", pyproject["project"]["readme"], *pyproject["tool"]["setuptools"]["packages"]}
+    needed = {"pyproject.toml", pyproject["project"]["readme"],
+              *pyproject["tool"]["setuptools"]["package-dir"].values()}
     copied = {Path(src).as_posix() for args in builder.all("COPY") for src in split_args(args)[1][:-1]}
     assert needed <= copied, f"`pip install .` needs {sorted(needed - copied)} in the builder"
     installs = [a for a in builder.all("RUN") if "pip install" in a and " ." in a]
@@ -144,12 +145,21 @@ def test_the_builder_installs_the_project_not_editable(stages):
     assert not any(" -e " in a or "--editable" in a for a in installs), "not an editable install"
 
 
-def test_a_non_editable_install_carries_the_job_page():
+def test_a_non_editable_install_carries_the_job_page_and_the_presets():
     """`pip install .` copies only Python modules unless package data names the rest."""
-    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
-    static = [p.relative_to(ROOT / "service").as_posix() for p in (ROOT / "service" / "static").rglob("*")
-              if p.is_file()]
-    assert static and all(any(fnmatch(f, pattern) for pattern in data["service"]) for f in static), static
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    folders = setuptools["package-dir"]
+
+    def folder(package: str) -> Path:
+        parent = max((p for p in folders if package == p or package.startswith(p + ".")), key=len)
+        return ROOT / folders[parent] / Path(*package[len(parent) + 1:].split(".") if package != parent else ())
+
+    for read in (ROOT / "service" / "static", ROOT / "solver" / "presets"):
+        package = next(p for p in setuptools["package-data"] if folder(p) == read or folder(p) == read.parent)
+        files = [p.relative_to(folder(package)).as_posix() for p in read.rglob("*")
+                 if p.is_file() and p.suffix != ".py" and "__pycache__" not in p.parts]
+        patterns = setuptools["package-data"][package]
+        assert files and all(any(fnmatch(f, pattern) for pattern in patterns) for f in files), (package, files)
 
 
 def test_the_runtime_user_is_not_root(final):
@@ -205,10 +215,7 @@ def test_every_copied_path_exists_and_reaches_the_build_context(stages):
 def test_the_image_environment(final):
     env = env_of_stage(final)
     assert env.get("PERCUSSIM_RESULTS_DIR") == "/data"
-    examples = [split_args(a)[1] for a in final.all("COPY") if split_args(a)[1][0].rstrip("/") == "examples"]
-    assert examples, "the presets (examples/) are in the image"
-    assert env.get("PERCUSSIM_PRESETS", "").rstrip("/") == examples[0][-1].rstrip("/"), (
-        "PERCUSSIM_PRESETS points where examples/ is copied")
+    assert "PERCUSSIM_PRESETS" not in env, "the presets ship in the package"
     assert any("/data" in a and "chown" in a for a in final.all("RUN")), (
         "/data is owned by the runtime user, so a new named volume mounted there is writable")
 
@@ -401,7 +408,7 @@ def test_the_http_health_checks_pass_on_200_and_fail_otherwise(final, api_stand_
 
 
 def test_the_worker_health_check_follows_its_heartbeat(tmp_path):
-    from worker.store import WorkerRegistry
+    from percussim.worker.store import WorkerRegistry
 
     test = healthcheck_test(yaml.safe_load(COMPOSE.read_text())["services"]["worker"])
     assert test[:3] == ["CMD", "python", "-c"]

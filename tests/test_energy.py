@@ -9,8 +9,9 @@ import pytest
 from scipy.integrate import trapezoid
 
 from conftest import BASE_CASE, merge
-from solver import parse_case, simulate_rod
-from solver.grid import tool_area
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.grid import tool_area
 
 DAMPED_DRIVEN = merge(BASE_CASE, {
     "force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 800.0},

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 from conftest import BASE_CASE, merge
-from solver import CaseError, parse_case
-from solver.simulate import simulate
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.simulate import simulate
 CREATED_AT_MOST = 0.005  # of the input energy: what no scheme may create at any instant
 
 # The shared test case (Fig. 3-like) on 60 cells with the default time step.

@@ -13,7 +13,7 @@ import pytest
 
 from conftest import BASE_CASE, CHATTERS, merge
 from live_stack import RedisServer, Stack, children, command_line, wait_for
-from solver.presets import preset_json
+from percussim.solver.presets import preset_json
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

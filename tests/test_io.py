@@ -7,12 +7,14 @@ import h5py
 import numpy as np
 import pytest
 
-import solver.controller as controller
-import solver.io as io
+import percussim.solver.controller as controller
+import percussim.solver.io as io
 from conftest import BASE_CASE, merge
-from solver import Cancelled, parse_case, simulate_rod
-from solver.io import read_result, remove_partial, write_result
-from solver.simulate import simulate
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.errors import Cancelled
+from percussim.solver.io import read_result, remove_partial, write_result
+from percussim.solver.simulate import simulate
 
 CASE = merge(BASE_CASE, {"numerics": {"duration": 5e-4},
                          "outputs": {"probes": [0.0, 0.6, 1.2], "fields": True, "field_stride": 25}})

@@ -10,9 +10,9 @@ import numpy as np
 import pytest
 from scipy.linalg import solve_banded
 
-from solver import kernel as K
-from solver.grid import make_grid
-from solver.presets import load_preset
+from percussim.solver import kernel as K
+from percussim.solver.grid import make_grid
+from percussim.solver.presets import load_preset
 
 RNG = np.random.default_rng(7)
 

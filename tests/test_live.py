@@ -15,9 +15,9 @@ import pytest
 
 from conftest import merge
 from live_stack import Stack, redis_server, wait_for
-from solver import parse_case
-from solver.presets import load_preset, preset_json
-from solver.simulate import simulate
+from percussim.solver.case import parse_case
+from percussim.solver.presets import load_preset, preset_json
+from percussim.solver.simulate import simulate
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

@@ -7,10 +7,11 @@ import pytest
 from scipy.integrate import trapezoid
 
 from conftest import BASE_CASE, STEEL, merge
-from solver import Cancelled, parse_case, simulate_rod
-from solver.controller import HISTORY_PATHS
-from solver.grid import tool_mass
-from solver.lumped import NO_FIELDS_WARNING, simulate_lumped
+from percussim.solver.case import parse_case
+from percussim.solver.controller import HISTORY_PATHS, simulate_rod
+from percussim.solver.errors import Cancelled
+from percussim.solver.grid import tool_mass
+from percussim.solver.lumped import NO_FIELDS_WARNING, simulate_lumped
 
 
 def relative(value: float, reference: float) -> float:

@@ -11,10 +11,10 @@ odd instants; one to several contacts.
 
 import pytest
 
-from solver import parse_case
-from solver.accuracy import estimated_values
-from solver.matrix import converged_reference, draw_cases
-from solver.simulate import simulate
+from percussim.solver.case import parse_case
+from percussim.solver.accuracy import estimated_values
+from percussim.solver.matrix import converged_reference, draw_cases
+from percussim.solver.simulate import simulate
 
 CASES = draw_cases(1, 23)
 SUBSET = (0, 3, 4, 5, 7, 9, 10, 11, 14, 16, 22)

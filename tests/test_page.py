@@ -17,7 +17,7 @@ from playwright.sync_api import Page, expect, sync_playwright
 
 from conftest import merge
 from live_stack import Stack
-from solver.presets import preset_json
+from percussim.solver.presets import preset_json
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

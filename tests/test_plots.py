@@ -17,18 +17,18 @@ import numpy as np
 import pytest
 from fastapi.testclient import TestClient
 
-import solver.plots as plots
+import percussim.solver.plots as plots
 from conftest import BASE_CASE, merge
 from live_stack import ROOT
-from service.app import create_app
-from solver.case import parse_case
-from solver.cli import main
-from solver.io import write_result
-from solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
-from solver.presets import preset_json
-from solver.simulate import simulate
-from worker.settings import Settings
-from worker.store import SUCCEEDED, JobStore, now
+from percussim.service.app import create_app
+from percussim.solver.case import parse_case
+from percussim.cli import main
+from percussim.solver.io import write_result
+from percussim.solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
+from percussim.solver.presets import preset_json
+from percussim.solver.simulate import simulate
+from percussim.worker.settings import Settings
+from percussim.worker.store import SUCCEEDED, JobStore, now
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -304,7 +304,7 @@ def test_http_serves_a_plot_as_png_and_svg_and_keeps_it(results, store, monkeypa
     def no_drawing(*args):
         raise AssertionError("a kept plot was drawn again")
 
-    monkeypatch.setattr("service.jobs.render", no_drawing)
+    monkeypatch.setattr("percussim.service.jobs.render", no_drawing)
     again = client.get(f"/v1/jobs/{job_id}/plots/force.png")
     assert again.status_code == 200 and again.content == png.content
 

@@ -10,17 +10,18 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from solver import CaseError, load_case, simulate_rod
-from solver.presets import PRESETS_ENV, load_preset, preset_json, preset_names
+from percussim.solver.case import CaseError, load_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.presets import PRESETS_ENV, load_preset, preset_json, preset_names
 
-EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
+EXAMPLES = Path(__file__).resolve().parents[1] / "solver" / "presets"  # as shipped
 PAPER_FIGURES = [f"fig{k}" for k in range(3, 10)]
 FILES = sorted(EXAMPLES.glob("*.json"))
 
 
 @pytest.fixture(autouse=True)
 def default_folder(monkeypatch):
-    """Read the repository's examples/, whatever the environment running the tests says."""
+    """Read the package's own presets, whatever the environment running the tests says."""
     monkeypatch.delenv(PRESETS_ENV, raising=False)
 
 

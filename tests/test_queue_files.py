@@ -9,15 +9,15 @@ import os
 import pytest
 from kombu import Connection
 
-import worker.queue_files as queue_files
-from worker.app import make_app
-from worker.settings import Settings
+import percussim.worker.queue_files as queue_files
+from percussim.worker.app import make_app
+from percussim.worker.settings import Settings
 
 
 @pytest.fixture
 def connection(tmp_path):
     folder = str(tmp_path)
-    with Connection("filesystem://", transport="worker.queue_files:Transport", transport_options={
+    with Connection("filesystem://", transport="percussim.worker.queue_files:Transport", transport_options={
             "data_folder_in": folder, "data_folder_out": folder, "control_folder": folder}) as c:
         yield c
 

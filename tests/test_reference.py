@@ -4,7 +4,8 @@ import math
 
 import numpy as np
 
-from solver import parse_case, simulate_rod
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
 
 
 def _errors(ref, cells):

@@ -9,9 +9,9 @@ import pytest
 from fastapi.testclient import TestClient
 
 from conftest import BASE_CASE, merge
-from service.app import create_app
-from solver.presets import preset_json
-from worker.settings import Settings
+from percussim.service.app import create_app
+from percussim.solver.presets import preset_json
+from percussim.worker.settings import Settings
 
 ALICE, BOB = "alice-key-0123456789", "bob-key-9876543210"
 
@@ -80,7 +80,7 @@ def test_no_path_is_built_from_user_input(tmp_path, path):
 
 
 def test_a_downloaded_file_name_is_made_from_safe_characters(tmp_path):
-    from service.jobs import _download_name
+    from percussim.service.jobs import _download_name
 
     assert _download_name({"id": "X", "name": "../../etc/passwd"}) == "etc_passwd-X.h5"
     assert _download_name({"id": "X", "name": 'a"b\r\nc'}) == "a_b_c-X.h5"

@@ -14,13 +14,14 @@ import pytest
 from fastapi.testclient import TestClient
 
 from conftest import BASE_CASE, merge
-from service.app import create_app
-from service.main import MAX_ATTEMPTS, queue_again, restore_queue
-from service.queue import JobQueue
-from solver.presets import PRESETS_ENV, preset_json, preset_names
-from worker.broker import queue_folder
-from worker.settings import Settings
-from worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry, now
+from percussim.service.app import create_app
+from percussim.service.main import MAX_ATTEMPTS, queue_again, restore_queue
+from percussim.service.queue import JobQueue
+from percussim.solver.presets import PRESETS_ENV, preset_json, preset_names
+from percussim.solver.simulate import simulate
+from percussim.worker.broker import queue_folder
+from percussim.worker.settings import Settings
+from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry, now
 
 
 @pytest.fixture(autouse=True)
@@ -141,10 +142,11 @@ def test_a_failed_job_names_its_error_in_the_409(client, tmp_path):
 def test_a_succeeded_job_serves_its_summary_and_hdf5_file(client, tmp_path):
     job = _submit(client, merge(BASE_CASE, {"name": "my rod/2"}))
     store = JobStore(tmp_path)
-    store.write_summary(job["id"], json.dumps({"co_impact_time": 3.35e-4}))
+    summary = simulate(BASE_CASE).summary
+    store.write_summary(job["id"], json.dumps(summary))
     store.result_path(job["id"]).write_bytes(b"\x89HDF\r\n\x1a\n fake")
     store.update(job["id"], status=SUCCEEDED, progress=1.0, finished=now())
-    assert client.get(f"/v1/jobs/{job['id']}/summary").json() == {"co_impact_time": 3.35e-4}
+    assert client.get(f"/v1/jobs/{job['id']}/summary").json() == summary
     download = client.get(f"/v1/jobs/{job['id']}/result.h5")
     assert download.status_code == 200
     assert download.headers["content-type"] == "application/x-hdf5"
@@ -409,3 +411,13 @@ def test_a_dead_workers_job_that_cannot_be_queued_again_ends_failed_saying_why(t
     record = jobs.get(job_id)
     assert record["status"] == FAILED
     assert record["error"].startswith("its worker died and the job could not be queued again: ")
+
+
+def test_openapi_documents_the_summary_with_units(client):
+    spec = client.get("/openapi.json").json()
+    answer = spec["paths"]["/v1/jobs/{job_id}/summary"]["get"]["responses"]["200"]
+    assert answer["content"]["application/json"]["schema"]["$ref"].endswith("/Summary")
+    schemas = spec["components"]["schemas"]
+    assert schemas["PeakForce"]["properties"]["value"]["description"] == "N"
+    assert schemas["Energy"]["properties"]["to_medium"]["description"].endswith(", J")
+    assert set(schemas["Summary"]["required"]) >= {"co_impact_time", "energy", "error_estimate", "warnings"}

@@ -5,11 +5,11 @@ import numpy as np
 import pytest
 
 from conftest import merge
-from solver import CaseError, parse_case
-from solver.characteristics import solve
-from solver.presets import preset_json
-from solver.reference import LinearImpact, RigidImpact, recorded_force, true_errors
-from solver.simulate import simulate
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.characteristics import solve
+from percussim.solver.presets import preset_json
+from percussim.solver.reference import LinearImpact, RigidImpact, recorded_force, true_errors
+from percussim.solver.simulate import simulate
 
 
 @pytest.fixture(scope="module")

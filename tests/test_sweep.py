@@ -9,12 +9,12 @@ import json
 import pytest
 
 from conftest import merge
-from solver import CaseError
-from solver.cli import main
-from solver.limits import Limits
-from solver.presets import preset_json
-from solver.simulate import simulate
-from solver.sweep import Sweep, run_sweep, variants
+from percussim.solver.case import CaseError
+from percussim.cli import main
+from percussim.solver.limits import Limits
+from percussim.solver.presets import preset_json
+from percussim.solver.simulate import run_sweep, simulate
+from percussim.solver.sweep import Sweep, variants
 
 FIG5 = preset_json("fig5")
 GRID = {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}

@@ -19,7 +19,7 @@ HEARTBEAT_SECONDS = 5.0
 
 
 def make_app(s: Settings) -> Celery:
-    app = Celery("percussim", include=["worker.tasks"])
+    app = Celery("percussim", include=["percussim.worker.tasks"])
     app.conf.update(broker_config(s), **{
         "task_acks_late": True,
         "task_reject_on_worker_lost": True,
@@ -43,7 +43,7 @@ _stop = threading.Event()
 def _load_kernel(**_):
     """Load the compiled kernel from Numba's cache in the parent process, before the pool forks:
     every child starts with it, and a fresh worker's first job pays no loading."""
-    from solver.controller import warm_up
+    from percussim.solver.controller import warm_up
 
     warm_up()
 

@@ -26,7 +26,7 @@ def broker_config(settings: Settings) -> dict:
         folder = str(queue_folder(settings))
         return {
             "broker_url": "filesystem://",
-            "broker_transport": "worker.queue_files:Transport",
+            "broker_transport": "percussim.worker.queue_files:Transport",
             # The control folder defaults to ./control: keep everything under the results folder.
             "broker_transport_options": {"data_folder_in": folder, "data_folder_out": folder,
                                          "control_folder": str(settings.broker_folder / "control"),

@@ -13,7 +13,7 @@ from pathlib import Path
 from pydantic import Field, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
-from solver.limits import Limits
+from percussim.solver.limits import Limits
 
 
 class Settings(BaseSettings):

@@ -5,9 +5,10 @@ from __future__ import annotations
 import socket
 import time
 
-from solver import Cancelled, CaseError, NumericalFailure, parse_case
-from solver.io import remove_partial
-from solver.simulate import simulate
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.errors import Cancelled, NumericalFailure
+from percussim.solver.io import remove_partial
+from percussim.solver.simulate import simulate
 
 from .app import app
 from .broker import RUN_JOB

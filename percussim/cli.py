@@ -16,8 +16,17 @@ PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
 
 
 def _no_such_file(path: str) -> int:
-    print(f"percussim: no such case file: {path}", file=sys.stderr)
+    print(f"percussim: no such case file or preset: {path} (`percussim presets` lists the presets)",
+          file=sys.stderr)
     return EXIT_INVALID
+
+
+def _case_source(arg: str) -> str | dict:
+    """The CASE argument: a case JSON file, or else a preset's name (its case JSON); a name that
+    is neither stays a path, whose reading then fails as a missing file."""
+    from .solver.presets import preset_json, preset_names
+
+    return preset_json(arg) if not Path(arg).exists() and arg in preset_names() else arg
 
 
 def _refused(what: str, error) -> int:
@@ -54,18 +63,18 @@ def _print_summary(summary: dict, path: str | None) -> int:
 
 def _limits():
     """The size limits of local runs: the service's settings (`PERCUSSIM_MAX_*`) read here too."""
-    from worker.settings import Settings
+    from percussim.worker.settings import Settings
 
     return Settings().limits()
 
 
 def _run(args: argparse.Namespace) -> int:
-    from .case import CaseError, load_case
-    from .controller import NumericalFailure
-    from .simulate import simulate
+    from .solver.case import CaseError
+    from .solver.errors import NumericalFailure
+    from .solver.simulate import simulate
 
     try:
-        case = load_case(args.case)
+        case = _case_source(args.case)
         with _progress_bar(args.progress) as advance:
             # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
             result = simulate(case, model=args.model, result_path=args.output, progress=advance,
@@ -81,14 +90,14 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _submit(args: argparse.Namespace) -> int:
-    from service.client import Client, Refused, ServiceError
+    from .client import Client, Refused, ServiceError
 
     if args.no_wait and (args.summary or args.output):
         print("percussim: --no-wait writes no --summary or --output: the job has not run yet", file=sys.stderr)
         return EXIT_INVALID
     try:
         with Client(args.url, api_key=args.api_key) as api:
-            job = api.submit(args.case)
+            job = api.submit(_case_source(args.case))
             if args.no_wait:
                 print(json.dumps(job, indent=2))
                 return 0
@@ -116,7 +125,7 @@ def _submit(args: argparse.Namespace) -> int:
 def _presets(args: argparse.Namespace) -> int:
     from textwrap import shorten
 
-    from .presets import preset_json, preset_names
+    from .solver.presets import preset_json, preset_names
 
     def text(name: str) -> str:
         return json.dumps(preset_json(name), indent=2, ensure_ascii=False) + "\n"
@@ -148,9 +157,9 @@ def _presets(args: argparse.Namespace) -> int:
 
 
 def _sweep(args: argparse.Namespace) -> int:
-    from service.client import Refused, ServiceError
+    from .client import Refused, ServiceError
 
-    from .case import CaseError
+    from .solver.case import CaseError
 
     try:
         rows = _sweep_on_service(args) if args.url else _sweep_here(args)
@@ -184,20 +193,21 @@ def _variants_done(done: int, total: int) -> None:
 
 def _sweep_here(args: argparse.Namespace) -> list[dict]:
     """Every variant solved on this machine's cores: a row each, the values then the columns."""
-    from .case import load_case
-    from .sweep import Sweep, run_sweep
+    from .solver.case import as_case
+    from .solver.simulate import run_sweep
+    from .solver.sweep import Sweep
 
-    sweep = Sweep(case=load_case(args.case), parameters=dict(args.vary))
+    sweep = Sweep(case=as_case(_case_source(args.case)), parameters=dict(args.vary))
     return run_sweep(sweep, processes=args.processes, progress=_variants_done, limits=_limits())
 
 
 def _sweep_on_service(args: argparse.Namespace) -> list[dict]:
     """Every variant a job on the service at `args.url`: a row each, the values then the job, its
     status and the columns. Ctrl-C cancels the variants not yet finished."""
-    from service.client import FINISHED, Client
+    from .client import FINISHED, Client
 
     with Client(args.url, api_key=args.api_key) as api:
-        sweep = api.submit_sweep(args.case, dict(args.vary))
+        sweep = api.submit_sweep(_case_source(args.case), dict(args.vary))
         try:
             done = api.wait_sweep(sweep["id"], progress=lambda fraction, s: _variants_done(
                 sum(s["counts"].get(status, 0) for status in FINISHED), s["total"]))
@@ -228,7 +238,7 @@ def _parameter(text: str) -> tuple[str, list]:
 
 
 def _times(text: str) -> list[float]:
-    from .plots import parse_times
+    from .solver.plots import parse_times
 
     try:
         return parse_times(text)
@@ -237,7 +247,7 @@ def _times(text: str) -> list[float]:
 
 
 def _plots(args: argparse.Namespace) -> int:
-    from .plots import write_plots
+    from .solver.plots import write_plots
 
     result = Path(args.result)
     if not result.is_file():
@@ -257,21 +267,21 @@ def _plots(args: argparse.Namespace) -> int:
 
 
 def _warmup(args: argparse.Namespace) -> int:
-    from .controller import warm_up
+    from .solver.controller import warm_up
 
     warm_up()
     return 0
 
 
 def _worker(args: argparse.Namespace) -> int:
-    from worker.main import run_worker
+    from percussim.worker.main import run_worker
 
     run_worker(concurrency=args.concurrency, loglevel=args.loglevel, name=args.name)
     return 0
 
 
 def _serve(args: argparse.Namespace) -> int:
-    from service.main import run_service
+    from percussim.service.main import run_service
 
     run_service(host=args.host, port=args.port, workers=args.workers, start_workers=not args.no_worker)
     return 0
@@ -288,7 +298,7 @@ def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="percussim", description=__doc__)
     commands = p.add_subparsers(dest="command", required=True)
     run = commands.add_parser("run", help="solve a case locally and print its pulse summary")
-    run.add_argument("case", help="impact case JSON")
+    run.add_argument("case", help="impact case JSON, or a preset's name")
     run.add_argument("--summary", metavar="OUT.json", help="also write the summary here")
     run.add_argument("--output", metavar="RESULT.h5", help="write the full result (HDF5) here")
     run.add_argument("--model", choices=["rod", "lumped"],
@@ -297,7 +307,7 @@ def parser() -> argparse.ArgumentParser:
                      help="show the progress bar on stderr even when it is not a terminal or the run is short")
     run.set_defaults(handler=_run)
     submit = commands.add_parser("submit", help="run a case on a percussim service and print its pulse summary")
-    submit.add_argument("case", help="impact case JSON")
+    submit.add_argument("case", help="impact case JSON, or a preset's name")
     submit.add_argument("--url", default=os.environ.get("PERCUSSIM_URL", "http://127.0.0.1:8000"),
                         help="the service (default: $PERCUSSIM_URL, else http://127.0.0.1:8000)")
     submit.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
@@ -310,7 +320,7 @@ def parser() -> argparse.ArgumentParser:
     submit.set_defaults(handler=_submit)
     sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every "
                                               "core or on a percussim service's workers")
-    sweep.add_argument("case", help="the base impact case JSON")
+    sweep.add_argument("case", help="the base impact case JSON, or a preset's name")
     sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
                        help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7")
     where = sweep.add_mutually_exclusive_group()

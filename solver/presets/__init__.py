@@ -1,6 +1,6 @@
 """The paper's cases as ready case JSON: one `<name>.json` file per preset in the presets folder.
 
-The folder is `$PERCUSSIM_PRESETS` if set, else the repository's `examples/`. A preset name is
+The folder is `$PERCUSSIM_PRESETS` if set, else this package's own (the presets ship with it). A preset name is
 only ever looked up among the files found there, never turned into a path, so a name such as
 "../x" cannot reach a file outside the folder.
 """
@@ -12,7 +12,7 @@ import os
 import re
 from pathlib import Path
 
-from .case import Case, load_case
+from ..case import Case, load_case
 
 PRESETS_ENV = "PERCUSSIM_PRESETS"
 _NAME = re.compile(r"[a-z0-9_]+")
@@ -21,7 +21,7 @@ _NAME = re.compile(r"[a-z0-9_]+")
 def presets_dir() -> Path:
     """The folder the presets are read from (read at every call, so the variable can change)."""
     folder = os.environ.get(PRESETS_ENV)
-    return Path(folder) if folder else Path(__file__).resolve().parents[1] / "examples"
+    return Path(folder) if folder else Path(__file__).resolve().parent
 
 
 def _preset_files() -> dict[str, Path]:

@@ -1,6 +1,6 @@
 """A Python client for the percussim HTTP API.
 
-    from service.client import Client
+    from percussim import Client
 
     with Client("http://127.0.0.1:8000") as api:
         summary = api.run("examples/fig9.json", progress=lambda fraction, record: print(fraction))
@@ -30,8 +30,8 @@ from urllib.parse import quote
 import httpx
 
 if TYPE_CHECKING:
-    from solver.case import Case
-    from solver.controller import Result
+    from percussim.solver.case import Case
+    from percussim.solver.result import Result
 
 FINISHED = ("succeeded", "failed", "cancelled")
 
@@ -143,7 +143,7 @@ class Client:
     # -- jobs
 
     def submit(self, case: dict | str | os.PathLike | Case) -> dict:
-        """Queue `case`: a dict of case JSON, the path of a case JSON file, or a `solver.case.Case`.
+        """Queue `case`: a dict of case JSON, the path of a case JSON file, or a `percussim.Case`.
         Returns the new job's record (`id`, `status` "queued", ...); raises `Refused` naming
         every offending field of an invalid case."""
         if isinstance(case, dict):
@@ -178,13 +178,13 @@ class Client:
         return self._json("GET", f"{self._job_path(job_id)}/summary")
 
     def result(self, job_id: str) -> Result:
-        """The succeeded job's HDF5 result, read into memory as a `solver.controller.Result`, the
+        """The succeeded job's HDF5 result, read into memory as a `percussim.Result`, the
         same object a local `simulate` returns: `history` maps dataset paths ("contact/force",
         "time", "energy/to_medium", ...) to NumPy arrays, with `probe_x`, `probe_stress`,
         `fields` (None unless asked), `summary`, `case` and `numerics`; `arrays()` gives every
         array under its HDF5 path. The file is streamed to a temporary file first, so that only
         the arrays are held; use `download` for a file too large for even those."""
-        from solver.io import read_result
+        from percussim.solver.io import read_result
 
         with tempfile.TemporaryFile() as f:
             self._stream_to(job_id, f)
