@@ -49,9 +49,10 @@ def test_files_are_written_even_when_stdout_closes_early(tmp_path):
     case.write_text(json.dumps(merge(BASE_CASE, {"numerics": {"duration": 5e-4}})))
     reader = subprocess.Popen([sys.executable, "-m", "percussim", "run", str(case), "--summary", "s.json",
                                "--output", "r.h5"], cwd=tmp_path, stdout=subprocess.PIPE,
-                              stderr=subprocess.DEVNULL)
+                              stderr=subprocess.PIPE, text=True)
     reader.stdout.close()  # like `| head -0`: nobody reads the summary
-    reader.wait(timeout=120)
+    assert reader.wait(timeout=120) == 141, "as a process stopped by SIGPIPE"
+    assert "Traceback" not in reader.stderr.read()
     assert json.loads((tmp_path / "s.json").read_text())["name"] == "test"
     with h5py.File(tmp_path / "r.h5") as f:
         assert "contact/force" in f
