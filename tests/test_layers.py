@@ -1,0 +1,75 @@
+"""The layers point down: percussim (API, command line, client) → service → worker → solver, and
+what validates input loads no kernel."""
+
+from __future__ import annotations
+
+import ast
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parents[1]
+# Each folder, the package it installs as, and the packages it may not import.
+LAYERS = {
+    "solver": ("percussim.solver", ("percussim.service", "percussim.worker", "percussim.cli",
+                                    "percussim.client", "fastapi", "celery", "starlette")),
+    "worker": ("percussim.worker", ("percussim.service", "percussim.cli", "fastapi")),
+    "service": ("percussim.service", ("percussim.cli",)),
+}
+
+
+def imported(path: Path, package: str) -> set[str]:
+    """Every module `path` imports, relative imports resolved within `package`."""
+    names = set()
+    here = package.split(".") + list(path.relative_to(ROOT / path.parts[len(ROOT.parts)]).parent.parts)
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.Import):
+            names |= {alias.name for alias in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            base = here[:len(here) - node.level + 1] if node.level else []
+            module = ".".join(base + ([node.module] if node.module else []))
+            names |= {module} | {f"{module}.{alias.name}" for alias in node.names}
+    return names
+
+
+@pytest.mark.parametrize("folder", LAYERS)
+def test_a_layer_imports_nothing_above_it(folder):
+    package, forbidden = LAYERS[folder]
+    wrong = {f"{path.relative_to(ROOT)}: {name}"
+             for path in (ROOT / folder).rglob("*.py")
+             for name in imported(path, package)
+             if any(name == f or name.startswith(f + ".") for f in forbidden)}
+    assert not wrong, sorted(wrong)
+
+
+@pytest.mark.parametrize("folder", LAYERS)
+def test_a_folder_is_only_its_package(folder):
+    """Loaded under its folder's name it would be a second copy of every module."""
+    done = subprocess.run([sys.executable, "-c", f"import {folder}"], cwd=ROOT, capture_output=True, text=True)
+    assert done.returncode != 0 and f"import percussim.{folder}, not {folder}" in done.stderr
+
+
+def loaded_after(statement: str) -> set[str]:
+    probe = f"import sys\n{statement}\nprint(*sys.modules)"
+    done = subprocess.run([sys.executable, "-c", probe], cwd=ROOT, capture_output=True, text=True, check=True)
+    return set(done.stdout.split())
+
+
+@pytest.mark.parametrize("statement", [
+    "import percussim",
+    "import percussim; percussim.Case, percussim.load_preset('fig3'), percussim.Client",
+    "from percussim.solver.case import parse_case",
+    "from percussim.service.app import create_app; create_app()",
+    "from percussim.solver.summary import Summary",
+    "from percussim.solver.limits import check_case",
+])
+def test_validating_input_loads_no_kernel(statement):
+    heavy = {"numba", "percussim.solver.kernel", "percussim.solver.controller"} & loaded_after(statement)
+    assert not heavy, sorted(heavy)
+
+
+def test_a_run_loads_the_kernel_when_it_needs_it():
+    loaded = loaded_after("import percussim; percussim.simulate(percussim.load_preset('fig3'))")
+    assert {"numba", "percussim.solver.kernel"} <= loaded
