@@ -9,7 +9,7 @@ number 1 on 100 and 2000 cells. A node-step is one node of the tool advanced one
 compilation, the contenders of a case timed in alternation so that a busy machine slows them alike.
 
 1. **Numba**: `solver.kernel.advance` called directly, as `simulate_rod` calls it, for the whole
-   run in one call with a summary-only setup (trackers, energy, contact intervals; no history,
+   run in one call with a summary-only setup (extremes, energy, contact intervals; no history,
    probes or fields). The time of the whole `simulate_rod` call (the same run plus a history row a
    step, the summary, the setup) is printed beside it.
 2. **C** (`bench/kernel_c/step.c`): the same step in C for a uniform tool without external force,
@@ -19,7 +19,7 @@ compilation, the contenders of a case timed in alternation so that a busy machin
    substitution with the precomputed factors (a fused multiply-add a node on the critical path of
    each, split as the kernel splits them into 4 segments swept as independent chains, with their
    carries; no recurrence at all for the explicit scheme) and the scalar contact solve; the energy
-   sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes what the summary needs (trackers, energy,
+   sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes what the summary needs (extremes, energy,
    contact intervals, in the kernel's slots) and is checked against Numba: co-impact time and
    energy terms should agree to about 1e-9; the peak force and the stress extremes differ by the
    size of a step's change, as the kernel records the force the scheme applies (centred on a
@@ -139,20 +139,21 @@ def explicit_courant_one(case: Case, cells: int) -> dict:
 
 
 def fresh_state(s: Setup) -> tuple[np.ndarray, ...]:
-    """u (3 layers), y, trackers, energy, contact intervals."""
-    return (np.zeros((3, s.n + 1)), np.zeros(3), K.new_trackers(), np.zeros((2, K.ENERGY_SLOTS)),
-            np.zeros((MAX_CONTACTS, 2)))
+    """u (3 layers), y, the ends' slots, extremes, energy, contact intervals."""
+    return (np.zeros((3, s.n + 1)), np.zeros(3), np.zeros(K.END_SLOTS), K.new_extremes(),
+            np.zeros((2, K.ENERGY_SLOTS)), np.zeros((MAX_CONTACTS, 2)))
 
 
-def observed(trackers: np.ndarray, energy: np.ndarray, contacts: np.ndarray) -> dict[str, float]:
+def observed(ends: np.ndarray, extremes: np.ndarray, energy: np.ndarray, contacts: np.ndarray
+             ) -> dict[str, float]:
     """What the summary reports, from the kernel's slots."""
-    count = int(trackers[K.T_CONTACTS])
+    count = int(extremes[K.X_CONTACTS])
     found = {
-        "co-impact time": trackers[K.T_CO_IMPACT],
-        "peak contact force": trackers[K.T_PEAK_FORCE],
-        "max compressive stress": trackers[K.T_MAX_COMPRESSION],
-        "max tensile stress": trackers[K.T_MAX_TENSION],
-        "contacts": count + trackers[K.T_IN_CONTACT],
+        "co-impact time": extremes[K.X_CO_IMPACT],
+        "peak contact force": extremes[K.X_PEAK_FORCE],
+        "max compressive stress": extremes[K.X_MAX_COMPRESSION],
+        "max tensile stress": extremes[K.X_MAX_TENSION],
+        "contacts": count + ends[K.S_IN_CONTACT],
         "last contact end": contacts[min(count, MAX_CONTACTS) - 1, 1] if count else math.nan,
     }
     names = ("external work", "dissipated contact", "dissipated medium", "striker kinetic",
@@ -169,7 +170,7 @@ def observed(trackers: np.ndarray, energy: np.ndarray, contacts: np.ndarray) -> 
 def numba_run(s: Setup) -> dict[str, float]:
     case, g, sch = s.case, s.grid, s.scheme
     assert case.force is None
-    u, y, trackers, energy, contacts = fresh_state(s)
+    u, y, ends, extremes, energy, contacts = fresh_state(s)
     no_rows = np.empty((K.HISTORY_COLUMNS, 0))
     no_fields = np.empty((0, s.n + 1))
     struck, working = end_conditions(case, g)
@@ -178,12 +179,12 @@ def numba_run(s: Setup) -> dict[str, float]:
         g.h, s.num.time_step, s.r, case.tool.youngs_modulus, case.tool.density, *s.end_stiffness,
         g.area[0], g.area[-1], sch.weight_new, sch.weight_old, sch.centered, sch.end_masses,
         s.num.ends == "impedance", struck, working, force_law(case),
-        trackers, energy, contacts,
+        ends, extremes, energy, contacts,
         no_rows, 0, np.empty(0, np.int64), np.empty(0), np.empty((0, 0)),
         no_fields, no_fields, 0,
     )
     assert status == K.STATUS_OK
-    return observed(trackers, energy, contacts)
+    return observed(ends, extremes, energy, contacts)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -202,7 +203,7 @@ def build_c(directory: str) -> ctypes.CDLL:
     lib = ctypes.CDLL(str(library))
     array = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
     lib.run.argtypes = [ctypes.c_long, ctypes.c_long, array, array, array, array, array, array,
-                        array, ctypes.c_long]
+                        array, array, ctypes.c_long]
     lib.run.restype = ctypes.c_int
     return lib
 
@@ -219,12 +220,12 @@ def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
         "c0": case.contact.tension_stiffness, "b1": case.contact.damping, "c2": s.c2, "b2": s.b2,
     }
     parameters = np.array([values[name] for name in C_PARAMETERS])
-    u, y, trackers, energy, contacts = fresh_state(s)
+    u, y, ends, extremes, energy, contacts = fresh_state(s)
     work = np.zeros(4 * (s.n + 1))
-    status = lib.run(s.n, s.num.steps, parameters, u, y, work, trackers, energy, contacts,
+    status = lib.run(s.n, s.num.steps, parameters, u, y, work, ends, extremes, energy, contacts,
                      MAX_CONTACTS)
     assert status == 0
-    return observed(trackers, energy, contacts)
+    return observed(ends, extremes, energy, contacts)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -290,10 +291,10 @@ def banded_run(s: Setup) -> dict[str, float]:
     unit[0] = 1.0
     z = solve_banded((1, 1), ab, unit)  # the tool's response to a unit contact force
 
-    u, y, trackers, layers, contacts = fresh_state(s)
+    u, y, ends, extremes, layers, contacts = fresh_state(s)
     energy = layers[0]  # the kernel's latest layer; this solve needs no other
     y[2] = -w1 * tau
-    trackers[K.T_IN_CONTACT] = 1.0
+    ends[K.S_IN_CONTACT] = 1.0
     initial_energy = 0.5 * m1 * w1 * w1
     for m in range(1, s.num.steps + 1):
         new, cur, old, ref = m % 3, (m - 1) % 3, (m - 2) % 3, (m - back) % 3
@@ -354,40 +355,40 @@ def banded_run(s: Setup) -> dict[str, float]:
                                                    + (1.0 - spring_weight) * uc[n] ** 2)
         balance = (energy[K.E_DISSIPATED_CONTACT:].sum() - initial_energy
                    - energy[K.E_EXTERNAL_WORK])
-        trackers[K.T_ENERGY_EXCESS] = max(trackers[K.T_ENERGY_EXCESS], balance)
+        extremes[K.X_ENERGY_EXCESS] = max(extremes[K.X_ENERGY_EXCESS], balance)
 
         stress = np.empty(n + 1)
         stress[0], stress[n] = -contact_force / g.area[0], -medium_force / g.area[-1]
         stress[1:n] = 0.5 * e_over_h * (un[2:] - un[:n - 1])
-        for sign, slot in ((-1.0, K.T_MAX_COMPRESSION), (1.0, K.T_MAX_TENSION)):
+        for sign, slot in ((-1.0, K.X_MAX_COMPRESSION), (1.0, K.X_MAX_TENSION)):
             node = int(np.argmax(sign * stress))
-            if sign * stress[node] > trackers[slot]:
-                trackers[slot:slot + 3] = sign * stress[node], node * h, t
+            if sign * stress[node] > extremes[slot]:
+                extremes[slot:slot + 3] = sign * stress[node], node * h, t
 
-        if contact_force > trackers[K.T_PEAK_FORCE]:
-            trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = contact_force, t
-        f1, f2 = trackers[K.T_FORCE_BEFORE], trackers[K.T_FORCE_BEFORE_THAT]
+        if contact_force > extremes[K.X_PEAK_FORCE]:
+            extremes[K.X_PEAK_FORCE], extremes[K.X_PEAK_FORCE_TIME] = contact_force, t
+        f1, f2 = ends[K.S_FORCE_BEFORE], ends[K.S_FORCE_BEFORE_THAT]
         if m >= 3 and f1 >= f2 and f1 > contact_force:
             offset = 0.5 * (contact_force - f2) / (2.0 * f1 - f2 - contact_force)
             vertex = f1 + 0.25 * (contact_force - f2) * offset
-            if vertex > trackers[K.T_PEAK_FORCE]:
-                trackers[K.T_PEAK_FORCE] = vertex
-                trackers[K.T_PEAK_FORCE_TIME] = t - tau + offset * tau
-        trackers[K.T_FORCE_BEFORE_THAT], trackers[K.T_FORCE_BEFORE] = f1, contact_force
+            if vertex > extremes[K.X_PEAK_FORCE]:
+                extremes[K.X_PEAK_FORCE] = vertex
+                extremes[K.X_PEAK_FORCE_TIME] = t - tau + offset * tau
+        ends[K.S_FORCE_BEFORE_THAT], ends[K.S_FORCE_BEFORE] = f1, contact_force
 
         previous = delta_old if m >= 2 else math.nan
-        if trackers[K.T_IN_CONTACT] and delta < 0.0:
+        if ends[K.S_IN_CONTACT] and delta < 0.0:
             t_cross = t - tau + tau * crossing(previous, delta_cur, delta)
-            k = int(trackers[K.T_CONTACTS])
-            contacts[k] = trackers[K.T_CONTACT_START], t_cross
-            trackers[K.T_CONTACTS] = k + 1
+            k = int(extremes[K.X_CONTACTS])
+            contacts[k] = ends[K.S_CONTACT_START], t_cross
+            extremes[K.X_CONTACTS] = k + 1
             if k == 0:
-                trackers[K.T_CO_IMPACT], trackers[K.T_REBOUND_VELOCITY] = t_cross, velocity
-            trackers[K.T_IN_CONTACT] = 0.0
-        elif not trackers[K.T_IN_CONTACT] and delta >= 0.0:
-            trackers[K.T_IN_CONTACT] = 1.0
-            trackers[K.T_CONTACT_START] = t - tau + tau * crossing(previous, delta_cur, delta)
-    return observed(trackers, energy, contacts)
+                extremes[K.X_CO_IMPACT], extremes[K.X_REBOUND_VELOCITY] = t_cross, velocity
+            ends[K.S_IN_CONTACT] = 0.0
+        elif not ends[K.S_IN_CONTACT] and delta >= 0.0:
+            ends[K.S_IN_CONTACT] = 1.0
+            ends[K.S_CONTACT_START] = t - tau + tau * crossing(previous, delta_cur, delta)
+    return observed(ends, extremes, energy, contacts)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -235,7 +235,8 @@ def simulate_rod(
     field_stride = out.field_stride if out.fields else 0
     u = np.zeros((3, n + 1))
     y = np.zeros(3)
-    trackers = K.new_trackers()
+    ends = np.zeros(K.END_SLOTS)
+    extremes = K.new_extremes()
     energy = np.zeros((2, K.ENERGY_SLOTS))
     struck, working = end_conditions(case, grid)
     force = force_law(case)
@@ -285,12 +286,12 @@ def simulate_rod(
             grid.area[0], grid.area[-1],
             scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses, impedance_ends,
             struck, working, force,
-            trackers, energy, contacts,
+            ends, extremes, energy, contacts,
             history, out.history_stride, probe_node, probe_weight, probes,
             field_u, field_stress, field_stride,
         )
         if status == K.STATUS_NON_FINITE:
-            raise NumericalFailure(trackers[K.T_FAILED_TIME], num)
+            raise NumericalFailure(extremes[K.X_FAILED_TIME], num)
         for path, column in HISTORY_PATHS.items():
             recorder.append(path, history[column, :n_hist])
         recorder.append("probes/stress", probes[:n_hist])
@@ -311,7 +312,8 @@ def simulate_rod(
 
     table = np.concatenate(summary_table, axis=1)
     summary = build_summary(
-        case=case, numerics=num, trackers=trackers, contacts=contacts,
+        case=case, numerics=num, extremes=extremes, contacts=contacts,
+        open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
         energy=energy_at(energy, last_layer, tau, case.numerics.duration, impedance_ends),
         history=dict(zip(FORCE_HISTORY.values(), table)),
     )

@@ -56,24 +56,28 @@ H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_
     12, 13, 14, 15, 16)
 HISTORY_COLUMNS = 17
 
-# Tracker slots (running extremes and contact state)
-T_PEAK_FORCE, T_PEAK_FORCE_TIME = 0, 1
-T_MAX_COMPRESSION, T_MAX_COMPRESSION_X, T_MAX_COMPRESSION_TIME = 2, 3, 4
-T_MAX_TENSION, T_MAX_TENSION_X, T_MAX_TENSION_TIME = 5, 6, 7
-T_IN_CONTACT, T_CONTACT_START, T_CONTACTS = 8, 9, 10
-T_CO_IMPACT, T_REBOUND_VELOCITY = 11, 12
-T_ENERGY_EXCESS = 13  # max over time of (stored + dissipated − input): > 0 means energy created
-T_FAILED_TIME = 14
-T_MIN_CONTACT_STEPS = 15  # fewest steps any finished contact interval was resolved by
-T_FORCE_BEFORE, T_FORCE_BEFORE_THAT = 16, 17  # contact force at layers m−1, m−2
-T_POTENTIAL_BEFORE, T_POTENTIAL_BEFORE_THAT = 18, 19  # contact potential Φ at layers m−1, m−2
-T_MEDIUM_FORCE, T_MEDIUM_FORCE_BEFORE = 20, 21  # medium force at the last two recorded layers
-# Ends that integrate their own equations: the striker's velocity and the incoming waves'
-# displacements G at the struck end and at the working end, at layers m−1, m−2
-T_STRIKER_VELOCITY = 22
-T_INCOMING, T_INCOMING_BEFORE, T_FAR_INCOMING, T_FAR_INCOMING_BEFORE = 23, 24, 25, 26
-T_FORCE_EARLIER, T_MEDIUM_FORCE_EARLIER = 27, 28  # the end forces one recorded layer earlier still
-TRACKER_SLOTS = 29
+# Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
+X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
+X_MAX_COMPRESSION, X_MAX_COMPRESSION_X, X_MAX_COMPRESSION_TIME = 2, 3, 4
+X_MAX_TENSION, X_MAX_TENSION_X, X_MAX_TENSION_TIME = 5, 6, 7
+X_CONTACTS, X_CO_IMPACT, X_REBOUND_VELOCITY = 8, 9, 10  # finished contact intervals; the first's end
+X_ENERGY_EXCESS = 11  # max over time of (stored + dissipated − input): > 0 means energy created
+X_FAILED_TIME = 12
+X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resolved by
+EXTREME_SLOTS = 14
+
+# End slots (`ends[S_…]`): what the next step needs of the ends beyond the layers. Whether the
+# striker is in contact and since when; the end forces and the contact potential at the last
+# recorded layers (m−1, m−2, m−3); for the ends that integrate their own equations, the
+# striker's velocity and the incoming waves' displacements G at the struck end and at the
+# working end, at layers m−1, m−2
+S_IN_CONTACT, S_CONTACT_START = 0, 1
+S_FORCE_BEFORE, S_FORCE_BEFORE_THAT, S_FORCE_EARLIER = 2, 3, 4  # the contact force
+S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER = 5, 6, 7
+S_POTENTIAL_BEFORE, S_POTENTIAL_BEFORE_THAT = 8, 9  # contact potential Φ at layers m−1, m−2
+S_STRIKER_VELOCITY = 10
+S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
+END_SLOTS = 15
 
 # Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
 # and dissipation, and the stored terms
@@ -99,13 +103,14 @@ SEGMENTS = 4
 MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swept serially
 
 
-def new_trackers() -> np.ndarray:
-    t = np.zeros(TRACKER_SLOTS)
-    t[T_CO_IMPACT] = np.nan
-    t[T_REBOUND_VELOCITY] = np.nan
-    t[T_FAILED_TIME] = np.nan
-    t[T_MIN_CONTACT_STEPS] = np.inf
-    return t
+def new_extremes() -> np.ndarray:
+    """The extremes before a run: none yet (NaN where nothing may happen)."""
+    x = np.zeros(EXTREME_SLOTS)
+    x[X_CO_IMPACT] = np.nan
+    x[X_REBOUND_VELOCITY] = np.nan
+    x[X_FAILED_TIME] = np.nan
+    x[X_MIN_CONTACT_STEPS] = np.inf
+    return x
 
 
 @njit(cache=True)
@@ -723,26 +728,26 @@ def first_node(u, row, half_e_over_h, start, value):
 
 
 @njit(cache=True, inline="always")
-def track_contact(trackers, contacts, t_cross, velocity, into_contact, tau):
+def track_contact(ends, extremes, contacts, t_cross, velocity, into_contact, tau):
     """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
     contact); the first one to close sets the co-impact time and the rebound velocity."""
-    in_contact = trackers[T_IN_CONTACT] != 0.0
+    in_contact = ends[S_IN_CONTACT] != 0.0
     if in_contact and not into_contact:
-        k = int(trackers[T_CONTACTS])
+        k = int(extremes[X_CONTACTS])
         if k < contacts.shape[0]:
-            contacts[k, 0] = trackers[T_CONTACT_START]
+            contacts[k, 0] = ends[S_CONTACT_START]
             contacts[k, 1] = t_cross
-        trackers[T_CONTACTS] = k + 1
-        steps = (t_cross - trackers[T_CONTACT_START]) / tau
-        if steps < trackers[T_MIN_CONTACT_STEPS]:
-            trackers[T_MIN_CONTACT_STEPS] = steps
+        extremes[X_CONTACTS] = k + 1
+        steps = (t_cross - ends[S_CONTACT_START]) / tau
+        if steps < extremes[X_MIN_CONTACT_STEPS]:
+            extremes[X_MIN_CONTACT_STEPS] = steps
         if k == 0:
-            trackers[T_CO_IMPACT] = t_cross
-            trackers[T_REBOUND_VELOCITY] = velocity
-        trackers[T_IN_CONTACT] = 0.0
+            extremes[X_CO_IMPACT] = t_cross
+            extremes[X_REBOUND_VELOCITY] = velocity
+        ends[S_IN_CONTACT] = 0.0
     elif not in_contact and into_contact:
-        trackers[T_IN_CONTACT] = 1.0
-        trackers[T_CONTACT_START] = t_cross
+        ends[S_IN_CONTACT] = 1.0
+        ends[S_CONTACT_START] = t_cross
 
 
 @njit(cache=True, inline="always")
@@ -761,11 +766,11 @@ def vertex(earliest, before_that, before, now):
 
 
 @njit(cache=True, inline="always")
-def track_end_extreme(trackers, slot, value, x, t):
-    if value > trackers[slot]:
-        trackers[slot] = value
-        trackers[slot + 1] = x
-        trackers[slot + 2] = t
+def track_end_extreme(extremes, slot, value, x, t):
+    if value > extremes[slot]:
+        extremes[slot] = value
+        extremes[slot + 1] = x
+        extremes[slot + 2] = t
 
 
 # `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
@@ -780,7 +785,7 @@ def advance(
     h, tau, r, youngs_modulus, density, end_stiffness_0, end_stiffness_n, end_area_0, end_area_n,
     weight_new, weight_old, centered, end_masses, impedance_ends,
     struck, working, force,
-    trackers, energy, contacts,
+    ends, extremes, energy, contacts,
     history, history_stride, probe_node, probe_weight, probes,
     field_u, field_stress, field_stride,
 ):
@@ -807,7 +812,7 @@ def advance(
     from the first of each buffer. `energy[0]` holds the energy terms of the last layer,
     `energy[1]` those of the one before. Returns `(status, layers of history written, rows of
     fields written)`; on a non-finite value it stops with `STATUS_NON_FINITE` and the time in
-    `trackers[T_FAILED_TIME]`.
+    `extremes[X_FAILED_TIME]`.
     """
     n = len(node_area) - 1
     striker_mass, striker_velocity = struck.mass, struck.velocity
@@ -848,14 +853,14 @@ def advance(
             y[2] = -striker_velocity * tau
             velocity = striker_velocity
             medium_force = 0.0
-            trackers[T_IN_CONTACT] = 1.0  # δ(0) = 0: contact from the first instant
-            trackers[T_CONTACT_START] = 0.0
+            ends[S_IN_CONTACT] = 1.0  # δ(0) = 0: contact from the first instant
+            ends[S_CONTACT_START] = 0.0
             # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
-            trackers[T_POTENTIAL_BEFORE] = 0.0
-            trackers[T_POTENTIAL_BEFORE_THAT] = 0.0
+            ends[S_POTENTIAL_BEFORE] = 0.0
+            ends[S_POTENTIAL_BEFORE_THAT] = 0.0
             if impedance_ends:
                 contact_force = struck_end_force(0.0, striker_velocity, 0.0, struck)
-                trackers[T_STRIKER_VELOCITY] = striker_velocity
+                ends[S_STRIKER_VELOCITY] = striker_velocity
                 energy[0, E_STRIKER_KINETIC] = initial_energy
             else:
                 contact_force = b1 * striker_velocity
@@ -903,42 +908,42 @@ def advance(
             if impedance_ends:
                 # The waves arriving at the ends over this step, then each end's equations.
                 # G_{m−2}, G_{m−1} carried; G_m, G_{m+1} from the layers
-                g_before, g_last = trackers[T_INCOMING_BEFORE], trackers[T_INCOMING]
+                g_before, g_last = ends[S_INCOMING_BEFORE], ends[S_INCOMING]
                 g_now = u[cur, 1] - u[old, 0] + g_before
                 g_next = u[new, 1] - u[cur, 0] + g_last
                 v_in = (g_now - g_last) / tau
                 v_slope = limited_slope((g_last - g_before) / tau, v_in, (g_next - g_now) / tau, tau)
-                trackers[T_INCOMING_BEFORE], trackers[T_INCOMING] = g_last, g_now
-                h_before, h_last = trackers[T_FAR_INCOMING_BEFORE], trackers[T_FAR_INCOMING]
+                ends[S_INCOMING_BEFORE], ends[S_INCOMING] = g_last, g_now
+                h_before, h_last = ends[S_FAR_INCOMING_BEFORE], ends[S_FAR_INCOMING]
                 h_now = u[cur, n - 1] - u[old, n] + h_before
                 h_next = u[new, n - 1] - u[cur, n] + h_last
                 v_far = (h_now - h_last) / tau
                 far_slope = limited_slope((h_last - h_before) / tau, v_far, (h_next - h_now) / tau, tau)
-                trackers[T_FAR_INCOMING_BEFORE], trackers[T_FAR_INCOMING] = h_last, h_now
+                ends[S_FAR_INCOMING_BEFORE], ends[S_FAR_INCOMING] = h_last, h_now
 
                 end_state[0] = y[cur]
-                end_state[1] = trackers[T_STRIKER_VELOCITY]
+                end_state[1] = ends[S_STRIKER_VELOCITY]
                 end_state[2] = u[cur, 0]
-                end_state[3] = trackers[T_FORCE_BEFORE]
+                end_state[3] = ends[S_FORCE_BEFORE]
                 work, dissipated, crossings, f_max, t_max, f_min, t_min = struck_end_step(
                     t - tau, tau, end_state, v_in, v_slope, struck, force, events)
                 far_state[0] = u[cur, n]
-                far_state[1] = trackers[T_MEDIUM_FORCE]
+                far_state[1] = ends[S_MEDIUM_FORCE]
                 dissipated_far, g_max, tg_max, g_min, tg_min = working_end_step(
                     tau, far_state, v_far, far_slope, working)
                 # the ends' extremes between layers, as their substeps saw them
-                if f_max > trackers[T_PEAK_FORCE]:
-                    trackers[T_PEAK_FORCE] = f_max
-                    trackers[T_PEAK_FORCE_TIME] = t_max
-                track_end_extreme(trackers, T_MAX_COMPRESSION, f_max / end_area_0, 0.0, t_max)
-                track_end_extreme(trackers, T_MAX_TENSION, -f_min / end_area_0, 0.0, t_min)
-                track_end_extreme(trackers, T_MAX_COMPRESSION, g_max / end_area_n, n * h,
+                if f_max > extremes[X_PEAK_FORCE]:
+                    extremes[X_PEAK_FORCE] = f_max
+                    extremes[X_PEAK_FORCE_TIME] = t_max
+                track_end_extreme(extremes, X_MAX_COMPRESSION, f_max / end_area_0, 0.0, t_max)
+                track_end_extreme(extremes, X_MAX_TENSION, -f_min / end_area_0, 0.0, t_min)
+                track_end_extreme(extremes, X_MAX_COMPRESSION, g_max / end_area_n, n * h,
                                   t - tau + tg_max)
-                track_end_extreme(trackers, T_MAX_TENSION, -g_min / end_area_n, n * h,
+                track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h,
                                   t - tau + tg_min)
                 if not (abs(end_state[0]) < 1e300 and abs(end_state[2]) < 1e300
                         and abs(far_state[0]) < 1e300):
-                    trackers[T_FAILED_TIME] = t
+                    extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 y[new] = end_state[0]
                 velocity = end_state[1]
@@ -946,9 +951,9 @@ def advance(
                 contact_force = end_state[3]
                 u[new, n] = far_state[0]
                 medium_force = far_state[1]
-                trackers[T_STRIKER_VELOCITY] = velocity
+                ends[S_STRIKER_VELOCITY] = velocity
                 for k in range(crossings):
-                    track_contact(trackers, contacts, events[k, 0], events[k, 1],
+                    track_contact(ends, extremes, contacts, events[k, 0], events[k, 1],
                                   events[k, 2] > 0.0, tau)
                 rec, t_rec = new, t
 
@@ -995,7 +1000,7 @@ def advance(
                 delta_free = b_y / a_y - b_0 / a_0
                 compliance = 1.0 / a_y + 1.0 / a_0
                 # Φ of the reference layer, as computed when it was new (0 for the state before impact)
-                ref_potential = trackers[T_POTENTIAL_BEFORE if back == 1 else T_POTENTIAL_BEFORE_THAT]
+                ref_potential = ends[S_POTENTIAL_BEFORE if back == 1 else S_POTENTIAL_BEFORE_THAT]
                 delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
                                       2.0 * delta_cur - delta_old, c1, alpha, c0, b1 * damper_factor)
                 # the contact force the scheme applies in this step (centred on layer n, or on
@@ -1005,7 +1010,7 @@ def advance(
                 y_new = (b_y - contact_force) / a_y
                 u0_new = (b_0 + contact_force) / a_0
                 if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
-                    trackers[T_FAILED_TIME] = t
+                    extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 y[new] = y_new
                 u[new, 0] = u0_new
@@ -1035,7 +1040,7 @@ def advance(
                     u, new, cur, rec, node_area, area_mid, strain_sigma, half_e_over_h)
                 tool_kinetic *= kinetic_factor
                 tool_strain *= 0.5 * e_over_h
-                contact_pot = spring_weight * potential + (1.0 - spring_weight) * trackers[T_POTENTIAL_BEFORE]
+                contact_pot = spring_weight * potential + (1.0 - spring_weight) * ends[S_POTENTIAL_BEFORE]
                 medium_pot = 0.5 * c2 * (spring_weight * u[new, n] * u[new, n]
                                          + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
                 energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
@@ -1051,19 +1056,19 @@ def advance(
                 balance = (striker_kinetic + tool_kinetic + tool_strain + contact_pot + medium_pot
                            + energy[0, E_DISSIPATED_CONTACT] + energy[0, E_DISSIPATED_MEDIUM]
                            - initial_energy - energy[0, E_EXTERNAL_WORK])
-                trackers[T_POTENTIAL_BEFORE_THAT] = trackers[T_POTENTIAL_BEFORE]
-                trackers[T_POTENTIAL_BEFORE] = potential
+                ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
+                ends[S_POTENTIAL_BEFORE] = potential
 
                 # Contact intervals: a crossing placed on the parabola through the last overlaps.
-                if (delta >= 0.0) != (trackers[T_IN_CONTACT] != 0.0):
+                if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
                     t_cross = t - tau + tau * crossing(delta_old if m >= 2 else np.nan, delta_cur, delta)
-                    track_contact(trackers, contacts, t_cross, velocity, delta >= 0.0, tau)
+                    track_contact(ends, extremes, contacts, t_cross, velocity, delta >= 0.0, tau)
 
             if not abs(balance) < 1e300:
-                trackers[T_FAILED_TIME] = t
+                extremes[X_FAILED_TIME] = t
                 return STATUS_NON_FINITE, n_hist, n_field
-            if balance > trackers[T_ENERGY_EXCESS]:
-                trackers[T_ENERGY_EXCESS] = balance
+            if balance > extremes[X_ENERGY_EXCESS]:
+                extremes[X_ENERGY_EXCESS] = balance
             s0 = -contact_force / end_area_0
             sn = -medium_force / end_area_n
 
@@ -1076,9 +1081,9 @@ def advance(
         # nodes overshoots by O(h), where the nodes' own error is O(h²).
         s_low, s_high = min(s0, low, sn), max(s0, high, sn)
         for peak, value, interior, block, slot in (
-                (-s_low, s_low, low, low_block, T_MAX_COMPRESSION),
-                (s_high, s_high, high, high_block, T_MAX_TENSION)):
-            if peak > trackers[slot]:
+                (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
+                (s_high, s_high, high, high_block, X_MAX_TENSION)):
+            if peak > extremes[slot]:
                 # Where, only for a new record (most layers set none): the first node of that
                 # stress, from the struck end.
                 if value == s0:
@@ -1087,39 +1092,39 @@ def advance(
                     node = first_node(u, rec, half_e_over_h, block, value)
                 else:
                     node = n
-                trackers[slot] = peak
-                trackers[slot + 1] = node * h
-                trackers[slot + 2] = t_rec
-        if contact_force > trackers[T_PEAK_FORCE]:
-            trackers[T_PEAK_FORCE] = contact_force
-            trackers[T_PEAK_FORCE_TIME] = t_rec
+                extremes[slot] = peak
+                extremes[slot + 1] = node * h
+                extremes[slot + 2] = t_rec
+        if contact_force > extremes[X_PEAK_FORCE]:
+            extremes[X_PEAK_FORCE] = contact_force
+            extremes[X_PEAK_FORCE_TIME] = t_rec
         # Extremes of the end forces between layers: the vertex of the parabola through the last
         # three, so that their error is the scheme's, not the sampling's.
-        f1, f2, f3 = trackers[T_FORCE_BEFORE], trackers[T_FORCE_BEFORE_THAT], trackers[T_FORCE_EARLIER]
-        g1, g2, g3 = (trackers[T_MEDIUM_FORCE], trackers[T_MEDIUM_FORCE_BEFORE],
-                      trackers[T_MEDIUM_FORCE_EARLIER])
+        f1, f2, f3 = ends[S_FORCE_BEFORE], ends[S_FORCE_BEFORE_THAT], ends[S_FORCE_EARLIER]
+        g1, g2, g3 = (ends[S_MEDIUM_FORCE], ends[S_MEDIUM_FORCE_BEFORE],
+                      ends[S_MEDIUM_FORCE_EARLIER])
         if m_rec >= 3:
             top, offset = vertex(f3, f2, f1, contact_force)
             when = t_rec - tau + offset * tau
-            if top > trackers[T_PEAK_FORCE]:
-                trackers[T_PEAK_FORCE] = top
-                trackers[T_PEAK_FORCE_TIME] = when
-            track_end_extreme(trackers, T_MAX_COMPRESSION, top / end_area_0, 0.0, when)
+            if top > extremes[X_PEAK_FORCE]:
+                extremes[X_PEAK_FORCE] = top
+                extremes[X_PEAK_FORCE_TIME] = when
+            track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_0, 0.0, when)
             top, offset = vertex(-f3, -f2, -f1, -contact_force)
-            track_end_extreme(trackers, T_MAX_TENSION, top / end_area_0, 0.0,
+            track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0,
                               t_rec - tau + offset * tau)
             top, offset = vertex(g3, g2, g1, medium_force)
-            track_end_extreme(trackers, T_MAX_COMPRESSION, top / end_area_n, n * h,
+            track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h,
                               t_rec - tau + offset * tau)
             top, offset = vertex(-g3, -g2, -g1, -medium_force)
-            track_end_extreme(trackers, T_MAX_TENSION, top / end_area_n, n * h,
+            track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h,
                               t_rec - tau + offset * tau)
-        trackers[T_FORCE_EARLIER] = f2
-        trackers[T_FORCE_BEFORE_THAT] = f1
-        trackers[T_FORCE_BEFORE] = contact_force
-        trackers[T_MEDIUM_FORCE_EARLIER] = g2
-        trackers[T_MEDIUM_FORCE_BEFORE] = g1
-        trackers[T_MEDIUM_FORCE] = medium_force
+        ends[S_FORCE_EARLIER] = f2
+        ends[S_FORCE_BEFORE_THAT] = f1
+        ends[S_FORCE_BEFORE] = contact_force
+        ends[S_MEDIUM_FORCE_EARLIER] = g2
+        ends[S_MEDIUM_FORCE_BEFORE] = g1
+        ends[S_MEDIUM_FORCE] = medium_force
 
         if history_stride > 0 and m_rec % history_stride == 0:
             history[H_TIME, n_hist] = t_rec

@@ -343,21 +343,19 @@ def stress_extremes(case: Case, p: Parameters, history: dict[str, np.ndarray],
     return best
 
 
-def fill_trackers(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
+def fill_extremes(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
                   excess: float) -> np.ndarray:
-    """The kernel's trackers from the contact log, the refined peak force and the stress maxima."""
-    trackers = K.new_trackers()
-    trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = peak
-    (trackers[K.T_MAX_COMPRESSION], trackers[K.T_MAX_COMPRESSION_X],
-     trackers[K.T_MAX_COMPRESSION_TIME], trackers[K.T_MAX_TENSION], trackers[K.T_MAX_TENSION_X],
-     trackers[K.T_MAX_TENSION_TIME]) = stress
-    trackers[K.T_CONTACTS] = len(log.intervals)
-    trackers[K.T_IN_CONTACT] = float(log.in_contact)
-    trackers[K.T_CONTACT_START] = log.start
-    trackers[K.T_CO_IMPACT] = log.first_end
-    trackers[K.T_REBOUND_VELOCITY] = log.rebound_velocity
-    trackers[K.T_ENERGY_EXCESS] = excess
-    return trackers
+    """The kernel's extremes from the contact log, the refined peak force and the stress maxima."""
+    extremes = K.new_extremes()
+    extremes[K.X_PEAK_FORCE], extremes[K.X_PEAK_FORCE_TIME] = peak
+    (extremes[K.X_MAX_COMPRESSION], extremes[K.X_MAX_COMPRESSION_X],
+     extremes[K.X_MAX_COMPRESSION_TIME], extremes[K.X_MAX_TENSION], extremes[K.X_MAX_TENSION_X],
+     extremes[K.X_MAX_TENSION_TIME]) = stress
+    extremes[K.X_CONTACTS] = len(log.intervals)
+    extremes[K.X_CO_IMPACT] = log.first_end
+    extremes[K.X_REBOUND_VELOCITY] = log.rebound_velocity
+    extremes[K.X_ENERGY_EXCESS] = excess
+    return extremes
 
 
 def simulate_lumped(
@@ -396,10 +394,11 @@ def simulate_lumped(
 
     history = history_table(case, p, time, samples)
     initial = 0.5 * p.m1 * case.striker.velocity ** 2
-    trackers = fill_trackers(log, peak, stress_extremes(case, p, history, peak),
+    extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak),
                              energy_excess(history, initial))
     summary = build_summary(
-        case=case, numerics=num, trackers=trackers, contacts=contact_table(log),
+        case=case, numerics=num, extremes=extremes, contacts=contact_table(log),
+        open_contact=log.start if log.in_contact else None,
         energy=final_energy(p, final), history=history,
         extra_warnings=[NO_FIELDS_WARNING] if case.outputs.fields else [],
     )
