@@ -160,6 +160,8 @@ strides ≤ 0 keep nothing."""
 # Within a step
 Layers = namedtuple("Layers", "new cur old ref")
 """The rows of `u` and `y` holding layers n+1, n, n−1, and the boundary terms' reference layer."""
+Overlaps = namedtuple("Overlaps", "cur old ref")
+"""The overlap δ = y − u_0 of layers n and n−1 and of the reference layer."""
 Boundary = namedtuple("Boundary", "end_weight spring_weight damper_factor back")
 """How the end rows and the boundary terms weight the layers (`boundary_weights`)."""
 StepConstants = namedtuple("StepConstants", "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
@@ -852,6 +854,15 @@ def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
 
 
 @njit(cache=True, inline="always")
+def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
+    """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
+    `Overlaps`: a change of sign placed on the parabola through the last three overlaps."""
+    if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
+        t_cross = t - tau + tau * crossing(overlaps.old if m >= 2 else np.nan, overlaps.cur, delta)
+        track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
+
+
+@njit(cache=True, inline="always")
 def vertex(earliest, before_that, before, now):
     """The maximum between four equally spaced samples whose third is a strict maximum: the vertex
     of the parabola through the last three, `(value, where it lies from the third sample in
@@ -1073,14 +1084,13 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
 
     The struck end sees the tool only through its link `u_1 = P_1·u_0 + Q_1` (`link` = (P_1, Q_1),
     from the sweep). With it the rows are `a_y·y = b_y − F` and `a_0·u_0 = b_0 + F`, F the contact
-    force: a scalar equation in the new overlap δ (`solve_overlap`). `overlaps` are the layers'
-    (δ^n, δ^{n−1}, δ_ref); R(t_n) = `r_n` is explicit in row (11). Returns `(y, u_0, F)` of the new
-    layer, F the force the scheme applies in the step (centred on layer n, or on the new layer for
-    the paper's).
+    force: a scalar equation in the new overlap δ (`solve_overlap`), from the layers' `Overlaps`;
+    R(t_n) = `r_n` is explicit in row (11). Returns `(y, u_0, F)` of the new layer, F the force the
+    scheme applies in the step (centred on layer n, or on the new layer for the paper's).
     """
     u, y, ends, _ = state
     _, cur, old, _ = layer
-    delta_cur, delta_old, delta_ref = overlaps
+    delta_cur, delta_old, delta_ref = overlaps.cur, overlaps.old, overlaps.ref
     p_1, q_1 = link
     k_0, weight_cur, weight_old = rod.struck_end_stiffness, step.weight_cur, weights.old
     end_weight, _, damper_factor, back = step.boundary
@@ -1161,15 +1171,16 @@ def incoming_wave(u, layer, inner, edge, ends, slot, tau):
 
 
 @njit(cache=True, inline="always")
-def audit_scheme_energy(state, layer, rec, r_n, delta_ref, delta, potential, contact, medium,
-                        tool, rod, step):
+def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod,
+                        step):
     """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
     dissipates), into `energy[0]`; returns the balance (stored + dissipated − input: > 0 is energy
     created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
-    the same pass along the tool finds (`tool_energy_and_stresses`). `delta`, `potential`: the new
-    overlap and its Φ."""
+    the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
+    `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
     u, y, ends, energy = state
     new, cur, old, ref = layer
+    delta = y[new] - u[new, 0]
     n, tau = step.n, rod.time_step
     _, spring_weight, damper_factor, _ = step.boundary
     dy = y[new] - y[cur]
@@ -1182,7 +1193,7 @@ def audit_scheme_energy(state, layer, rec, r_n, delta_ref, delta, potential, con
     medium_pot = 0.5 * medium.stiffness * (spring_weight * u[new, n] * u[new, n]
                                            + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
     energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y[new] - y[old])
-    rate = damper_factor * (delta - delta_ref)
+    rate = damper_factor * (delta - overlaps.ref)
     energy[0, E_DISSIPATED_CONTACT] += contact.damping * rate * rate * tau
     rate = damper_factor * (u[new, n] - u[ref, n])
     energy[0, E_DISSIPATED_MEDIUM] += medium.damping * rate * rate * tau
@@ -1386,13 +1397,13 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
     this call records, from the first of each buffer.
 
     The interior operator weights layers n+1, n, n−1 by `weights.new`, `1 − new − old`,
-    `weights.old`. `centered` centres the boundary terms on layer n (springs
+    `weights.old`. `weights.centered` centres the boundary terms on layer n (springs
     `(z^{n+1} + z^{n−1})/2`, dampers `(z^{n+1} − z^{n−1})/(2τ)`, the contact quotient between
     δ^{n+1} and δ^{n−1}); otherwise they are the paper's (new layer, `(z^{n+1} − z^n)/τ`).
-    `end_masses` gives the end rows the interior's weights (they then carry their half-cell mass
-    `node_area·ρh`); massless ends are quasi-static, all on the new layer. `impedance_ends` (the
-    explicit scheme at Courant number 1 only) integrates each end's own equations instead (see
-    `struck_end_step`).
+    `weights.end_masses` gives the end rows the interior's weights (they then carry their half-cell
+    mass `node_area·ρh`); massless ends are quasi-static, all on the new layer.
+    `weights.impedance_ends` (the explicit scheme at Courant number 1 only) integrates each end's
+    own equations instead (`integrate_ends`).
 
     What is recorded of a layer is what the scheme applies there: the centred schemes' boundary
     forces are centred on layer n, so a layer is recorded one step after it is computed (the
@@ -1419,7 +1430,7 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
         t = m * tau
         if m == 0:
             recorded = start_impact(state, layer, t, tool, rod, weights, contact, step)
-            interior = (np.inf, 0, -np.inf, 0)  # no interior stresses recorded yet
+            interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
         else:
             for slot in range(ENERGY_SLOTS):
                 energy[1, slot] = energy[0, slot]
@@ -1439,14 +1450,12 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
                 balance, interior = audit_impedance_energy(
                     state, layer, flows, velocity, contact, medium, tool, step)
             else:
-                delta_cur = y[cur] - u[cur, 0]
-                delta_old = y[old] - u[old, 0]
-                delta_ref = y[ref] - u[ref, 0]
+                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0],
+                                    ref=y[ref] - u[ref, 0])
                 r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
                 q_1, carries = sweep(u, layer, rows, step)
                 y_new, u0_new, contact_force = solve_struck_end(
-                    state, layer, (delta_cur, delta_old, delta_ref), (rows.p[1], q_1), r_n, contact,
-                    rod, weights, step)
+                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step)
                 if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
@@ -1465,15 +1474,10 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
                     velocity = (contact.striker_velocity if m == 1 else
                                 (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau))
                 balance, interior = audit_scheme_energy(
-                    state, layer, rec, r_n, delta_ref, delta, potential, contact, medium, tool, rod,
-                    step)
+                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step)
                 ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
                 ends[S_POTENTIAL_BEFORE] = potential
-                # Contact intervals: a crossing placed on the parabola through the last overlaps.
-                if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
-                    t_cross = t - tau + tau * crossing(delta_old if m >= 2 else np.nan, delta_cur,
-                                                       delta)
-                    track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
+                track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
 
             if not track_energy_excess(extremes, balance):
                 extremes[X_FAILED_TIME] = t
