@@ -1418,7 +1418,8 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
     u, y, ends, energy = state
     extremes = observed.extremes
     tau = rod.time_step
-    # the ends' states and the struck end's events within a step (`integrate_ends`)
+    # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
+    # step `uncounted`: `scratch` holds them through the loop
     scratch = (np.empty(4), np.empty(2), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
@@ -1442,7 +1443,8 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
 
             if weights.impedance_ends:
                 finite, velocity, contact_force, medium_force, flows = integrate_ends(
-                    state, observed, layer, t, tool, rod, contact, medium, force, scratch, step)
+                    state, observed, layer, t, tool, rod, contact, medium, force,
+                    uncounted(scratch), step)
                 if not finite:
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
