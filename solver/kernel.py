@@ -978,10 +978,20 @@ def start_impact(state, layer, t, tool, rod, weights, contact, step):
 
 
 @njit(cache=True, inline="always")
+def known_layers(u, layer, i, weight_cur, weight_old):
+    """The known layers' combination `v = w_n·u^n + w_{n−1}·u^{n−1}` at nodes i − 1, i, i + 1."""
+    _, cur, old, _ = layer
+    return (weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1],
+            weight_cur * u[cur, i] + weight_old * u[old, i],
+            weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1])
+
+
+@njit(cache=True, inline="always")
 def right_hand_sides(u, layer, tool, rows, rod, weights, step):
     """Right-hand sides of the tool's rows u_1 … u_{N−1} over their diagonals, into row `new` of
     `u` (the sweep turns them into the Q_i there). The known layers enter the operator as one
-    combination v = w_n·u^n + w_{n−1}·u^{n−1}."""
+    combination v (`known_layers`). Each case has a loop of its own: a loop that tests `uniform`
+    at every node, as LLVM leaves it, costs about 4% of a step of the paper's scheme on 2000 cells."""
     new, cur, old, _ = layer
     n, r, weight_cur, weight_old = step.n, rod.courant_squared, step.weight_cur, weights.old
     grid_lower, grid_upper, inv_den = tool.lower, tool.upper, rows.inv_den
@@ -995,15 +1005,15 @@ def right_hand_sides(u, layer, tool, rows, rod, weights, step):
             u[new, i] = (2.0 * u[cur, i] - u[old, i]
                          + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
                                 + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
+    elif tool.uniform:
+        for i in range(1, n):
+            v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
+            lap = v_left - 2.0 * v_mid + v_right
+            u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
     else:
         for i in range(1, n):
-            v_left = weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1]
-            v_mid = weight_cur * u[cur, i] + weight_old * u[old, i]
-            v_right = weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1]
-            if tool.uniform:
-                lap = v_left - 2.0 * v_mid + v_right
-            else:
-                lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
+            v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
+            lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
             u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
 
 
