@@ -9,7 +9,7 @@ number 1 on 100 and 2000 cells. A node-step is one node of the tool advanced one
 compilation, the contenders of a case timed in alternation so that a busy machine slows them alike.
 
 1. **Numba**: `solver.kernel.advance` called directly, as `simulate_rod` calls it, for the whole
-   run in one call with a summary-only setup (trackers, energy, contact intervals; no history,
+   run in one call with a summary-only setup (extremes, energy, contact intervals; no history,
    probes or fields). The time of the whole `simulate_rod` call (the same run plus a history row a
    step, the summary, the setup) is printed beside it.
 2. **C** (`bench/kernel_c/step.c`): the same step in C for a uniform tool without external force,
@@ -19,11 +19,12 @@ compilation, the contenders of a case timed in alternation so that a busy machin
    substitution with the precomputed factors (a fused multiply-add a node on the critical path of
    each, split as the kernel splits them into 4 segments swept as independent chains, with their
    carries; no recurrence at all for the explicit scheme) and the scalar contact solve; the energy
-   sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes what the summary needs (trackers, energy,
-   contact intervals, in the kernel's slots) and is checked against Numba: co-impact time and
-   energy terms should agree to about 1e-9; the peak force and the stress extremes differ by the
-   size of a step's change, as the kernel records the force the scheme applies (centred on a
-   layer) and refines the ends' extremes between layers, where the yardstick keeps the layers'.
+   sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes
+   what the summary needs (extremes, energy, contact intervals, in the kernel's slots) and is
+   checked against Numba: co-impact time and energy terms should agree to about 1e-9; the peak
+   force and the stress extremes differ by the size of a step's change, as the kernel records the
+   force the scheme applies (centred on a layer) and refines the ends' extremes between layers,
+   where the yardstick keeps the layers'.
 3. **solve_banded**: the same scheme in NumPy/SciPy, a Python loop over steps. The tool's rows
    form a constant tridiagonal matrix (assembled once); each step assembles the right-hand side
    with array operations and calls `scipy.linalg.solve_banded` (LAPACK gbsv: a banded LU and a
@@ -72,12 +73,11 @@ from scipy.linalg import solve_banded
 from scipy.optimize import brentq
 
 from percussim.solver import kernel as K
-from percussim.solver.case import load_case
-from percussim.solver.controller import simulate_rod
-from percussim.solver.case import Case
-from percussim.solver.controller import MAX_CONTACTS, end_conditions, force_law
+from percussim.solver.case import Case, load_case
+from percussim.solver.controller import (end_conditions, force_law, rod_constants, scheme_weights,
+                                         simulate_rod, tool_on)
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
-from percussim.solver.schemes import Scheme
+from percussim.solver.summary import MAX_CONTACTS
 
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE = ROOT / "bench" / "kernel_c" / "step.c"
@@ -100,13 +100,12 @@ class Setup:
     short: str  # for the table of ratios
     case: Case
     num: ResolvedNumerics
-    scheme: Scheme
     grid: Grid
-    r: float
-    c2: float
-    b2: float
-    end_stiffness: tuple[float, float]
-    factors: tuple[np.ndarray, np.ndarray, np.ndarray]  # P, 1/den, coefficient of Q_{i+1}
+    tool: K.Tool
+    rod: K.Rod
+    weights: K.Weights
+    medium: K.Medium
+    rows: K.ToolRows
 
     @property
     def n(self) -> int:
@@ -119,18 +118,11 @@ class Setup:
 
 def prepare(label: str, short: str, case: Case, **numerics) -> Setup:
     num = resolve_numerics(case, model="rod", **numerics)
-    scheme = num.weights()
-    grid = make_grid(case.tool, num.cells, scheme.end_masses)
-    tool, tau, h = case.tool, num.time_step, grid.h
-    r = (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
-    c2 = case.medium.stiffness if case.medium else 0.0
-    b2 = case.medium.damping if case.medium else 0.0
-    end_stiffness = (grid.end_area[0] * tool.youngs_modulus / h,
-                     grid.end_area[1] * tool.youngs_modulus / h)
-    factors = K.factor_tool_rows(grid.lower, grid.upper, grid.node_area, end_stiffness[1], c2, b2,
-                                 r, tau, tool.density, h, scheme.weight_new, scheme.centered,
-                                 scheme.end_masses)
-    return Setup(label, short, case, num, scheme, grid, r, c2, b2, end_stiffness, factors)
+    grid = make_grid(case.tool, num.cells, num.end_masses)
+    tool, rod, weights = tool_on(grid), rod_constants(case, num, grid), scheme_weights(num)
+    medium = end_conditions(case, grid)[1]
+    rows = K.factor_tool_rows(tool, rod, weights, medium)
+    return Setup(label, short, case, num, grid, tool, rod, weights, medium, rows)
 
 
 def explicit_courant_one(case: Case, cells: int) -> dict:
@@ -139,27 +131,21 @@ def explicit_courant_one(case: Case, cells: int) -> dict:
             "time_step": COURANT_ONE * h / wave_speed(case.tool)}
 
 
-def fresh_state(s: Setup) -> tuple[np.ndarray, ...]:
-    """u (3 layers), y, trackers, energy, contact intervals."""
-    return (np.zeros((3, s.n + 1)), np.zeros(3), K.new_trackers(), np.zeros((2, K.ENERGY_SLOTS)),
-            np.zeros((MAX_CONTACTS, 2)))
-
-
-def observed(trackers: np.ndarray, energy: np.ndarray, contacts: np.ndarray) -> dict[str, float]:
+def reported(state: K.State, observed: K.Observed) -> dict[str, float]:
     """What the summary reports, from the kernel's slots."""
-    count = int(trackers[K.T_CONTACTS])
+    extremes, contacts = observed
+    count = int(extremes[K.X_CONTACTS])
     found = {
-        "co-impact time": trackers[K.T_CO_IMPACT],
-        "peak contact force": trackers[K.T_PEAK_FORCE],
-        "max compressive stress": trackers[K.T_MAX_COMPRESSION],
-        "max tensile stress": trackers[K.T_MAX_TENSION],
-        "contacts": count + trackers[K.T_IN_CONTACT],
+        "co-impact time": extremes[K.X_CO_IMPACT],
+        "peak contact force": extremes[K.X_PEAK_FORCE],
+        "max compressive stress": extremes[K.X_MAX_COMPRESSION],
+        "max tensile stress": extremes[K.X_MAX_TENSION],
+        "contacts": count + state.ends[K.S_IN_CONTACT],
         "last contact end": contacts[min(count, MAX_CONTACTS) - 1, 1] if count else math.nan,
     }
     names = ("external work", "dissipated contact", "dissipated medium", "striker kinetic",
              "tool kinetic", "tool strain", "contact potential", "medium potential")
-    last = energy[0] if energy.ndim == 2 else energy  # the kernel keeps the layer before too
-    found.update({f"energy: {name}": last[i] for i, name in enumerate(names)})
+    found.update({f"energy: {name}": state.energy[0, i] for i, name in enumerate(names)})
     return found
 
 
@@ -168,23 +154,19 @@ def observed(trackers: np.ndarray, energy: np.ndarray, contacts: np.ndarray) -> 
 
 
 def numba_run(s: Setup) -> dict[str, float]:
-    case, g, sch = s.case, s.grid, s.scheme
+    case = s.case
     assert case.force is None
-    u, y, trackers, energy, contacts = fresh_state(s)
-    no_rows = np.empty((K.HISTORY_COLUMNS, 0))
+    state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
     no_fields = np.empty((0, s.n + 1))
-    struck, working = end_conditions(case, g)
-    status, _, _ = K.advance(
-        0, s.num.steps, u, y, g.lower, g.upper, g.node_area, g.area_mid, g.uniform, *s.factors,
-        g.h, s.num.time_step, s.r, case.tool.youngs_modulus, case.tool.density, *s.end_stiffness,
-        g.area[0], g.area[-1], sch.weight_new, sch.weight_old, sch.centered, sch.end_masses,
-        s.num.ends == "impedance", struck, working, force_law(case),
-        trackers, energy, contacts,
-        no_rows, 0, np.empty(0, np.int64), np.empty(0), np.empty((0, 0)),
-        no_fields, no_fields, 0,
-    )
+    recorders = K.Recorders(
+        history=np.empty((K.HISTORY_COLUMNS, 0)), history_stride=0,
+        probe_node=np.empty(0, np.int64), probe_weight=np.empty(0), probes=np.empty((0, 0)),
+        field_u=no_fields, field_stress=no_fields, field_stride=0)
+    contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
+    status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, medium,
+                             force_law(case), state, observed, recorders)
     assert status == K.STATUS_OK
-    return observed(trackers, energy, contacts)
+    return reported(state, observed)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -203,29 +185,30 @@ def build_c(directory: str) -> ctypes.CDLL:
     lib = ctypes.CDLL(str(library))
     array = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
     lib.run.argtypes = [ctypes.c_long, ctypes.c_long, array, array, array, array, array, array,
-                        array, ctypes.c_long]
+                        array, array, ctypes.c_long]
     lib.run.restype = ctypes.c_int
     return lib
 
 
 def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
-    case, sch = s.case, s.scheme
+    case, weights = s.case, s.weights
     assert s.grid.uniform and case.force is None, "step.c covers uniform tools without force"
     values = {
-        "h": s.grid.h, "tau": s.num.time_step, "r": s.r, "youngs_modulus": case.tool.youngs_modulus,
-        "density": case.tool.density, "area": case.tool.area, "weight_new": sch.weight_new,
-        "weight_old": sch.weight_old, "centered": float(sch.centered),
-        "end_masses": float(sch.end_masses), "m1": case.striker.mass, "w1": case.striker.velocity,
-        "c1": case.contact.stiffness, "alpha": case.contact.exponent,
-        "c0": case.contact.tension_stiffness, "b1": case.contact.damping, "c2": s.c2, "b2": s.b2,
+        "h": s.grid.h, "tau": s.num.time_step, "r": s.rod.courant_squared,
+        "youngs_modulus": case.tool.youngs_modulus, "density": case.tool.density,
+        "area": case.tool.area, "weight_new": weights.new, "weight_old": weights.old,
+        "centered": float(weights.centered), "end_masses": float(weights.end_masses),
+        "m1": case.striker.mass, "w1": case.striker.velocity, "c1": case.contact.stiffness,
+        "alpha": case.contact.exponent, "c0": case.contact.tension_stiffness,
+        "b1": case.contact.damping, "c2": s.medium.stiffness, "b2": s.medium.damping,
     }
     parameters = np.array([values[name] for name in C_PARAMETERS])
-    u, y, trackers, energy, contacts = fresh_state(s)
+    state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
     work = np.zeros(4 * (s.n + 1))
-    status = lib.run(s.n, s.num.steps, parameters, u, y, work, trackers, energy, contacts,
-                     MAX_CONTACTS)
+    status = lib.run(s.n, s.num.steps, parameters, state.u, state.y, work, state.ends,
+                     observed.extremes, state.energy, observed.contacts, MAX_CONTACTS)
     assert status == 0
-    return observed(trackers, energy, contacts)
+    return reported(state, observed)
 
 
 # ---------------------------------------------------------------------------------------------
@@ -263,38 +246,38 @@ def crossing(before_that: float, before: float, now: float) -> float:
 
 
 def banded_run(s: Setup) -> dict[str, float]:
-    case, g, sch = s.case, s.grid, s.scheme
-    n, tau, h = s.n, s.num.time_step, g.h
+    case, g, weights = s.case, s.grid, s.weights
+    n, tau, h, r = s.n, s.num.time_step, g.h, s.rod.courant_squared
     m1, w1 = case.striker.mass, case.striker.velocity
     law = (case.contact.stiffness, case.contact.exponent, case.contact.tension_stiffness)
-    b1, c2, b2 = case.contact.damping, s.c2, s.b2
-    end_weight, spring_weight, damper_factor, back = K.boundary_weights(
-        sch.weight_new, sch.centered, sch.end_masses, tau)
-    k0, kn = s.end_stiffness
-    wn, wo = sch.weight_new, sch.weight_old
+    b1, c2, b2 = case.contact.damping, s.medium.stiffness, s.medium.damping
+    end_weight, spring_weight, damper_factor, back = K.boundary_weights(weights, tau)
+    k0, kn = s.rod.struck_end_stiffness, s.rod.working_end_stiffness
+    wn, wo = weights.new, weights.old
     wc = 1.0 - wn - wo
     mass = case.tool.density * h * g.node_area / tau**2
     a_y = m1 / tau**2
     e_over_h = case.tool.youngs_modulus / h
-    strain_sigma = wn if sch.centered else 0.25
+    strain_sigma = wn if weights.centered else 0.25
     lower, upper = g.lower[1:n], g.upper[1:n]
 
     # The tool's rows (9), (8), (10) in solve_banded's layout: ab[1 + i − j, j] = A[i, j]
     ab = np.zeros((3, n + 1))
     ab[1, 0], ab[0, 1] = mass[0] + end_weight * k0, -end_weight * k0
-    ab[2, :n - 1] = -wn * s.r * lower
-    ab[1, 1:n] = 1.0 + wn * s.r * (lower + upper)
-    ab[0, 2:] = -wn * s.r * upper
+    ab[2, :n - 1] = -wn * r * lower
+    ab[1, 1:n] = 1.0 + wn * r * (lower + upper)
+    ab[0, 2:] = -wn * r * upper
     ab[2, n - 1] = -end_weight * kn
     ab[1, n] = mass[n] + end_weight * kn + spring_weight * c2 + b2 * damper_factor
     unit = np.zeros(n + 1)
     unit[0] = 1.0
     z = solve_banded((1, 1), ab, unit)  # the tool's response to a unit contact force
 
-    u, y, trackers, layers, contacts = fresh_state(s)
+    state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
+    (u, y, ends, layers), (extremes, contacts) = state, observed
     energy = layers[0]  # the kernel's latest layer; this solve needs no other
     y[2] = -w1 * tau
-    trackers[K.T_IN_CONTACT] = 1.0
+    ends[K.S_IN_CONTACT] = 1.0
     initial_energy = 0.5 * m1 * w1 * w1
     for m in range(1, s.num.steps + 1):
         new, cur, old, ref = m % 3, (m - 1) % 3, (m - 2) % 3, (m - back) % 3
@@ -303,12 +286,12 @@ def banded_run(s: Setup) -> dict[str, float]:
         delta_cur, delta_old, delta_ref = y[cur] - uc[0], y[old] - uo[0], y[ref] - ur[0]
         v = wc * uc + wo * uo
         rhs = np.empty(n + 1)
-        rhs[1:n] = 2.0 * uc[1:n] - uo[1:n] + s.r * (lower * (v[:n - 1] - v[1:n])
-                                                     + upper * (v[2:] - v[1:n]))
+        rhs[1:n] = 2.0 * uc[1:n] - uo[1:n] + r * (lower * (v[:n - 1] - v[1:n])
+                                                   + upper * (v[2:] - v[1:n]))
         rhs[0] = mass[0] * (2.0 * uc[0] - uo[0])
         rhs[n] = (mass[n] * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - spring_weight) * ur[n]
                   + b2 * damper_factor * ur[n])
-        if sch.end_masses:
+        if weights.end_masses:
             rhs[0] += k0 * (v[1] - v[0])
             rhs[n] -= kn * (v[n] - v[n - 1])
         x = solve_banded((1, 1), ab, rhs)
@@ -355,40 +338,40 @@ def banded_run(s: Setup) -> dict[str, float]:
                                                    + (1.0 - spring_weight) * uc[n] ** 2)
         balance = (energy[K.E_DISSIPATED_CONTACT:].sum() - initial_energy
                    - energy[K.E_EXTERNAL_WORK])
-        trackers[K.T_ENERGY_EXCESS] = max(trackers[K.T_ENERGY_EXCESS], balance)
+        extremes[K.X_ENERGY_EXCESS] = max(extremes[K.X_ENERGY_EXCESS], balance)
 
         stress = np.empty(n + 1)
         stress[0], stress[n] = -contact_force / g.area[0], -medium_force / g.area[-1]
         stress[1:n] = 0.5 * e_over_h * (un[2:] - un[:n - 1])
-        for sign, slot in ((-1.0, K.T_MAX_COMPRESSION), (1.0, K.T_MAX_TENSION)):
+        for sign, slot in ((-1.0, K.X_MAX_COMPRESSION), (1.0, K.X_MAX_TENSION)):
             node = int(np.argmax(sign * stress))
-            if sign * stress[node] > trackers[slot]:
-                trackers[slot:slot + 3] = sign * stress[node], node * h, t
+            if sign * stress[node] > extremes[slot]:
+                extremes[slot:slot + 3] = sign * stress[node], node * h, t
 
-        if contact_force > trackers[K.T_PEAK_FORCE]:
-            trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = contact_force, t
-        f1, f2 = trackers[K.T_FORCE_BEFORE], trackers[K.T_FORCE_BEFORE_THAT]
+        if contact_force > extremes[K.X_PEAK_FORCE]:
+            extremes[K.X_PEAK_FORCE], extremes[K.X_PEAK_FORCE_TIME] = contact_force, t
+        f1, f2 = ends[K.S_FORCE_BEFORE], ends[K.S_FORCE_BEFORE_THAT]
         if m >= 3 and f1 >= f2 and f1 > contact_force:
             offset = 0.5 * (contact_force - f2) / (2.0 * f1 - f2 - contact_force)
             vertex = f1 + 0.25 * (contact_force - f2) * offset
-            if vertex > trackers[K.T_PEAK_FORCE]:
-                trackers[K.T_PEAK_FORCE] = vertex
-                trackers[K.T_PEAK_FORCE_TIME] = t - tau + offset * tau
-        trackers[K.T_FORCE_BEFORE_THAT], trackers[K.T_FORCE_BEFORE] = f1, contact_force
+            if vertex > extremes[K.X_PEAK_FORCE]:
+                extremes[K.X_PEAK_FORCE] = vertex
+                extremes[K.X_PEAK_FORCE_TIME] = t - tau + offset * tau
+        ends[K.S_FORCE_BEFORE_THAT], ends[K.S_FORCE_BEFORE] = f1, contact_force
 
         previous = delta_old if m >= 2 else math.nan
-        if trackers[K.T_IN_CONTACT] and delta < 0.0:
+        if ends[K.S_IN_CONTACT] and delta < 0.0:
             t_cross = t - tau + tau * crossing(previous, delta_cur, delta)
-            k = int(trackers[K.T_CONTACTS])
-            contacts[k] = trackers[K.T_CONTACT_START], t_cross
-            trackers[K.T_CONTACTS] = k + 1
+            k = int(extremes[K.X_CONTACTS])
+            contacts[k] = ends[K.S_CONTACT_START], t_cross
+            extremes[K.X_CONTACTS] = k + 1
             if k == 0:
-                trackers[K.T_CO_IMPACT], trackers[K.T_REBOUND_VELOCITY] = t_cross, velocity
-            trackers[K.T_IN_CONTACT] = 0.0
-        elif not trackers[K.T_IN_CONTACT] and delta >= 0.0:
-            trackers[K.T_IN_CONTACT] = 1.0
-            trackers[K.T_CONTACT_START] = t - tau + tau * crossing(previous, delta_cur, delta)
-    return observed(trackers, energy, contacts)
+                extremes[K.X_CO_IMPACT], extremes[K.X_REBOUND_VELOCITY] = t_cross, velocity
+            ends[K.S_IN_CONTACT] = 0.0
+        elif not ends[K.S_IN_CONTACT] and delta >= 0.0:
+            ends[K.S_IN_CONTACT] = 1.0
+            ends[K.S_CONTACT_START] = t - tau + tau * crossing(previous, delta_cur, delta)
+    return reported(state, observed)
 
 
 # ---------------------------------------------------------------------------------------------

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import kernel as K
+from . import layout as L
 from .case import Case
 from .errors import Cancelled, NumericalFailure
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
@@ -20,23 +21,23 @@ CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
 
 # History columns as stored under their HDF5 paths.
 HISTORY_PATHS = {
-    "time": K.H_TIME,
-    "striker/displacement": K.H_STRIKER_DISP,
-    "striker/velocity": K.H_STRIKER_VEL,
-    "tool/struck_end_displacement": K.H_STRUCK_END,
-    "tool/working_end_displacement": K.H_WORKING_END,
-    "contact/force": K.H_CONTACT_FORCE,
-    "contact/overlap": K.H_OVERLAP,
-    "medium/force": K.H_MEDIUM_FORCE,
-    "external/force": K.H_EXTERNAL_FORCE,
-    "energy/external_work": K.H_EXTERNAL_WORK,
-    "energy/dissipated_contact": K.H_DISSIPATED_CONTACT,
-    "energy/dissipated_medium": K.H_DISSIPATED_MEDIUM,
-    "energy/striker_kinetic": K.H_STRIKER_KINETIC,
-    "energy/tool_kinetic": K.H_TOOL_KINETIC,
-    "energy/tool_strain": K.H_TOOL_STRAIN,
-    "energy/contact_potential": K.H_CONTACT_POTENTIAL,
-    "energy/medium_potential": K.H_MEDIUM_POTENTIAL,
+    "time": L.H_TIME,
+    "striker/displacement": L.H_STRIKER_DISP,
+    "striker/velocity": L.H_STRIKER_VEL,
+    "tool/struck_end_displacement": L.H_STRUCK_END,
+    "tool/working_end_displacement": L.H_WORKING_END,
+    "contact/force": L.H_CONTACT_FORCE,
+    "contact/overlap": L.H_OVERLAP,
+    "medium/force": L.H_MEDIUM_FORCE,
+    "external/force": L.H_EXTERNAL_FORCE,
+    "energy/external_work": L.H_EXTERNAL_WORK,
+    "energy/dissipated_contact": L.H_DISSIPATED_CONTACT,
+    "energy/dissipated_medium": L.H_DISSIPATED_MEDIUM,
+    "energy/striker_kinetic": L.H_STRIKER_KINETIC,
+    "energy/tool_kinetic": L.H_TOOL_KINETIC,
+    "energy/tool_strain": L.H_TOOL_STRAIN,
+    "energy/contact_potential": L.H_CONTACT_POTENTIAL,
+    "energy/medium_potential": L.H_MEDIUM_POTENTIAL,
 }
 
 
@@ -57,22 +58,51 @@ def force_law(case: Case) -> K.ForceLaw:
     """R(t) as the kernel takes it."""
     f = case.force
     if f is None:
-        return K.ForceLaw(K.FORCE_NONE, 0.0, 0.0, 0.0, 0.0)
+        return K.ForceLaw(kind=K.FORCE_NONE, amplitude=0.0, omega=0.0, start=0.0, duration=0.0)
     if f.kind == "pulse":
-        return K.ForceLaw(K.FORCE_PULSE, f.amplitude, 0.0, f.start, f.duration)
+        return K.ForceLaw(kind=K.FORCE_PULSE, amplitude=f.amplitude, omega=0.0, start=f.start,
+                          duration=f.duration)
     kind = K.FORCE_SINE if f.kind == "sine" else K.FORCE_ABS_SINE
-    return K.ForceLaw(kind, f.amplitude, f.omega, 0.0, 0.0)
+    return K.ForceLaw(kind=kind, amplitude=f.amplitude, omega=f.omega, start=0.0, duration=0.0)
 
 
-def end_conditions(case: Case, grid: Grid) -> tuple[K.StruckEnd, K.WorkingEnd]:
+def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
     """The striker and contact, and the medium, with the impedances of the tool's end cells."""
     c, m = case.contact, case.medium
     impedance = grid.density * wave_speed(case.tool)
-    struck = K.StruckEnd(case.striker.mass, case.striker.velocity, c.stiffness, c.exponent,
-                         c.tension_stiffness, c.damping, impedance * grid.end_area[0])
-    working = K.WorkingEnd(m.stiffness if m else 0.0, m.damping if m else 0.0,
-                           impedance * grid.end_area[1])
-    return struck, working
+    contact = K.Contact(striker_mass=case.striker.mass, striker_velocity=case.striker.velocity,
+                        stiffness=c.stiffness, exponent=c.exponent,
+                        tension_stiffness=c.tension_stiffness, damping=c.damping,
+                        impedance=impedance * grid.end_area[0])
+    medium = K.Medium(stiffness=m.stiffness if m else 0.0, damping=m.damping if m else 0.0,
+                      impedance=impedance * grid.end_area[1])
+    return contact, medium
+
+
+def tool_on(grid: Grid) -> K.Tool:
+    """The tool on its grid, as the kernel takes it."""
+    return K.Tool(lower=grid.lower, upper=grid.upper, node_area=grid.node_area,
+                  area_mid=grid.area_mid, uniform=grid.uniform,
+                  struck_end_area=float(grid.area[0]), working_end_area=float(grid.area[-1]))
+
+
+def rod_constants(case: Case, num: ResolvedNumerics, grid: Grid) -> K.Rod:
+    """The rod's constants on the grid and time step."""
+    tool, tau, h = case.tool, num.time_step, grid.h
+    impedance_ends = num.ends == "impedance"
+    # Courant number 1 exactly where the ends rely on the end rows being the characteristic relation
+    r = 1.0 if impedance_ends else (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
+    return K.Rod(cell_length=h, time_step=tau, courant_squared=r,
+                 youngs_modulus=tool.youngs_modulus, density=tool.density,
+                 struck_end_stiffness=grid.end_area[0] * tool.youngs_modulus / h,
+                 working_end_stiffness=grid.end_area[1] * tool.youngs_modulus / h)
+
+
+def scheme_weights(num: ResolvedNumerics) -> K.Weights:
+    """The scheme as the kernel takes it."""
+    scheme = num.weights()
+    return K.Weights(new=scheme.weight_new, old=scheme.weight_old, centered=scheme.centered,
+                     end_masses=scheme.end_masses, impedance_ends=num.ends == "impedance")
 
 
 def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool
@@ -82,10 +112,10 @@ def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_a
     the duration. The terms are at layer m − ½ in the scheme's own form, but for the ends that
     integrate their own equations (`ends_at_layer`), whose work, dissipation and stored energy are
     at layer m."""
-    at = np.full(K.ENERGY_SLOTS, (last - 0.5) * tau)
+    at = np.full(L.ENERGY_SLOTS, (last - 0.5) * tau)
     if ends_at_layer:
-        at[[K.E_EXTERNAL_WORK, K.E_DISSIPATED_CONTACT, K.E_DISSIPATED_MEDIUM, K.E_STRIKER_KINETIC,
-            K.E_CONTACT_POTENTIAL, K.E_MEDIUM_POTENTIAL]] = last * tau
+        at[[L.E_EXTERNAL_WORK, L.E_DISSIPATED_CONTACT, L.E_DISSIPATED_MEDIUM, L.E_STRIKER_KINETIC,
+            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL]] = last * tau
     if last < 2:
         return energy[0].copy()
     weight = (duration - at) / tau  # 0 at row 0, −1 at row 1
@@ -105,34 +135,22 @@ def simulate_rod(
     with any other the result is `streamed` and carries the summary only.
     """
     num = numerics or resolve_numerics(case, model="rod")
-    scheme = num.weights()
-    impedance_ends = num.ends == "impedance"
-    grid = make_grid(case.tool, num.cells, scheme.end_masses)
-    n, tau, h = grid.cells, num.time_step, grid.h
-    tool = case.tool
-    # Courant number 1 exactly where the ends rely on the end rows being the characteristic relation
-    r = 1.0 if impedance_ends else (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
-    c2 = case.medium.stiffness if case.medium else 0.0
-    b2 = case.medium.damping if case.medium else 0.0
-    end_stiffness = (grid.end_area[0] * tool.youngs_modulus / h,
-                     grid.end_area[1] * tool.youngs_modulus / h)
-    factors = K.factor_tool_rows(
-        grid.lower, grid.upper, grid.node_area, end_stiffness[1], c2, b2, r, tau, tool.density, h,
-        scheme.weight_new, scheme.centered, scheme.end_masses)
+    weights = scheme_weights(num)
+    grid = make_grid(case.tool, num.cells, weights.end_masses)
+    n, tau = grid.cells, num.time_step
+    tool, rod = tool_on(grid), rod_constants(case, num, grid)
+    contact, medium = end_conditions(case, grid)
+    rows = K.factor_tool_rows(tool, rod, weights, medium)
+    force = force_law(case)
 
     out = case.outputs
     probe_node, probe_weight = _probe_nodes(grid, out.probes)
     field_stride = out.field_stride if out.fields else 0
-    u = np.zeros((3, n + 1))
-    y = np.zeros(3)
-    trackers = K.new_trackers()
-    energy = np.zeros((2, K.ENERGY_SLOTS))
-    struck, working = end_conditions(case, grid)
-    force = force_law(case)
+    state = K.new_state(n)
+    observed = K.new_observed(MAX_CONTACTS)
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
-    lag = 1 if scheme.centered and not impedance_ends else 0
+    lag = 1 if weights.centered and not weights.impedance_ends else 0
     last_layer = num.steps + lag
-    contacts = np.zeros((MAX_CONTACTS, 2))
 
     recorder = MemoryRecorder() if recorder is None else recorder
     recorder.start()
@@ -162,28 +180,22 @@ def simulate_rod(
     while first <= last_layer:
         last = min(last_layer, first + chunk - 1)
         recorded = (max(0, first - lag), last - lag)  # the layers this chunk records
-        rows = _kept(*recorded, out.history_stride)
+        kept_rows = _kept(*recorded, out.history_stride)
         frames = _kept(*recorded, field_stride)
-        history = np.empty((K.HISTORY_COLUMNS, rows))
-        probes = np.empty((rows, len(probe_node)))
-        field_u = np.empty((frames, n + 1))
-        field_stress = np.empty((frames, n + 1))
-        status, n_hist, n_field = K.advance(
-            first, last, u, y, grid.lower, grid.upper, grid.node_area, grid.area_mid,
-            grid.uniform, *factors,
-            h, tau, r, tool.youngs_modulus, tool.density, *end_stiffness,
-            grid.area[0], grid.area[-1],
-            scheme.weight_new, scheme.weight_old, scheme.centered, scheme.end_masses, impedance_ends,
-            struck, working, force,
-            trackers, energy, contacts,
-            history, out.history_stride, probe_node, probe_weight, probes,
-            field_u, field_stress, field_stride,
-        )
+        recorders = K.Recorders(
+            history=np.empty((L.HISTORY_COLUMNS, kept_rows)), history_stride=out.history_stride,
+            probe_node=probe_node, probe_weight=probe_weight,
+            probes=np.empty((kept_rows, len(probe_node))),
+            field_u=np.empty((frames, n + 1)), field_stress=np.empty((frames, n + 1)),
+            field_stride=field_stride)
+        status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, medium,
+                                            force, state, observed, recorders)
         if status == K.STATUS_NON_FINITE:
-            raise NumericalFailure(trackers[K.T_FAILED_TIME], num)
+            raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
+        history = recorders.history
         for path, column in HISTORY_PATHS.items():
             recorder.append(path, history[column, :n_hist])
-        recorder.append("probes/stress", probes[:n_hist])
+        recorder.append("probes/stress", recorders.probes[:n_hist])
         low, high = np.searchsorted(summary_rows, (row, row + n_hist))
         summary_table.append(history[summary_columns].take(summary_rows[low:high] - row, axis=1))
         row += n_hist
@@ -191,8 +203,8 @@ def simulate_rod(
             lo, hi = recorded
             recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride,
                                                      hi + 1, field_stride) * tau)
-            recorder.append("fields/displacement", field_u[:n_field])
-            recorder.append("fields/stress", field_stress[:n_field])
+            recorder.append("fields/displacement", recorders.field_u[:n_field])
+            recorder.append("fields/stress", recorders.field_stress[:n_field])
         first = last + 1
         if progress is not None:
             progress(min(1.0, first / (last_layer + 1)))
@@ -200,9 +212,12 @@ def simulate_rod(
             raise Cancelled(f"cancelled at t = {first * tau:.6g} s")
 
     table = np.concatenate(summary_table, axis=1)
+    ends = state.ends
     summary = build_summary(
-        case=case, numerics=num, trackers=trackers, contacts=contacts,
-        energy=energy_at(energy, last_layer, tau, case.numerics.duration, impedance_ends),
+        case=case, numerics=num, extremes=observed.extremes, contacts=observed.contacts,
+        open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
+        energy=energy_at(state.energy, last_layer, tau, case.numerics.duration,
+                         weights.impedance_ends),
         history=dict(zip(FORCE_HISTORY.values(), table)),
     )
     held = recorder.held()

@@ -24,14 +24,39 @@ whatever the time step; the two agree to first order in τ.
 Everything the summary needs (contact intervals, peaks, the energy audit) is observed inside the
 loop, so a summary-only run keeps nothing of size N·M.
 
+`advance` takes named bundles: the `Tool` on its grid and its `ToolRows` factored once, the
+`Rod`'s constants, the scheme's `Weights`, the `Contact` at the struck end, the `Medium` at the
+working end and the `ForceLaw` on the striker; the `State` it carries from step to step and call to
+call (the layers, the ends' slots `S_…`, the energy terms), what it has `Observed` (the extremes
+`X_…` and the contact intervals, which the summary reads) and the `Recorders` of a call. A step is
+a sequence of named phases, each a function inlined into `advance`: the right-hand sides, the
+sweep, the struck end's solve, the back-substitution, the working end's force, the energy audit,
+the extremes and the contacts, the recording.
+
+The ends are where the tool meets what strikes it and what it strikes. Their laws enter a step's
+solve only through these functions, one end at a time, so that another medium or striker replaces
+them and leaves the tool's rows alone:
+- the working end (the medium, c2, b2): `working_end_diagonal`, its share of row u_N's diagonal,
+  factored once with the tool's rows; `working_end_row`, the row's right-hand side;
+  `working_end_force`, its force on the new layer;
+- the struck end (the striker m1 and the contact c1, α, c0, b1): `solve_struck_end`, the striker
+  row (11) and the struck-end row (9) solved with the contact law; they see the tool only through
+  its link `u_1 = P_1·u_0 + Q_1`, which the sweep gives;
+- ends that integrate their own equations: `struck_end_step` and `working_end_step`.
+A medium linear in u_N (any c2, b2) is its three functions. A piecewise-linear one (a bilinear
+rock, Smith's soil) has a diagonal for each branch of its law: its rows would be factored again
+when it changes branch. An elastic striker replaces `solve_struck_end` and `struck_end_step` by its
+own rows, coupled to the tool through the same link. The ends' energy terms (the contact's Φ, the
+medium's `c2·u_N²/2`, what the dampers dissipate) are the energy audit's: a new law brings its own.
+
 All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3, n%3, (n+1)%3` of
-`u` (3 × (N+1)) and of the striker's `y` (3), so no state but the layer index is carried between
-chunks. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first step
-is an ordinary step of the scheme. The layers are indexed as `u[row, i]`, never through a row view:
-Numba counts a view's references with atomic instructions, and three views a step cost about
-0.4 ns a node-step on 100 cells, a sixth of the step. Where LLVM cannot prove an index
-non-negative, it is unsigned: Numba wraps negative indices around, and that check on every load
-keeps loops from vectorising.
+`u` (3 × (N+1)) and of the striker's `y` (3), so the layers carry no state between chunks but the
+layer index. Layer −1 (row 2) is the state one step before the impact, `z − τ·z'`, so the first
+step is an ordinary step of the scheme. The layers are indexed as `u[row, i]`, never through a row
+view: Numba counts a view's references with atomic instructions, and three views a step cost about
+0.4 ns a node-step on 100 cells, a sixth of the step (for the same reason the phases take the
+bundles `uncounted`). Where LLVM cannot prove an index non-negative, it is unsigned: Numba wraps
+negative indices around, and that check on every load keeps loops from vectorising.
 """
 
 from __future__ import annotations
@@ -45,52 +70,92 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from .layout import (ENERGY_SLOTS, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
+                     E_EXTERNAL_WORK, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC, E_TOOL_KINETIC,
+                     E_TOOL_STRAIN, HISTORY_COLUMNS, H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
+                     H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
+                     H_MEDIUM_FORCE, H_MEDIUM_POTENTIAL, H_OVERLAP, H_STRIKER_DISP,
+                     H_STRIKER_KINETIC, H_STRIKER_VEL, H_STRUCK_END, H_TIME, H_TOOL_KINETIC,
+                     H_TOOL_STRAIN, H_WORKING_END, X_CONTACTS, X_CO_IMPACT, X_ENERGY_EXCESS,
+                     X_FAILED_TIME, X_MAX_COMPRESSION, X_MAX_TENSION, X_MIN_CONTACT_STEPS,
+                     X_PEAK_FORCE, X_PEAK_FORCE_TIME, X_REBOUND_VELOCITY, new_extremes)
+
 # Force kinds (`force_kind`)
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
 
-# History quantities: `history[H_…, k]` is the k-th kept layer's (one contiguous series each)
-H_TIME, H_STRIKER_DISP, H_STRIKER_VEL, H_STRUCK_END, H_WORKING_END = 0, 1, 2, 3, 4
-H_CONTACT_FORCE, H_OVERLAP, H_MEDIUM_FORCE, H_EXTERNAL_FORCE = 5, 6, 7, 8
-H_EXTERNAL_WORK, H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM = 9, 10, 11
-H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL = (
-    12, 13, 14, 15, 16)
-HISTORY_COLUMNS = 17
-
-# Tracker slots (running extremes and contact state)
-T_PEAK_FORCE, T_PEAK_FORCE_TIME = 0, 1
-T_MAX_COMPRESSION, T_MAX_COMPRESSION_X, T_MAX_COMPRESSION_TIME = 2, 3, 4
-T_MAX_TENSION, T_MAX_TENSION_X, T_MAX_TENSION_TIME = 5, 6, 7
-T_IN_CONTACT, T_CONTACT_START, T_CONTACTS = 8, 9, 10
-T_CO_IMPACT, T_REBOUND_VELOCITY = 11, 12
-T_ENERGY_EXCESS = 13  # max over time of (stored + dissipated − input): > 0 means energy created
-T_FAILED_TIME = 14
-T_MIN_CONTACT_STEPS = 15  # fewest steps any finished contact interval was resolved by
-T_FORCE_BEFORE, T_FORCE_BEFORE_THAT = 16, 17  # contact force at layers m−1, m−2
-T_POTENTIAL_BEFORE, T_POTENTIAL_BEFORE_THAT = 18, 19  # contact potential Φ at layers m−1, m−2
-T_MEDIUM_FORCE, T_MEDIUM_FORCE_BEFORE = 20, 21  # medium force at the last two recorded layers
-# Ends that integrate their own equations: the striker's velocity and the incoming waves'
-# displacements G at the struck end and at the working end, at layers m−1, m−2
-T_STRIKER_VELOCITY = 22
-T_INCOMING, T_INCOMING_BEFORE, T_FAR_INCOMING, T_FAR_INCOMING_BEFORE = 23, 24, 25, 26
-T_FORCE_EARLIER, T_MEDIUM_FORCE_EARLIER = 27, 28  # the end forces one recorded layer earlier still
-TRACKER_SLOTS = 29
-
-# Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
-# and dissipation, and the stored terms
-E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM = 0, 1, 2
-E_STRIKER_KINETIC, E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL = (
-    3, 4, 5, 6, 7)
-ENERGY_SLOTS = 8
+# End slots (`ends[S_…]`): what the next step needs of the ends beyond the layers. Whether the
+# striker is in contact and since when; the end forces and the contact potential at the last
+# recorded layers (m−1, m−2, m−3); for the ends that integrate their own equations, the
+# striker's velocity and the incoming waves' displacements G at the struck end and at the
+# working end, at layers m−1, m−2
+S_IN_CONTACT, S_CONTACT_START = 0, 1
+S_FORCE_BEFORE, S_FORCE_BEFORE_THAT, S_FORCE_EARLIER = 2, 3, 4  # the contact force
+S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER = 5, 6, 7
+S_POTENTIAL_BEFORE, S_POTENTIAL_BEFORE_THAT = 8, 9  # contact potential Φ at layers m−1, m−2
+S_STRIKER_VELOCITY = 10
+S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
+END_SLOTS = 15
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
-# The end conditions, as the kernel takes them
-StruckEnd = namedtuple("StruckEnd", "mass velocity c1 alpha c0 b1 impedance")
-"""The striker (m1, W1), the contact (c1, α, c0, b1) and the end cell's impedance ρ·a·S̄ (N·s/m)."""
-WorkingEnd = namedtuple("WorkingEnd", "c2 b2 impedance")
-"""The medium (c2, b2; 0 for a free end) and the end cell's impedance."""
+# What `advance` takes, as named bundles. Numba passes a namedtuple's fields as separate values and
+# reads them as registers: a bundle costs nothing in the step (typing them all costs about 3 µs a
+# call of `advance`, against ~10 ms of steps a call). Build them by keyword, as `solver.controller`
+# does: a bundle of another kind in the place of one does not compile.
+Tool = namedtuple("Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area")
+"""The tool on its grid (`solver.grid.Grid`): the operator's weights `lower_i`, `upper_i` of the
+neighbours (all 1 when `uniform`), the nodes' areas S̄_i (`node_area·ρh` is a node's mass: half a
+cell at the ends, 0 at a massless end), the cells' areas S_{i+½} and the areas at the struck and
+working ends (their stresses are the end forces over them)."""
+ToolRows = namedtuple("ToolRows", "p inv_den coefficient coefficient_product p_product")
+"""The tool's rows u_1 … u_N eliminated once (`factor_tool_rows`)."""
+Rod = namedtuple("Rod", "cell_length time_step courant_squared youngs_modulus density "
+                        "struck_end_stiffness working_end_stiffness")
+"""The rod's constants: h, τ, r = (a·τ/h)², E, ρ and the end cells' stiffness k_0, k_N = S·E/h."""
+Weights = namedtuple("Weights", "new old centered end_masses impedance_ends")
+"""The scheme (`solver.schemes.Scheme`): the weights of layers n+1 and n−1 in the tool's operator
+(γ and 0 for the paper's, σ and σ for the σ-scheme, 0 and 0 explicit; layer n has the rest),
+whether the boundary terms are centred on layer n, whether the ends carry their half-cell masses,
+and whether each end integrates its own equations (the explicit scheme at Courant number 1)."""
+Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponent "
+                                "tension_stiffness damping impedance")
+"""The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
+contact and `c0·δ` in separation (c1, α, c0), its damper (b1), and the impedance ρ·a·S of the
+tool's end cell (N·s/m)."""
+Medium = namedtuple("Medium", "stiffness damping impedance")
+"""The working end: the medium's spring and damper (c2, b2; 0 for a free end) and the impedance
+of the tool's end cell."""
 ForceLaw = namedtuple("ForceLaw", "kind amplitude omega start duration")
-"""R(t): a `FORCE_…` kind and its parameters."""
+"""R(t) on the striker: a `FORCE_…` kind and its parameters."""
+State = namedtuple("State", "u y ends energy")
+"""What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's `y` (3),
+the ends' slots (`S_…`) and the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at the
+one before)."""
+Observed = namedtuple("Observed", "extremes contacts")
+"""What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
+intervals (start, end; one row each, those beyond its rows counted only)."""
+Recorders = namedtuple("Recorders", "history history_stride probe_node probe_weight probes "
+                                    "field_u field_stress field_stride")
+"""Where a call records its layers: every `history_stride`-th to `history` (a column each) and
+`probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
+with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each);
+strides ≤ 0 keep nothing."""
+
+# Within a step
+Layers = namedtuple("Layers", "new cur old ref")
+"""The rows of `u` and `y` holding layers n+1, n, n−1, and the boundary terms' reference layer."""
+Overlaps = namedtuple("Overlaps", "cur old ref")
+"""The overlap δ = y − u_0 of layers n and n−1 and of the reference layer."""
+Boundary = namedtuple("Boundary", "end_weight spring_weight damper_factor back")
+"""How the end rows and the boundary terms weight the layers (`boundary_weights`)."""
+StepConstants = namedtuple("StepConstants", "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
+                                            "lag strain_sigma e_over_h half_e_over_h "
+                                            "kinetic_factor initial_energy segments explicit")
+"""What every step derives from the bundles (`step_constants`); `segments` is `segment_layout`'s."""
+Recorded = namedtuple("Recorded", "row time velocity contact_force medium_force struck_end_stress "
+                                  "working_end_stress")
+"""A layer as it is recorded: its row of `u`, its time, the striker's velocity, the end forces the
+scheme applies there and the stresses they make at the ends (tension +)."""
 
 # Independent chains a recurrence along the tool is split into: enough to hide the multiply-add's
 # latency (4 cycles) behind the other chains' work. `sweep_toward_struck_end` and
@@ -99,29 +164,31 @@ SEGMENTS = 4
 MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swept serially
 
 
-def new_trackers() -> np.ndarray:
-    t = np.zeros(TRACKER_SLOTS)
-    t[T_CO_IMPACT] = np.nan
-    t[T_REBOUND_VELOCITY] = np.nan
-    t[T_FAILED_TIME] = np.nan
-    t[T_MIN_CONTACT_STEPS] = np.inf
-    return t
+def new_state(cells: int) -> State:
+    """The state before a run on `cells` cells (`advance` sets layer 0 and the one before)."""
+    return State(u=np.zeros((3, cells + 1)), y=np.zeros(3), ends=np.zeros(END_SLOTS),
+                 energy=np.zeros((2, ENERGY_SLOTS)))
+
+
+def new_observed(max_contacts: int) -> Observed:
+    """Nothing observed yet, with room for `max_contacts` contact intervals."""
+    return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)))
 
 
 @njit(cache=True)
-def boundary_weights(weight_new, centered, end_masses, tau):
-    """How the end rows and the boundary terms weight the layers.
+def boundary_weights(weights, tau):
+    """How the end rows and the boundary terms of the scheme (`Weights`) weight the layers.
 
-    Returns `(end_weight, spring_weight, damper_factor, back)`: the end rows' weight of the new
-    layer in the tool's own stiffness (the interior's with end masses; 1 for quasi-static massless
-    ends); the boundary springs' weight of the new layer (the rest on the reference layer); the
-    dampers' rate factor (`1/(2τ)` centred, `1/τ` backward); how many layers before the new one
-    the boundary terms' reference layer lies (2: n−1 centred; 1: n for the paper).
+    Returns `Boundary(end_weight, spring_weight, damper_factor, back)`: the end rows' weight of the
+    new layer in the tool's own stiffness (the interior's with end masses; 1 for quasi-static
+    massless ends); the boundary springs' weight of the new layer (the rest on the reference
+    layer); the dampers' rate factor (`1/(2τ)` centred, `1/τ` backward); how many layers before
+    the new one the boundary terms' reference layer lies (2: n−1 centred; 1: n for the paper).
     """
-    end_weight = weight_new if end_masses else 1.0
-    if centered:
-        return end_weight, 0.5, 0.5 / tau, 2
-    return end_weight, 1.0, 1.0 / tau, 1
+    end_weight = weights.new if weights.end_masses else 1.0
+    if weights.centered:
+        return Boundary(end_weight=end_weight, spring_weight=0.5, damper_factor=0.5 / tau, back=2)
+    return Boundary(end_weight=end_weight, spring_weight=1.0, damper_factor=1.0 / tau, back=1)
 
 
 @njit(cache=True)
@@ -133,25 +200,24 @@ def segment_layout(n):
 
 
 @njit(cache=True)
-def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_stiffness,
-                     medium_damping, r, tau, density, h, weight_new, centered, end_masses):
-    """Eliminate rows u_N … u_1 once: returns `P`, `1/den`, the coefficient `c` of `Q_{i+1}` in
-    `Q_i = rhs_i/den_i + c_i·Q_{i+1}`, and the segments' multiples of their carries: for node i of a
-    segment `b … e` (`segment_layout`), `Π c_j` over `i … e` and `Π P_j` over `b … i`.
+def factor_tool_rows(tool, rod, weights, medium):
+    """Eliminate rows u_N … u_1 once (`ToolRows`): `P`, `1/den`, the coefficient `c` of `Q_{i+1}`
+    in `Q_i = rhs_i/den_i + c_i·Q_{i+1}`, and the segments' multiples of their carries: for node i
+    of a segment `b … e` (`segment_layout`), `Π c_j` over `i … e` and `Π P_j` over `b … i`.
 
-    Row u_N: `(M_N/τ² + θ·k_N + θ_s·c2 + b2·d)·u_N − θ·k_N·u_{N−1} = rhs`, `k_N = S·E/h`, with
-    the weights of `boundary_weights`.
+    Row u_N: `working_end_diagonal·u_N − θ·k_N·u_{N−1} = rhs`, θ the end rows' weight of
+    `boundary_weights`.
     Rows u_i: `−w·r·lower_i·u_{i−1} + (1 + w·r·(lower_i + upper_i))·u_i − w·r·upper_i·u_{i+1} = rhs_i`.
     """
-    end_weight, spring_weight, damper_factor, _ = boundary_weights(weight_new, centered, end_masses, tau)
-    n = len(node_area) - 1
+    end_weight = boundary_weights(weights, rod.time_step).end_weight
+    weight_new, r = weights.new, rod.courant_squared
+    grid_lower, grid_upper = tool.lower, tool.upper
+    n = len(tool.node_area) - 1
     p = np.zeros(n + 1)
     inv_den = np.zeros(n + 1)
     carry = weight_new * r * grid_upper
-    mass_n = density * h * node_area[n] / (tau * tau)
-    diag_n = (mass_n + end_weight * end_stiffness + spring_weight * medium_stiffness
-              + medium_damping * damper_factor)
-    p[n] = end_weight * end_stiffness / diag_n
+    diag_n = working_end_diagonal(tool, rod, weights, medium)
+    p[n] = end_weight * rod.working_end_stiffness / diag_n
     inv_den[n] = 1.0 / diag_n
     for i in range(n - 1, 0, -1):
         den = 1.0 + weight_new * r * (grid_lower[i] + grid_upper[i]) - carry[i] * p[i + 1]
@@ -172,7 +238,8 @@ def factor_tool_rows(grid_lower, grid_upper, node_area, end_stiffness, medium_st
         for i in range(start, end + 1):
             product *= p[i]
             p_product[i] = product
-    return p, inv_den, coefficient, coefficient_product, p_product
+    return ToolRows(p=p, inv_den=inv_den, coefficient=coefficient,
+                    coefficient_product=coefficient_product, p_product=p_product)
 
 
 @njit(cache=True, inline="always")
@@ -184,13 +251,15 @@ def segment_starts(length, head):
 
 
 @njit(cache=True, inline="always")
-def sweep_toward_struck_end(u, row, coefficient, coefficient_product, length, head):
-    """`Q_i = a_i + c_i·Q_{i+1}` for i = n … 1, row `row` of `u` holding `a_i` on entry.
+def sweep_toward_struck_end(u, row, rows, length, head):
+    """`Q_i = a_i + c_i·Q_{i+1}` for i = n … 1, row `row` of `u` holding `a_i` on entry, with the
+    factors `rows` (`ToolRows`) and the segments of `segment_layout`.
 
     Returns `Q_1` and the true Q carried into each segment (`Q_{e+1}`, e its last node). On return
     the row holds the segments' chains, started from 0 (true: chain + `Π c`·carry), and the head's
     true values.
     """
+    coefficient, coefficient_product = rows.coefficient, rows.coefficient_product
     first = 0.0  # Q_{n+1}
     carry_0 = carry_1 = carry_2 = carry_3 = 0.0  # carry_3 stays 0: the last segment ends at row N
     if length > 0:
@@ -213,14 +282,15 @@ def sweep_toward_struck_end(u, row, coefficient, coefficient_product, length, he
     for i in range(head, 0, -1):
         first = u[row, i] + coefficient[i] * first
         u[row, i] = first
-    return first, carry_0, carry_1, carry_2, carry_3
+    return first, (carry_0, carry_1, carry_2, carry_3)
 
 
 @njit(cache=True, inline="always")
-def substitute_toward_working_end(u, row, p, coefficient_product, p_product, length, head, x_0,
-                                  carry_0, carry_1, carry_2, carry_3):
+def substitute_toward_working_end(u, row, rows, length, head, x_0, carries):
     """`u_i = P_i·u_{i−1} + Q_i` for i = 1 … n from `u_0 = x_0`, row `row` of `u` holding what
     `sweep_toward_struck_end` left, with its carries: the true Q are made on the way."""
+    p, coefficient_product, p_product = rows.p, rows.coefficient_product, rows.p_product
+    carry_0, carry_1, carry_2, carry_3 = carries
     prev = x_0
     for i in range(1, head + 1):
         prev = p[i] * prev + u[row, i]
@@ -249,8 +319,9 @@ def substitute_toward_working_end(u, row, p, coefficient_product, p_product, len
 
 
 @njit(cache=True, inline="always")
-def external_force(t, kind, amplitude, omega, start, duration):
-    """`R(t)`: P·sin(ωt), P·|sin(ωt)|, or P on [t1, t1 + Δt]."""
+def external_force(t, force):
+    """`R(t)` of the `ForceLaw`: P·sin(ωt), P·|sin(ωt)|, or P on [t1, t1 + Δt]."""
+    kind, amplitude, omega, start, duration = force
     if kind == FORCE_SINE:
         return amplitude * np.sin(omega * t)
     if kind == FORCE_ABS_SINE:
@@ -262,10 +333,11 @@ def external_force(t, kind, amplitude, omega, start, duration):
 
 
 @njit(cache=True, inline="always")
-def contact_law(delta, c1, alpha, c0):
+def contact_law(delta, contact):
     """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
     separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
     for both, as on a small grid the contact solve is a large part of a step."""
+    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
     if delta >= 0.0:
         force = c1 * delta ** (alpha + 1.0)
         return force, force * delta / (alpha + 2.0)
@@ -273,9 +345,10 @@ def contact_law(delta, c1, alpha, c0):
 
 
 @njit(cache=True, inline="always")
-def contact_spring(delta, c1, alpha, c0):
+def contact_spring(delta, contact):
     """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
     exponents without a power."""
+    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
     if delta >= 0.0:
         if alpha == 0.0:
             return c1 * delta, c1
@@ -288,19 +361,19 @@ def contact_spring(delta, c1, alpha, c0):
 
 
 @njit(cache=True, inline="always")
-def quotient_force(delta, ref, ref_potential, c1, alpha, c0):
+def quotient_force(delta, ref, ref_potential, contact):
     """`(Φ(δ) − Φ_ref)/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref).
 
     `Φ_ref` is Φ(ref) but for the state before impact, where no link acts yet and it is 0.
     """
     diff = delta - ref
     if abs(diff) > 1e-7 * (abs(delta) + abs(ref)):
-        spring, potential = contact_law(delta, c1, alpha, c0)
+        spring, potential = contact_law(delta, contact)
         inverse = 1.0 / diff
         f = (potential - ref_potential) * inverse
         return f, (spring - f) * inverse
     mid = 0.5 * (delta + ref)
-    spring, stiffness = contact_spring(mid, c1, alpha, c0)
+    spring, stiffness = contact_spring(mid, contact)
     return spring, 0.5 * stiffness
 
 
@@ -320,13 +393,13 @@ def bracketed_newton_step(x, g, slope, lo, hi, scale):
 
 
 @njit(cache=True)
-def solve_overlap(free, compliance, ref, ref_potential, guess, c1, alpha, c0, damper):
+def solve_overlap(free, compliance, ref, ref_potential, guess, contact, damper):
     """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
 
     F increases with δ (Φ is convex), so the root is unique and lies between `free` and
     `free − compliance·F(free)`, where `bracketed_newton_step` finds it.
     """
-    f_free = quotient_force(free, ref, ref_potential, c1, alpha, c0)[0] + damper * (free - ref)
+    f_free = quotient_force(free, ref, ref_potential, contact)[0] + damper * (free - ref)
     other = free - compliance * f_free
     lo, hi = min(free, other), max(free, other)
     if lo == hi:
@@ -334,7 +407,7 @@ def solve_overlap(free, compliance, ref, ref_potential, guess, c1, alpha, c0, da
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):
-        f, df = quotient_force(x, ref, ref_potential, c1, alpha, c0)
+        f, df = quotient_force(x, ref, ref_potential, contact)
         g = x + compliance * (f + damper * (x - ref)) - free
         if g == 0.0:
             return x
@@ -365,14 +438,14 @@ def crossing(before_that, before, now):
 
 
 @njit(cache=True, inline="always")
-def node_stress(u, row, i, n, e_over_h, struck_end_stress, working_end_stress):
-    """`σ_i = E·∂u/∂x` (tension +) of the layer in row `row` of `u`: central inside; at the ends
+def node_stress(u, recorded, i, step):
+    """`σ_i = E·∂u/∂x` (tension +) at node i of the `Recorded` layer: central inside; at the ends
     the end force over the area."""
     if i == 0:
-        return struck_end_stress
-    if i == n:
-        return working_end_stress
-    return 0.5 * e_over_h * (u[row, i + 1] - u[row, i - 1])
+        return recorded.struck_end_stress
+    if i == step.n:
+        return recorded.working_end_stress
+    return 0.5 * step.e_over_h * (u[recorded.row, i + 1] - u[recorded.row, i - 1])
 
 
 # --- Ends that integrate their own equations (the explicit scheme at Courant number 1) -----------
@@ -413,11 +486,12 @@ def substeps(rate, span, limit):
 
 
 @njit(cache=True)
-def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
+def solve_spring_balance(target, compliance, guess, contact):
     """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
     `target` and `target − compliance·Φ'(target)`, where `bracketed_newton_step` finds it (on one
     linear branch, directly)."""
-    other = target - compliance * contact_spring(target, c1, alpha, c0)[0]
+    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
+    other = target - compliance * contact_spring(target, contact)[0]
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
         return target
@@ -429,7 +503,7 @@ def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):
-        spring, stiffness = contact_spring(x, c1, alpha, c0)
+        spring, stiffness = contact_spring(x, contact)
         g = x + compliance * spring - target
         if g == 0.0:
             return x
@@ -440,26 +514,29 @@ def solve_spring_balance(target, compliance, guess, c1, alpha, c0):
 
 
 @njit(cache=True, inline="always")
-def struck_end_force(delta, w, v_in, end):
+def struck_end_force(delta, w, v_in, contact):
     """The contact force from the overlap, the striker's velocity and the incoming wave: the
     damper sees `δ' = w − u_0'`, `u_0' = F/Z + 2·v_in`, so `F(1 + b1/Z) = Φ'(δ) + b1·(w − 2·v_in)`."""
-    spring = contact_spring(delta, end.c1, end.alpha, end.c0)[0]
-    return (spring + end.b1 * (w - 2.0 * v_in)) / (1.0 + end.b1 / end.impedance)
+    spring = contact_spring(delta, contact)[0]
+    b1 = contact.damping
+    return (spring + b1 * (w - 2.0 * v_in)) / (1.0 + b1 / contact.impedance)
 
 
 @njit(cache=True, inline="always")
-def struck_end_stage(by, bw, bu, g, r, v_in, guess, end):
-    """One implicit stage `X = B + g·f(X)` of the striker and the struck end, X = (y, w, u_0):
-    `y' = w`, `m1·w' = R − F`, `u_0' = F/Z + 2·v_in`. Everything is linear in F but the spring
-    Φ'(δ), so the stage is one scalar equation in δ = y − u_0. Returns `(y, w, u_0, F, δ)`."""
-    m1, z, b1 = end.mass, end.impedance, end.b1
+def struck_end_stage(base, g, r, v_in, guess, contact):
+    """One implicit stage `X = B + g·f(X)` of the striker and the struck end, X = (y, w, u_0),
+    B = `base`: `y' = w`, `m1·w' = R − F`, `u_0' = F/Z + 2·v_in`. Everything is linear in F but
+    the spring Φ'(δ), so the stage is one scalar equation in δ = y − u_0. Returns
+    `(y, w, u_0, F, δ)`."""
+    by, bw, bu = base
+    m1, z, b1 = contact.striker_mass, contact.impedance, contact.damping
     compliance = g * g / m1 + g / z  # how δ gives way to F within the stage
     denominator = 1.0 + b1 / z + b1 * g / m1
     pushed = b1 * (bw + g * r / m1 - 2.0 * v_in)
     free = by - bu - 2.0 * g * v_in + g * bw + g * g * r / m1  # δ were F = 0
     delta = solve_spring_balance(free - compliance * pushed / denominator, compliance / denominator,
-                                 guess, end.c1, end.alpha, end.c0)
-    force = (contact_spring(delta, end.c1, end.alpha, end.c0)[0] + pushed) / denominator
+                                 guess, contact)
+    force = (contact_spring(delta, contact)[0] + pushed) / denominator
     w = bw + g * (r - force) / m1
     return by + g * w, w, bu + g * (force / z + 2.0 * v_in), force, delta
 
@@ -470,7 +547,7 @@ def force_on_substep(t, t_a, t_b, force):
     substep's midpoint, so that both ends of the substep see its side of a jump."""
     if force.kind == FORCE_PULSE:
         t = 0.5 * (t_a + t_b)
-    return external_force(t, force.kind, force.amplitude, force.omega, force.start, force.duration)
+    return external_force(t, force)
 
 
 @njit(cache=True, inline="always")
@@ -526,15 +603,17 @@ def limited_slope(before, now, after, tau):
 
 
 @njit(cache=True)
-def struck_end_step(t0, tau, state, v_mean, v_slope, end, force, events):
+def struck_end_step(t0, tau, state, v_mean, v_slope, contact, force, events):
     """Advance the striker and the struck end over [t0, t0 + τ] under the incoming wave's rate
     `v_in(t) = v_mean + v_slope·(t − t0 − τ/2)`, split where R jumps or kinks.
 
-    `state` = (y, w, u_0, F) at t0 on entry, at t0 + τ on return. Returns the work of R and what the damper b1 dissipated over the step,
-    the number of changes of sign of δ, each written to `events` (time, striker velocity, +1 into
-    contact or −1 out of it; at most `events.shape[0]`), and the largest and least force at the
-    substeps' ends with their times (a stiff contact's substeps see a peak the layers miss).
+    `state` = (y, w, u_0, F) at t0 on entry, at t0 + τ on return. Returns the work of R and what
+    the damper b1 dissipated over the step, the number of changes of sign of δ, each written to
+    `events` (time, striker velocity, +1 into contact or −1 out of it; at most
+    `events.shape[0]`), and `(largest force, its time, least force, its time)` at the substeps'
+    ends (a stiff contact's substeps see a peak the layers miss).
     """
+    m1, z, b1 = contact.striker_mass, contact.impedance, contact.damping
     gamma = SDIRK_GAMMA
     t_a = t0
     t_end = t0 + tau
@@ -543,7 +622,8 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, end, force, events):
     count = 0
     y, w, u0 = state[0], state[1], state[2]
     v_start = v_mean - 0.5 * tau * v_slope
-    f = struck_end_force(y - u0, w, v_start, end)  # under the wave arriving now: F can jump at t0
+    # under the wave arriving now: F can jump at t0
+    f = struck_end_force(y - u0, w, v_start, contact)
     f_max, t_max, f_min, t_min = f, t0, f, t0
     t_stop = t0
     sub = tau
@@ -552,10 +632,10 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, end, force, events):
             # the next stretch without a break of R, in substeps for the contact's relaxation
             # against the tool (its stiffness at the overlap the stretch may reach)
             t_next = min(t_end, next_break(t_a, force))
-            reach = abs(y - u0) + (t_next - t_a) * abs(w - f / end.impedance - 2.0 * v_mean)
-            stiffness = max(contact_spring(reach, end.c1, end.alpha, end.c0)[1], end.c0)
-            braking = (end.impedance + end.b1) / end.mass
-            count_sub = substeps(stiffness / (end.impedance + end.b1), t_next - t_a,
+            reach = abs(y - u0) + (t_next - t_a) * abs(w - f / z - 2.0 * v_mean)
+            stiffness = max(contact_spring(reach, contact)[1], contact.tension_stiffness)
+            braking = (z + b1) / m1
+            count_sub = substeps(stiffness / (z + b1), t_next - t_a,
                                  min(SDIRK_MONOTONE, STIFF_RISE_STEPS * braking * tau))
             sub = (t_next - t_a) / count_sub
             t_stop = t_next
@@ -566,26 +646,26 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, end, force, events):
         t1 = t_a + g
         r1 = force_on_substep(t1, t_a, t_b, force)
         v1 = v_start + v_slope * (t1 - t0)
-        y1, w1, u1, f1, d1 = struck_end_stage(y, w, u0, g, r1, v1, y - u0, end)
-        ky, kw, ku = w1, (r1 - f1) / end.mass, f1 / end.impedance + 2.0 * v1
+        y1, w1, u1, f1, d1 = struck_end_stage((y, w, u0), g, r1, v1, y - u0, contact)
+        ky, kw, ku = w1, (r1 - f1) / m1, f1 / z + 2.0 * v1
         # stage 2 at t_b: the new state (stiffly accurate)
         r2 = force_on_substep(t_b, t_a, t_b, force)
         v2 = v_start + v_slope * (t_b - t0)
         step = (1.0 - gamma) * span
-        y2, w2, u2, f2, d2 = struck_end_stage(y + step * ky, w + step * kw, u0 + step * ku, g,
-                                              r2, v2, d1, end)
+        y2, w2, u2, f2, d2 = struck_end_stage((y + step * ky, w + step * kw, u0 + step * ku), g,
+                                              r2, v2, d1, contact)
         rate1 = w1 - ku
-        rate2 = w2 - (f2 / end.impedance + 2.0 * v2)
+        rate2 = w2 - (f2 / z + 2.0 * v2)
         work += span * ((1.0 - gamma) * r1 * w1 + gamma * r2 * w2)
-        dissipated += span * end.b1 * ((1.0 - gamma) * rate1 * rate1 + gamma * rate2 * rate2)
+        dissipated += span * b1 * ((1.0 - gamma) * rate1 * rate1 + gamma * rate2 * rate2)
         # a change of sign of δ: where, on the cubic through the ends' values and rates
         delta_a = y - u0
         if (delta_a >= 0.0) != (d2 >= 0.0) and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
-            rate_a = w - (f / end.impedance + 2.0 * (v_start + v_slope * (t_a - t0)))
+            rate_a = w - (f / z + 2.0 * (v_start + v_slope * (t_a - t0)))
             s = hermite_root(delta_a, d2, rate_a, rate2, span)
             events[count, 0] = t_a + s * span
-            events[count, 1] = hermite(w, w2, (r_a - f) / end.mass, (r2 - f2) / end.mass, span, s)
+            events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
             events[count, 2] = 1.0 if d2 >= 0.0 else -1.0
             count += 1
         y, w, u0, f = y2, w2, u2, f2
@@ -595,46 +675,47 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, end, force, events):
         if f < f_min:
             f_min, t_min = f, t_a
     state[0], state[1], state[2], state[3] = y, w, u0, f
-    return work, dissipated, count, f_max, t_max, f_min, t_min
+    return work, dissipated, count, (f_max, t_max, f_min, t_min)
 
 
 @njit(cache=True, inline="always")
-def working_end_step(tau, state, v_mean, v_slope, end):
+def working_end_step(tau, state, v_mean, v_slope, medium):
     """Advance the working end over one step under the incoming wave's rate
     `v_in(t) = v_mean + v_slope·(t − τ/2)` (t from the step's start):
     `u_N' = −F_m/Z + 2·v_in`, `F_m = c2·u_N + b2·u_N'`, linear, so each SDIRK stage is solved
     directly, in substeps for the medium's relaxation `c2/(Z + b2)`. `state` = (u_N, F_m).
-    Returns what the damper b2 dissipated and the largest and least F_m just after the step's
-    start and at the substeps' ends, with their offsets from the step's start."""
+    Returns what the damper b2 dissipated and `(largest F_m, its offset, least F_m, its offset)`
+    just after the step's start and at the substeps' ends, offsets from the step's start."""
+    z, c2, b2 = medium.impedance, medium.stiffness, medium.damping
     gamma = SDIRK_GAMMA
-    z_total = end.impedance + end.b2
-    count = substeps(end.c2 / z_total, tau, SDIRK_MONOTONE)
+    z_total = z + b2
+    count = substeps(c2 / z_total, tau, SDIRK_MONOTONE)
     span = tau / count
     g = gamma * span
     u = state[0]
     v_start = v_mean - 0.5 * tau * v_slope
-    k2 = (2.0 * end.impedance * v_start - end.c2 * u) / z_total
-    f_max = f_min = end.c2 * u + end.b2 * k2  # under the wave arriving now
+    k2 = (2.0 * z * v_start - c2 * u) / z_total
+    f_max = f_min = c2 * u + b2 * k2  # under the wave arriving now
     t_max = t_min = 0.0
     dissipated = 0.0
     for j in range(count):
         t_a = j * span
         v1 = v_start + v_slope * (t_a + g)
-        u1 = (u + g * 2.0 * end.impedance * v1 / z_total) / (1.0 + g * end.c2 / z_total)
-        k1 = (2.0 * end.impedance * v1 - end.c2 * u1) / z_total
+        u1 = (u + g * 2.0 * z * v1 / z_total) / (1.0 + g * c2 / z_total)
+        k1 = (2.0 * z * v1 - c2 * u1) / z_total
         base = u + (1.0 - gamma) * span * k1
         v2 = v_start + v_slope * (t_a + span)
-        u = (base + g * 2.0 * end.impedance * v2 / z_total) / (1.0 + g * end.c2 / z_total)
-        k2 = (2.0 * end.impedance * v2 - end.c2 * u) / z_total
-        dissipated += span * end.b2 * ((1.0 - gamma) * k1 * k1 + gamma * k2 * k2)
-        f = end.c2 * u + end.b2 * k2
+        u = (base + g * 2.0 * z * v2 / z_total) / (1.0 + g * c2 / z_total)
+        k2 = (2.0 * z * v2 - c2 * u) / z_total
+        dissipated += span * b2 * ((1.0 - gamma) * k1 * k1 + gamma * k2 * k2)
+        f = c2 * u + b2 * k2
         if f > f_max:
             f_max, t_max = f, t_a + span
         if f < f_min:
             f_min, t_min = f, t_a + span
     state[0] = u
-    state[1] = end.c2 * u + end.b2 * k2
-    return dissipated, f_max, t_max, f_min, t_min
+    state[1] = c2 * u + b2 * k2
+    return dissipated, (f_max, t_max, f_min, t_min)
 
 
 def _llvm_binary(name):
@@ -723,26 +804,36 @@ def first_node(u, row, half_e_over_h, start, value):
 
 
 @njit(cache=True, inline="always")
-def track_contact(trackers, contacts, t_cross, velocity, into_contact, tau):
+def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
     """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
     contact); the first one to close sets the co-impact time and the rebound velocity."""
-    in_contact = trackers[T_IN_CONTACT] != 0.0
+    extremes, contacts = observed
+    in_contact = ends[S_IN_CONTACT] != 0.0
     if in_contact and not into_contact:
-        k = int(trackers[T_CONTACTS])
+        k = int(extremes[X_CONTACTS])
         if k < contacts.shape[0]:
-            contacts[k, 0] = trackers[T_CONTACT_START]
+            contacts[k, 0] = ends[S_CONTACT_START]
             contacts[k, 1] = t_cross
-        trackers[T_CONTACTS] = k + 1
-        steps = (t_cross - trackers[T_CONTACT_START]) / tau
-        if steps < trackers[T_MIN_CONTACT_STEPS]:
-            trackers[T_MIN_CONTACT_STEPS] = steps
+        extremes[X_CONTACTS] = k + 1
+        steps = (t_cross - ends[S_CONTACT_START]) / tau
+        if steps < extremes[X_MIN_CONTACT_STEPS]:
+            extremes[X_MIN_CONTACT_STEPS] = steps
         if k == 0:
-            trackers[T_CO_IMPACT] = t_cross
-            trackers[T_REBOUND_VELOCITY] = velocity
-        trackers[T_IN_CONTACT] = 0.0
+            extremes[X_CO_IMPACT] = t_cross
+            extremes[X_REBOUND_VELOCITY] = velocity
+        ends[S_IN_CONTACT] = 0.0
     elif not in_contact and into_contact:
-        trackers[T_IN_CONTACT] = 1.0
-        trackers[T_CONTACT_START] = t_cross
+        ends[S_IN_CONTACT] = 1.0
+        ends[S_CONTACT_START] = t_cross
+
+
+@njit(cache=True, inline="always")
+def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
+    """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
+    `Overlaps`: a change of sign placed on the parabola through the last three overlaps."""
+    if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
+        t_cross = t - tau + tau * crossing(overlaps.old if m >= 2 else np.nan, overlaps.cur, delta)
+        track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
 
 
 @njit(cache=True, inline="always")
@@ -761,11 +852,517 @@ def vertex(earliest, before_that, before, now):
 
 
 @njit(cache=True, inline="always")
-def track_end_extreme(trackers, slot, value, x, t):
-    if value > trackers[slot]:
-        trackers[slot] = value
-        trackers[slot + 1] = x
-        trackers[slot + 2] = t
+def track_end_extreme(extremes, slot, value, x, t):
+    if value > extremes[slot]:
+        extremes[slot] = value
+        extremes[slot + 1] = x
+        extremes[slot + 2] = t
+
+
+# --- A step's phases ------------------------------------------------------------------------------
+#
+# `advance` is the loop over layers; each phase of a step is one of the functions below. They are
+# `inline="always"`: Numba puts them into `advance` before typing it, so that they are compiled
+# with its fast-math flags and make the same multiply-adds as had they been written there. (As
+# functions of their own, called, they would have their own flags, and LLVM does not inline them.)
+#
+# Each array an inlined function takes, alone or in a bundle, is a new reference, which Numba
+# counts with atomic instructions (the module's docstring says what they cost); LLVM removes few of
+# those counts where a phase has loops or calls, and with the bundles counted a step of the paper's
+# scheme on 100 cells cost 70% more. `advance` holds its arguments for the whole call, so it hands
+# the phases bundles whose arrays are `uncounted`: the same arrays, without the meminfo that
+# Numba's counting goes through.
+
+
+def _uncounted_value(context, builder, typ, value):
+    if isinstance(typ, types.Array):
+        view = context.make_array(typ)(context, builder, value=value)
+        view.meminfo = cgutils.get_null_value(view.meminfo.type)
+        return view._getvalue()
+    if isinstance(typ, types.BaseTuple):
+        for k, member in enumerate(typ):
+            item = builder.extract_value(value, k)
+            value = builder.insert_value(value, _uncounted_value(context, builder, member, item), k)
+    return value
+
+
+@intrinsic
+def uncounted(typingctx, bundle):
+    """The bundle (or array) with the same arrays, whose references are not counted: for use
+    while something else holds them."""
+    def codegen(context, builder, signature, args):
+        return _uncounted_value(context, builder, bundle, args[0])
+    return bundle(bundle), codegen
+
+
+@njit(cache=True, inline="always")
+def step_constants(tool, rod, weights, contact):
+    """What every step derives from the bundles (`StepConstants`)."""
+    n = len(tool.node_area) - 1
+    h, tau, density = rod.cell_length, rod.time_step, rod.density
+    striker_mass, striker_velocity = contact.striker_mass, contact.striker_velocity
+    inv_tau2 = 1.0 / (tau * tau)
+    e_over_h = rod.youngs_modulus / h
+    lag = 1 if weights.centered and not weights.impedance_ends else 0  # recorded: layer m − lag
+    strain_sigma = weights.new if weights.centered else 0.25  # 0.25: strain energy at the midpoint
+    return StepConstants(
+        n=n,
+        weight_cur=1.0 - weights.new - weights.old,
+        inv_tau2=inv_tau2,
+        m1_tau2=striker_mass * inv_tau2,
+        mass_0=density * h * tool.node_area[0] * inv_tau2,
+        mass_n=density * h * tool.node_area[n] * inv_tau2,
+        boundary=boundary_weights(weights, tau),
+        lag=lag,
+        strain_sigma=strain_sigma,
+        e_over_h=e_over_h,
+        half_e_over_h=0.5 * e_over_h,
+        kinetic_factor=0.5 * density * h * inv_tau2,
+        initial_energy=0.5 * striker_mass * striker_velocity * striker_velocity,
+        segments=segment_layout(n),
+        explicit=weights.new == 0.0 and weights.old == 0.0,
+    )
+
+
+@njit(cache=True, inline="always")
+def start_impact(state, layer, t, tool, rod, weights, contact, step):
+    """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
+    from the first instant); and layer −1 (row 2) one step before. Returns layer 0 as recorded."""
+    u, y, ends, energy = state
+    striker_velocity = contact.striker_velocity
+    for i in range(step.n + 1):
+        u[layer.new, i] = 0.0
+        u[2, i] = 0.0
+    y[layer.new] = 0.0
+    y[2] = -striker_velocity * rod.time_step
+    ends[S_IN_CONTACT] = 1.0
+    ends[S_CONTACT_START] = 0.0
+    # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
+    ends[S_POTENTIAL_BEFORE] = 0.0
+    ends[S_POTENTIAL_BEFORE_THAT] = 0.0
+    if weights.impedance_ends:
+        contact_force = struck_end_force(0.0, striker_velocity, 0.0, contact)
+        ends[S_STRIKER_VELOCITY] = striker_velocity
+        energy[0, E_STRIKER_KINETIC] = step.initial_energy
+    else:
+        contact_force = contact.damping * striker_velocity
+    return Recorded(row=layer.new, time=t, velocity=striker_velocity, contact_force=contact_force,
+                    medium_force=0.0, struck_end_stress=-contact_force / tool.struck_end_area,
+                    working_end_stress=0.0)
+
+
+@njit(cache=True, inline="always")
+def known_layers(u, layer, i, weight_cur, weight_old):
+    """The known layers' combination `v = w_n·u^n + w_{n−1}·u^{n−1}` at nodes i − 1, i, i + 1."""
+    _, cur, old, _ = layer
+    return (weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1],
+            weight_cur * u[cur, i] + weight_old * u[old, i],
+            weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1])
+
+
+@njit(cache=True, inline="always")
+def right_hand_sides(u, layer, tool, rows, rod, weights, step):
+    """Right-hand sides of the tool's rows u_1 … u_{N−1} over their diagonals, into row `new` of
+    `u` (the sweep turns them into the Q_i there). The known layers enter the operator as one
+    combination v (`known_layers`). Each case has a loop of its own: a loop that tests `uniform`
+    at every node, as LLVM leaves it, costs about 4% of a step of the paper's scheme on 2000 cells."""
+    new, cur, old, _ = layer
+    n, r, weight_cur, weight_old = step.n, rod.courant_squared, step.weight_cur, weights.old
+    grid_lower, grid_upper, inv_den = tool.lower, tool.upper, rows.inv_den
+    if step.explicit and tool.uniform:
+        # v = u^n, and the interior rows are uncoupled (den_i = 1, nothing carried)
+        for i in range(1, n):
+            u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                         + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
+    elif step.explicit:
+        for i in range(1, n):
+            u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                         + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
+                                + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
+    elif tool.uniform:
+        for i in range(1, n):
+            v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
+            lap = v_left - 2.0 * v_mid + v_right
+            u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
+    else:
+        for i in range(1, n):
+            v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
+            lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
+            u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
+
+
+NO_CARRIES = (0.0, 0.0, 0.0, 0.0)
+
+
+@njit(cache=True, inline="always")
+def sweep(u, layer, rows, step):
+    """The sweep toward the struck end: `(Q_1, carries)`, Q_1 the tool's link to the struck end
+    `u_1 = P_1·u_0 + Q_1` (`sweep_toward_struck_end`). The explicit scheme's rows are uncoupled:
+    Q_1 is row 1's own right-hand side and nothing is carried."""
+    if step.explicit:
+        return u[layer.new, 1], NO_CARRIES
+    length, head = step.segments
+    return sweep_toward_struck_end(u, layer.new, rows, length, head)
+
+
+@njit(cache=True, inline="always")
+def back_substitute(u, layer, u_0, carries, rows, step):
+    """The substitution toward the working end from the new `u_0`: the new layer in row `new`."""
+    if step.explicit:
+        n = step.n
+        # P_i = 0 but at a massless working end
+        u[layer.new, n] = rows.p[n] * u[layer.new, n - 1] + u[layer.new, n]
+    else:
+        length, head = step.segments
+        substitute_toward_working_end(u, layer.new, rows, length, head, u_0, carries)
+
+
+# --- The ends in a step ---------------------------------------------------------------------------
+#
+# What the tool touches enters a step only here (the module's docstring says how).
+
+
+@njit(cache=True, inline="always")
+def working_end_diagonal(tool, rod, weights, medium):
+    """The diagonal of the working end's row u_N: `M_N/τ² + θ·k_N + θ_s·c2 + b2·d`, the end node's
+    mass, the end cell's stiffness and the medium's spring and damper, weighted as the scheme
+    weights them (`boundary_weights`). It is factored with the tool's rows (`factor_tool_rows`)."""
+    end_weight, spring_weight, damper_factor, _ = boundary_weights(weights, rod.time_step)
+    tau, n = rod.time_step, len(tool.node_area) - 1
+    mass_n = rod.density * rod.cell_length * tool.node_area[n] / (tau * tau)
+    return (mass_n + end_weight * rod.working_end_stiffness + spring_weight * medium.stiffness
+            + medium.damping * damper_factor)
+
+
+@njit(cache=True, inline="always")
+def working_end_row(u, layer, rows, rod, weights, medium, step):
+    """The right-hand side of the working end's row u_N over its diagonal, into row `new` of `u`
+    (where the sweep starts from it): the end node's inertia, the medium's spring and damper on the
+    reference layer, and with end masses the end cell's share of the known layers."""
+    new, cur, old, ref = layer
+    n, weight_cur, weight_old = step.n, step.weight_cur, weights.old
+    spring_weight, damper_factor = step.boundary.spring_weight, step.boundary.damper_factor
+    v_right = weight_cur * u[cur, n] + weight_old * u[old, n]
+    v_mid = weight_cur * u[cur, n - 1] + weight_old * u[old, n - 1]
+    rhs = (step.mass_n * (2.0 * u[cur, n] - u[old, n])
+           - medium.stiffness * (1.0 - spring_weight) * u[ref, n]
+           + medium.damping * damper_factor * u[ref, n])
+    if weights.end_masses:
+        rhs -= rod.working_end_stiffness * (v_right - v_mid)
+    u[new, n] = rhs * rows.inv_den[n]
+
+
+@njit(cache=True, inline="always")
+def working_end_force(u, layer, medium, step):
+    """The medium's force on the new layer, `c2·u_N + b2·u_N'` as the scheme weights them."""
+    new, _, _, ref = layer
+    n = step.n
+    _, spring_weight, damper_factor, _ = step.boundary
+    return (medium.stiffness * (spring_weight * u[new, n] + (1.0 - spring_weight) * u[ref, n])
+            + medium.damping * damper_factor * (u[new, n] - u[ref, n]))
+
+
+@njit(cache=True, inline="always")
+def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, step):
+    """The striker row (11) and the struck end's row (9) of the step, solved with the contact.
+
+    The struck end sees the tool only through its link `u_1 = P_1·u_0 + Q_1` (`link` = (P_1, Q_1),
+    from the sweep). With it the rows are `a_y·y = b_y − F` and `a_0·u_0 = b_0 + F`, F the contact
+    force: a scalar equation in the new overlap δ (`solve_overlap`), from the layers' `Overlaps`;
+    R(t_n) = `r_n` is explicit in row (11). Returns `(y, u_0, F)` of the new layer, F the force the
+    scheme applies in the step (centred on layer n, or on the new layer for the paper's).
+    """
+    u, y, ends, _ = state
+    _, cur, old, _ = layer
+    delta_cur, delta_old, delta_ref = overlaps.cur, overlaps.old, overlaps.ref
+    p_1, q_1 = link
+    k_0, weight_cur, weight_old = rod.struck_end_stiffness, step.weight_cur, weights.old
+    end_weight, _, damper_factor, back = step.boundary
+    b1 = contact.damping
+    a_y = step.m1_tau2
+    b_y = step.m1_tau2 * (2.0 * y[cur] - y[old]) + r_n
+    a_0 = step.mass_0 + end_weight * k_0 * (1.0 - p_1)
+    b_0 = step.mass_0 * (2.0 * u[cur, 0] - u[old, 0]) + end_weight * k_0 * q_1
+    if weights.end_masses:
+        b_0 += k_0 * ((weight_cur * u[cur, 1] + weight_old * u[old, 1])
+                      - (weight_cur * u[cur, 0] + weight_old * u[old, 0]))
+    delta_free = b_y / a_y - b_0 / a_0
+    compliance = 1.0 / a_y + 1.0 / a_0
+    # Φ of the reference layer, as computed when it was new (0 for the state before impact)
+    ref_potential = ends[S_POTENTIAL_BEFORE if back == 1 else S_POTENTIAL_BEFORE_THAT]
+    delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
+                          2.0 * delta_cur - delta_old, contact, b1 * damper_factor)
+    contact_force = (quotient_force(delta, delta_ref, ref_potential, contact)[0]
+                     + b1 * damper_factor * (delta - delta_ref))
+    return (b_y - contact_force) / a_y, (b_0 + contact_force) / a_0, contact_force
+
+
+@njit(cache=True, inline="always")
+def integrate_ends(state, observed, layer, t, tool, rod, contact, medium, force, scratch, step):
+    """The ends that integrate their own equations, over the step to `t`: the waves arriving at
+    them, then the striker and the struck end (`struck_end_step`) and the working end
+    (`working_end_step`), with the contacts and the end forces' extremes their substeps see. Returns
+    whether the new ends are finite (they are written to the new layer only then), the striker's
+    velocity, the contact and medium forces, and `(work of R, dissipated by b1, by b2)` over the
+    step. `scratch`: room for the struck end's and the working end's states and the events."""
+    u, y, ends, _ = state
+    new, cur, _, _ = layer
+    n, tau = step.n, rod.time_step
+    end_state, far_state, events = scratch
+    v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, S_INCOMING, tau)
+    v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, S_FAR_INCOMING, tau)
+    end_state[0] = y[cur]
+    end_state[1] = ends[S_STRIKER_VELOCITY]
+    end_state[2] = u[cur, 0]
+    end_state[3] = ends[S_FORCE_BEFORE]
+    work, dissipated, crossings, struck_range = struck_end_step(
+        t - tau, tau, end_state, v_in, v_slope, contact, force, events)
+    far_state[0] = u[cur, n]
+    far_state[1] = ends[S_MEDIUM_FORCE]
+    dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
+    track_ends_between_layers(observed.extremes, struck_range, working_range, t, tool, rod, step)
+    flows = (work, dissipated, dissipated_far)
+    if not (abs(end_state[0]) < 1e300 and abs(end_state[2]) < 1e300
+            and abs(far_state[0]) < 1e300):
+        return False, 0.0, 0.0, 0.0, flows
+    y[new] = end_state[0]
+    velocity = end_state[1]
+    u[new, 0] = end_state[2]
+    u[new, n] = far_state[0]
+    ends[S_STRIKER_VELOCITY] = velocity
+    for k in range(crossings):
+        track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
+    return True, velocity, end_state[3], far_state[1], flows
+
+
+@njit(cache=True, inline="always")
+def incoming_wave(u, layer, inner, edge, ends, slot, tau):
+    """For the ends that integrate their own equations: the mean rate over this step of the wave
+    arriving at the end node `edge` (its neighbour `inner`) and its slope within the step. Its
+    displacement `G_m = u_inner^{m−1} − u_edge^{m−2} + G_{m−2}`: G_{m−1}, G_{m−2} are carried in
+    `ends[slot]`, `ends[slot + 1]`; G_m, G_{m+1} come from the layers."""
+    new, cur, old, _ = layer
+    g_before, g_last = ends[slot + 1], ends[slot]
+    g_now = u[cur, inner] - u[old, edge] + g_before
+    g_next = u[new, inner] - u[cur, edge] + g_last
+    rate = (g_now - g_last) / tau
+    slope = limited_slope((g_last - g_before) / tau, rate, (g_next - g_now) / tau, tau)
+    ends[slot + 1], ends[slot] = g_last, g_now
+    return rate, slope
+
+
+# --- Energy audit, extremes, recording ------------------------------------------------------------
+
+
+@njit(cache=True, inline="always")
+def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod,
+                        step):
+    """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
+    dissipates), into `energy[0]`; returns the balance (stored + dissipated − input: > 0 is energy
+    created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
+    the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
+    `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
+    u, y, ends, energy = state
+    new, cur, old, ref = layer
+    delta = y[new] - u[new, 0]
+    n, tau = step.n, rod.time_step
+    _, spring_weight, damper_factor, _ = step.boundary
+    dy = y[new] - y[cur]
+    striker_kinetic = 0.5 * contact.striker_mass * dy * dy * step.inv_tau2
+    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
+        u, new, cur, rec, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
+    tool_kinetic *= step.kinetic_factor
+    tool_strain *= 0.5 * step.e_over_h
+    contact_pot = spring_weight * potential + (1.0 - spring_weight) * ends[S_POTENTIAL_BEFORE]
+    medium_pot = 0.5 * medium.stiffness * (spring_weight * u[new, n] * u[new, n]
+                                           + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
+    energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y[new] - y[old])
+    rate = damper_factor * (delta - overlaps.ref)
+    energy[0, E_DISSIPATED_CONTACT] += contact.damping * rate * rate * tau
+    rate = damper_factor * (u[new, n] - u[ref, n])
+    energy[0, E_DISSIPATED_MEDIUM] += medium.damping * rate * rate * tau
+    energy[0, E_STRIKER_KINETIC] = striker_kinetic
+    energy[0, E_TOOL_KINETIC] = tool_kinetic
+    energy[0, E_TOOL_STRAIN] = tool_strain
+    energy[0, E_CONTACT_POTENTIAL] = contact_pot
+    energy[0, E_MEDIUM_POTENTIAL] = medium_pot
+    balance = (striker_kinetic + tool_kinetic + tool_strain + contact_pot + medium_pot
+               + energy[0, E_DISSIPATED_CONTACT] + energy[0, E_DISSIPATED_MEDIUM]
+               - step.initial_energy - energy[0, E_EXTERNAL_WORK])
+    return balance, (low, low_block, high, high_block)
+
+
+@njit(cache=True, inline="always")
+def audit_impedance_energy(state, layer, flows, velocity, contact, medium, tool, step):
+    """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
+    at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
+    tool's at m − ½ (the form the explicit scheme conserves); the balance compares them at m − ½."""
+    u, y, _, energy = state
+    new, cur, _, _ = layer
+    n = step.n
+    work, dissipated, dissipated_far = flows
+    delta = y[new] - u[new, 0]
+    potential = contact_law(delta, contact)[1]
+    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
+        u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
+    energy[0, E_EXTERNAL_WORK] += work
+    energy[0, E_DISSIPATED_CONTACT] += dissipated
+    energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
+    energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
+    energy[0, E_TOOL_KINETIC] = tool_kinetic * step.kinetic_factor
+    energy[0, E_TOOL_STRAIN] = tool_strain * 0.5 * step.e_over_h
+    energy[0, E_CONTACT_POTENTIAL] = potential
+    energy[0, E_MEDIUM_POTENTIAL] = 0.5 * medium.stiffness * u[new, n] * u[new, n]
+    balance = energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
+    for slot in (E_STRIKER_KINETIC, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL,
+                 E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM):
+        balance += 0.5 * (energy[0, slot] + energy[1, slot])
+    balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
+    return balance, (low, low_block, high, high_block)
+
+
+@njit(cache=True, inline="always")
+def track_energy_excess(extremes, balance):
+    """Whether the energy balance is finite; the largest energy the scheme created so far."""
+    if not abs(balance) < 1e300:
+        return False
+    if balance > extremes[X_ENERGY_EXCESS]:
+        extremes[X_ENERGY_EXCESS] = balance
+    return True
+
+
+@njit(cache=True, inline="always")
+def track_ends_between_layers(extremes, struck_range, working_range, t, tool, rod, step):
+    """The end forces' extremes within the step, as the ends' substeps saw them: `struck_range`
+    (largest contact force, its time, least, its time) and `working_range` (the medium force's,
+    with their offsets from the step's start)."""
+    f_max, t_max, f_min, t_min = struck_range
+    g_max, tg_max, g_min, tg_min = working_range
+    n, h, tau = step.n, rod.cell_length, rod.time_step
+    end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
+    if f_max > extremes[X_PEAK_FORCE]:
+        extremes[X_PEAK_FORCE] = f_max
+        extremes[X_PEAK_FORCE_TIME] = t_max
+    track_end_extreme(extremes, X_MAX_COMPRESSION, f_max / end_area_0, 0.0, t_max)
+    track_end_extreme(extremes, X_MAX_TENSION, -f_min / end_area_0, 0.0, t_min)
+    track_end_extreme(extremes, X_MAX_COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
+    track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
+
+
+@njit(cache=True, inline="always")
+def track_stress_extremes(extremes, u, recorded, interior, rod, step):
+    """The recorded layer's extreme stresses along the tool (`interior`: its interior nodes' least
+    and greatest stress with their blocks, `tool_energy_and_stresses`) against the records.
+
+    Not refined between nodes: next to a kink (a reflected front meeting the peak) a parabola
+    through three nodes overshoots by O(h), where the nodes' own error is O(h²)."""
+    low, low_block, high, high_block = interior
+    s0, sn = recorded.struck_end_stress, recorded.working_end_stress
+    s_low, s_high = min(s0, low, sn), max(s0, high, sn)
+    for peak, value, inside, block, slot in (
+            (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
+            (s_high, s_high, high, high_block, X_MAX_TENSION)):
+        if peak > extremes[slot]:
+            # Where, only for a new record (most layers set none): the first node of that
+            # stress, from the struck end.
+            if value == s0:
+                node = 0
+            elif value == inside:
+                node = first_node(u, recorded.row, step.half_e_over_h, block, value)
+            else:
+                node = step.n
+            extremes[slot] = peak
+            extremes[slot + 1] = node * rod.cell_length
+            extremes[slot + 2] = recorded.time
+
+
+@njit(cache=True, inline="always")
+def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step):
+    """The peak contact force and the end stresses' extremes between layers, from the recorded
+    layer's end forces and those of the three layers before it (carried in `ends`)."""
+    contact_force, medium_force = recorded.contact_force, recorded.medium_force
+    t_rec, n, h, tau = recorded.time, step.n, rod.cell_length, rod.time_step
+    end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
+    if contact_force > extremes[X_PEAK_FORCE]:
+        extremes[X_PEAK_FORCE] = contact_force
+        extremes[X_PEAK_FORCE_TIME] = t_rec
+    # Extremes of the end forces between layers: the vertex of the parabola through the last
+    # three, so that their error is the scheme's, not the sampling's.
+    f1, f2, f3 = ends[S_FORCE_BEFORE], ends[S_FORCE_BEFORE_THAT], ends[S_FORCE_EARLIER]
+    g1, g2, g3 = ends[S_MEDIUM_FORCE], ends[S_MEDIUM_FORCE_BEFORE], ends[S_MEDIUM_FORCE_EARLIER]
+    if m_rec >= 3:
+        top, offset = vertex(f3, f2, f1, contact_force)
+        when = t_rec - tau + offset * tau
+        if top > extremes[X_PEAK_FORCE]:
+            extremes[X_PEAK_FORCE] = top
+            extremes[X_PEAK_FORCE_TIME] = when
+        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_0, 0.0, when)
+        top, offset = vertex(-f3, -f2, -f1, -contact_force)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0,
+                          t_rec - tau + offset * tau)
+        top, offset = vertex(g3, g2, g1, medium_force)
+        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h,
+                          t_rec - tau + offset * tau)
+        top, offset = vertex(-g3, -g2, -g1, -medium_force)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h,
+                          t_rec - tau + offset * tau)
+    ends[S_FORCE_EARLIER] = f2
+    ends[S_FORCE_BEFORE_THAT] = f1
+    ends[S_FORCE_BEFORE] = contact_force
+    ends[S_MEDIUM_FORCE_EARLIER] = g2
+    ends[S_MEDIUM_FORCE_BEFORE] = g1
+    ends[S_MEDIUM_FORCE] = medium_force
+
+
+@njit(cache=True, inline="always")
+def record_history(recorders, column, state, recorded, m_rec, force, step):
+    """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
+    them; none yet for layer 0, whose energy is all the striker's)."""
+    history = recorders.history
+    u, y, _, energy = state
+    rec, t_rec = recorded.row, recorded.time
+    history[H_TIME, column] = t_rec
+    history[H_STRIKER_DISP, column] = y[rec]
+    history[H_STRIKER_VEL, column] = recorded.velocity
+    history[H_STRUCK_END, column] = u[rec, 0]
+    history[H_WORKING_END, column] = u[rec, step.n]
+    history[H_CONTACT_FORCE, column] = recorded.contact_force
+    history[H_OVERLAP, column] = y[rec] - u[rec, 0]
+    history[H_MEDIUM_FORCE, column] = recorded.medium_force
+    history[H_EXTERNAL_FORCE, column] = external_force(t_rec, force)
+    history[H_EXTERNAL_WORK, column] = energy[0, E_EXTERNAL_WORK]
+    history[H_DISSIPATED_CONTACT, column] = energy[0, E_DISSIPATED_CONTACT]
+    history[H_DISSIPATED_MEDIUM, column] = energy[0, E_DISSIPATED_MEDIUM]
+    if m_rec == 0:
+        history[H_STRIKER_KINETIC, column] = step.initial_energy
+        for c in range(H_TOOL_KINETIC, HISTORY_COLUMNS):
+            history[c, column] = 0.0
+    else:
+        history[H_STRIKER_KINETIC, column] = energy[0, E_STRIKER_KINETIC]
+        history[H_TOOL_KINETIC, column] = energy[0, E_TOOL_KINETIC]
+        history[H_TOOL_STRAIN, column] = energy[0, E_TOOL_STRAIN]
+        history[H_CONTACT_POTENTIAL, column] = energy[0, E_CONTACT_POTENTIAL]
+        history[H_MEDIUM_POTENTIAL, column] = energy[0, E_MEDIUM_POTENTIAL]
+
+
+@njit(cache=True, inline="always")
+def record_probes(recorders, row, u, recorded, step):
+    """The stress at each probe into `row` of `probes`: linear between its two nodes."""
+    for k in range(len(recorders.probe_node)):
+        j = recorders.probe_node[k]
+        w = recorders.probe_weight[k]
+        s = (1.0 - w) * node_stress(u, recorded, j, step)
+        if w > 0.0:
+            s += w * node_stress(u, recorded, j + 1, step)
+        recorders.probes[row, k] = s
+
+
+@njit(cache=True, inline="always")
+def record_fields(recorders, row, u, recorded, step):
+    """The displacement and the stress along the tool into `row` of the fields."""
+    for i in range(step.n + 1):
+        recorders.field_u[row, i] = u[recorded.row, i]
+        recorders.field_stress[row, i] = node_stress(u, recorded, i, step)
 
 
 # `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
@@ -773,389 +1370,119 @@ def track_end_extreme(trackers, slot, value, x, t):
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
 @njit(cache=True, fastmath={"contract"})
-def advance(
-    first, last,
-    u, y, grid_lower, grid_upper, node_area, area_mid, uniform,
-    p, inv_den, coefficient, coefficient_product, p_product,
-    h, tau, r, youngs_modulus, density, end_stiffness_0, end_stiffness_n, end_area_0, end_area_n,
-    weight_new, weight_old, centered, end_masses, impedance_ends,
-    struck, working, force,
-    trackers, energy, contacts,
-    history, history_stride, probe_node, probe_weight, probes,
-    field_u, field_stress, field_stride,
-):
+def advance(first, last, tool, rows, rod, weights, contact, medium, force, state, observed,
+            recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
-    The interior operator weights layers n+1, n, n−1 by `weight_new`, `1 − weight_new −
-    weight_old`, `weight_old`. `centered` centres the boundary terms on layer n (springs
+    The `Tool` with its rows factored (`ToolRows`), the `Rod`'s constants and the scheme's
+    `Weights`; the ends: the `Contact` (the striker at the struck end) and the `Medium` (at the
+    working end), and R(t) on the striker (`ForceLaw`). The `State` carries the layers from call to
+    call, the `Observed` extremes and contacts accumulate, and the `Recorders` take the layers
+    this call records, from the first of each buffer.
+
+    The interior operator weights layers n+1, n, n−1 by `weights.new`, `1 − new − old`,
+    `weights.old`. `weights.centered` centres the boundary terms on layer n (springs
     `(z^{n+1} + z^{n−1})/2`, dampers `(z^{n+1} − z^{n−1})/(2τ)`, the contact quotient between
     δ^{n+1} and δ^{n−1}); otherwise they are the paper's (new layer, `(z^{n+1} − z^n)/τ`).
-    `end_masses` gives the end rows the interior's weights (they then carry their half-cell mass
-    `node_area·ρh`); massless ends are quasi-static, all on the new layer. `impedance_ends` (the
-    explicit scheme at Courant number 1 only) integrates each end's own equations instead (see
-    `struck_end_step`).
-
-    `struck` (StruckEnd), `working` (WorkingEnd) and `force` (ForceLaw) are the end conditions.
+    `weights.end_masses` gives the end rows the interior's weights (they then carry their half-cell
+    mass `node_area·ρh`); massless ends are quasi-static, all on the new layer.
+    `weights.impedance_ends` (the explicit scheme at Courant number 1 only) integrates each end's
+    own equations instead (`integrate_ends`).
 
     What is recorded of a layer is what the scheme applies there: the centred schemes' boundary
     forces are centred on layer n, so a layer is recorded one step after it is computed (the
     caller runs one layer more); the paper's act on the new layer, the ends that integrate their
     own equations have their forces at every instant.
 
-    Writes every `history_stride`-th recorded layer to `history` (a column each) and `probes` (a
-    row each) and every `field_stride`-th to `field_u`/`field_stress` (strides ≤ 0 keep nothing),
-    from the first of each buffer. `energy[0]` holds the energy terms of the last layer,
-    `energy[1]` those of the one before. Returns `(status, layers of history written, rows of
-    fields written)`; on a non-finite value it stops with `STATUS_NON_FINITE` and the time in
-    `trackers[T_FAILED_TIME]`.
+    Returns `(status, layers of history written, rows of fields written)`; on a non-finite value
+    it stops with `STATUS_NON_FINITE` and the time in `extremes[X_FAILED_TIME]`.
     """
-    n = len(node_area) - 1
-    striker_mass, striker_velocity = struck.mass, struck.velocity
-    c1, alpha, c0, b1 = struck.c1, struck.alpha, struck.c0, struck.b1
-    c2, b2 = working.c2, working.b2
-    weight_cur = 1.0 - weight_new - weight_old
-    inv_tau2 = 1.0 / (tau * tau)
-    m1_tau2 = striker_mass * inv_tau2
-    mass_0 = density * h * node_area[0] * inv_tau2
-    mass_n = density * h * node_area[n] * inv_tau2
-    end_weight, spring_weight, damper_factor, back = boundary_weights(
-        weight_new, centered, end_masses, tau)
-    lag = 1 if centered and not impedance_ends else 0  # the recorded layer is m − lag
-    strain_sigma = weight_new if centered else 0.25  # 0.25: strain energy at the midpoint
-    e_over_h = youngs_modulus / h
-    half_e_over_h = 0.5 * e_over_h
-    kinetic_factor = 0.5 * density * h * inv_tau2
-    initial_energy = 0.5 * striker_mass * striker_velocity * striker_velocity
-    length, head = segment_layout(n)
-    explicit = weight_new == 0.0 and weight_old == 0.0
-    end_state = np.empty(4)
-    far_state = np.empty(2)
-    events = np.empty((4, 3))
+    tool, rows, state, observed, recorders = uncounted((tool, rows, state, observed, recorders))
+    step = step_constants(tool, rod, weights, contact)
+    u, y, ends, energy = state
+    extremes = observed.extremes
+    tau = rod.time_step
+    # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
+    # step `uncounted`: `scratch` holds them through the loop
+    scratch = (np.empty(4), np.empty(2), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 
     for m in range(first, last + 1):
-        new = m % 3
-        cur = (m - 1) % 3
-        old = (m - 2) % 3
+        layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3,
+                       ref=(m - step.boundary.back) % 3)
+        new, cur, old, ref = layer
         t = m * tau
         if m == 0:
-            # (5), (6): tool at rest, striker at 0 moving at W1; layer −1 one step before.
-            for i in range(n + 1):
-                u[new, i] = 0.0
-                u[2, i] = 0.0
-            y[new] = 0.0
-            y[2] = -striker_velocity * tau
-            velocity = striker_velocity
-            medium_force = 0.0
-            trackers[T_IN_CONTACT] = 1.0  # δ(0) = 0: contact from the first instant
-            trackers[T_CONTACT_START] = 0.0
-            # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
-            trackers[T_POTENTIAL_BEFORE] = 0.0
-            trackers[T_POTENTIAL_BEFORE_THAT] = 0.0
-            if impedance_ends:
-                contact_force = struck_end_force(0.0, striker_velocity, 0.0, struck)
-                trackers[T_STRIKER_VELOCITY] = striker_velocity
-                energy[0, E_STRIKER_KINETIC] = initial_energy
-            else:
-                contact_force = b1 * striker_velocity
-            rec, t_rec = new, t
-            s0 = -contact_force / end_area_0
-            sn = 0.0
-            low, high = np.inf, -np.inf
-            low_block = high_block = 0
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, step)
+            interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
         else:
-            for k in range(ENERGY_SLOTS):
-                energy[1, k] = energy[0, k]
-            # Right-hand sides of rows u_N … u_1 over their diagonals, eliminated toward the struck
-            # end. The explicit layers enter the operator as one combination
-            # v = w_n·u^n + w_{n−1}·u^{n−1}.
-            if not impedance_ends:
-                ref = (m - back) % 3
-                v_right = weight_cur * u[cur, n] + weight_old * u[old, n]
-                v_mid = weight_cur * u[cur, n - 1] + weight_old * u[old, n - 1]
-                rhs = (mass_n * (2.0 * u[cur, n] - u[old, n]) - c2 * (1.0 - spring_weight) * u[ref, n]
-                       + b2 * damper_factor * u[ref, n])
-                if end_masses:
-                    rhs -= end_stiffness_n * (v_right - v_mid)
-                u[new, n] = rhs * inv_den[n]  # Q_i is kept in row `new` until the substitution
-            if explicit and uniform:
-                # v = u^n, and the interior rows are uncoupled (den_i = 1, nothing carried)
-                for i in range(1, n):
-                    u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                                 + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
-            elif explicit:
-                for i in range(1, n):
-                    u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                                 + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
-                                        + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
-            else:
-                for i in range(1, n):
-                    v_left = weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1]
-                    v_mid = weight_cur * u[cur, i] + weight_old * u[old, i]
-                    v_right = weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1]
-                    if uniform:
-                        lap = v_left - 2.0 * v_mid + v_right
-                    else:
-                        lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
-                    u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
+            for slot in range(ENERGY_SLOTS):
+                energy[1, slot] = energy[0, slot]
+            # Right-hand sides of rows u_N … u_1 over their diagonals; Q_i is kept in row `new`
+            # until the substitution.
+            if not weights.impedance_ends:
+                working_end_row(u, layer, rows, rod, weights, medium, step)
+            right_hand_sides(u, layer, tool, rows, rod, weights, step)
 
-            if impedance_ends:
-                # The waves arriving at the ends over this step, then each end's equations.
-                # G_{m−2}, G_{m−1} carried; G_m, G_{m+1} from the layers
-                g_before, g_last = trackers[T_INCOMING_BEFORE], trackers[T_INCOMING]
-                g_now = u[cur, 1] - u[old, 0] + g_before
-                g_next = u[new, 1] - u[cur, 0] + g_last
-                v_in = (g_now - g_last) / tau
-                v_slope = limited_slope((g_last - g_before) / tau, v_in, (g_next - g_now) / tau, tau)
-                trackers[T_INCOMING_BEFORE], trackers[T_INCOMING] = g_last, g_now
-                h_before, h_last = trackers[T_FAR_INCOMING_BEFORE], trackers[T_FAR_INCOMING]
-                h_now = u[cur, n - 1] - u[old, n] + h_before
-                h_next = u[new, n - 1] - u[cur, n] + h_last
-                v_far = (h_now - h_last) / tau
-                far_slope = limited_slope((h_last - h_before) / tau, v_far, (h_next - h_now) / tau, tau)
-                trackers[T_FAR_INCOMING_BEFORE], trackers[T_FAR_INCOMING] = h_last, h_now
-
-                end_state[0] = y[cur]
-                end_state[1] = trackers[T_STRIKER_VELOCITY]
-                end_state[2] = u[cur, 0]
-                end_state[3] = trackers[T_FORCE_BEFORE]
-                work, dissipated, crossings, f_max, t_max, f_min, t_min = struck_end_step(
-                    t - tau, tau, end_state, v_in, v_slope, struck, force, events)
-                far_state[0] = u[cur, n]
-                far_state[1] = trackers[T_MEDIUM_FORCE]
-                dissipated_far, g_max, tg_max, g_min, tg_min = working_end_step(
-                    tau, far_state, v_far, far_slope, working)
-                # the ends' extremes between layers, as their substeps saw them
-                if f_max > trackers[T_PEAK_FORCE]:
-                    trackers[T_PEAK_FORCE] = f_max
-                    trackers[T_PEAK_FORCE_TIME] = t_max
-                track_end_extreme(trackers, T_MAX_COMPRESSION, f_max / end_area_0, 0.0, t_max)
-                track_end_extreme(trackers, T_MAX_TENSION, -f_min / end_area_0, 0.0, t_min)
-                track_end_extreme(trackers, T_MAX_COMPRESSION, g_max / end_area_n, n * h,
-                                  t - tau + tg_max)
-                track_end_extreme(trackers, T_MAX_TENSION, -g_min / end_area_n, n * h,
-                                  t - tau + tg_min)
-                if not (abs(end_state[0]) < 1e300 and abs(end_state[2]) < 1e300
-                        and abs(far_state[0]) < 1e300):
-                    trackers[T_FAILED_TIME] = t
+            if weights.impedance_ends:
+                finite, velocity, contact_force, medium_force, flows = integrate_ends(
+                    state, observed, layer, t, tool, rod, contact, medium, force,
+                    uncounted(scratch), step)
+                if not finite:
+                    extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
-                y[new] = end_state[0]
-                velocity = end_state[1]
-                u[new, 0] = end_state[2]
-                contact_force = end_state[3]
-                u[new, n] = far_state[0]
-                medium_force = far_state[1]
-                trackers[T_STRIKER_VELOCITY] = velocity
-                for k in range(crossings):
-                    track_contact(trackers, contacts, events[k, 0], events[k, 1],
-                                  events[k, 2] > 0.0, tau)
                 rec, t_rec = new, t
-
-                # Energy: the ends' terms at layer m, the tool's at m − ½ (the form the explicit
-                # scheme conserves); the audit compares them at m − ½.
-                delta = y[new] - u[new, 0]
-                potential = contact_law(delta, c1, alpha, c0)[1]
-                tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-                    u, new, cur, rec, node_area, area_mid, strain_sigma, half_e_over_h)
-                energy[0, E_EXTERNAL_WORK] += work
-                energy[0, E_DISSIPATED_CONTACT] += dissipated
-                energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
-                energy[0, E_STRIKER_KINETIC] = 0.5 * striker_mass * velocity * velocity
-                energy[0, E_TOOL_KINETIC] = tool_kinetic * kinetic_factor
-                energy[0, E_TOOL_STRAIN] = tool_strain * 0.5 * e_over_h
-                energy[0, E_CONTACT_POTENTIAL] = potential
-                energy[0, E_MEDIUM_POTENTIAL] = 0.5 * c2 * u[new, n] * u[new, n]
-                balance = energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - initial_energy
-                for k in (E_STRIKER_KINETIC, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL,
-                          E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM):
-                    balance += 0.5 * (energy[0, k] + energy[1, k])
-                balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
+                balance, interior = audit_impedance_energy(
+                    state, layer, flows, velocity, contact, medium, tool, step)
             else:
-                y_cur = y[cur]
-                delta_cur = y_cur - u[cur, 0]
-                delta_old = y[old] - u[old, 0]
-                delta_ref = y[ref] - u[ref, 0]
-                r_n = external_force((m - 1) * tau, force.kind, force.amplitude, force.omega,
-                                     force.start, force.duration)  # R(t_n), explicit in row (11)
-                if explicit:
-                    q_1, carry_0, carry_1, carry_2, carry_3 = u[new, 1], 0.0, 0.0, 0.0, 0.0
-                else:
-                    q_1, carry_0, carry_1, carry_2, carry_3 = sweep_toward_struck_end(
-                        u, new, coefficient, coefficient_product, length, head)
-                # Striker row (11) and struck-end row (9) with u_1 = P_1·u_0 + Q_1:
-                # a_y·y = b_y − F and a_0·u_0 = b_0 + F, F the contact force, a scalar equation in δ.
-                a_y = m1_tau2
-                b_y = m1_tau2 * (2.0 * y_cur - y[old]) + r_n
-                a_0 = mass_0 + end_weight * end_stiffness_0 * (1.0 - p[1])
-                b_0 = mass_0 * (2.0 * u[cur, 0] - u[old, 0]) + end_weight * end_stiffness_0 * q_1
-                if end_masses:
-                    b_0 += end_stiffness_0 * ((weight_cur * u[cur, 1] + weight_old * u[old, 1])
-                                              - (weight_cur * u[cur, 0] + weight_old * u[old, 0]))
-                delta_free = b_y / a_y - b_0 / a_0
-                compliance = 1.0 / a_y + 1.0 / a_0
-                # Φ of the reference layer, as computed when it was new (0 for the state before impact)
-                ref_potential = trackers[T_POTENTIAL_BEFORE if back == 1 else T_POTENTIAL_BEFORE_THAT]
-                delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
-                                      2.0 * delta_cur - delta_old, c1, alpha, c0, b1 * damper_factor)
-                # the contact force the scheme applies in this step (centred on layer n, or on
-                # the new layer for the paper's)
-                contact_force = (quotient_force(delta, delta_ref, ref_potential, c1, alpha, c0)[0]
-                                 + b1 * damper_factor * (delta - delta_ref))
-                y_new = (b_y - contact_force) / a_y
-                u0_new = (b_0 + contact_force) / a_0
+                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0],
+                                    ref=y[ref] - u[ref, 0])
+                r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
+                q_1, carries = sweep(u, layer, rows, step)
+                y_new, u0_new, contact_force = solve_struck_end(
+                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step)
                 if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
-                    trackers[T_FAILED_TIME] = t
+                    extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 y[new] = y_new
                 u[new, 0] = u0_new
-                if explicit:
-                    # P_i = 0 but at a massless working end
-                    u[new, n] = p[n] * u[new, n - 1] + u[new, n]
-                else:
-                    substitute_toward_working_end(u, new, p, coefficient_product, p_product, length,
-                                                  head, u0_new, carry_0, carry_1, carry_2, carry_3)
-                medium_force = (c2 * (spring_weight * u[new, n] + (1.0 - spring_weight) * u[ref, n])
-                                + b2 * damper_factor * (u[new, n] - u[ref, n]))
+                back_substitute(u, layer, u0_new, carries, rows, step)
+                medium_force = working_end_force(u, layer, medium, step)
                 # Φ of the new layer from its own overlap, as the next steps' quotients take it
                 delta = y_new - u0_new
-                potential = contact_law(delta, c1, alpha, c0)[1]
-                if lag:
+                potential = contact_law(delta, contact)[1]
+                if step.lag:
                     rec, t_rec = cur, t - tau
                     velocity = (y_new - y[old]) / (2.0 * tau)
                 else:
                     rec, t_rec = new, t
-                    velocity = (striker_velocity if m == 1 else
-                                (3.0 * y_new - 4.0 * y_cur + y[old]) / (2.0 * tau))
+                    velocity = (contact.striker_velocity if m == 1 else
+                                (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau))
+                balance, interior = audit_scheme_energy(
+                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step)
+                ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
+                ends[S_POTENTIAL_BEFORE] = potential
+                track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
 
-                # Energy at layer m − ½, in the form each scheme conserves (or dissipates).
-                dy = y_new - y_cur
-                striker_kinetic = 0.5 * striker_mass * dy * dy * inv_tau2
-                tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-                    u, new, cur, rec, node_area, area_mid, strain_sigma, half_e_over_h)
-                tool_kinetic *= kinetic_factor
-                tool_strain *= 0.5 * e_over_h
-                contact_pot = spring_weight * potential + (1.0 - spring_weight) * trackers[T_POTENTIAL_BEFORE]
-                medium_pot = 0.5 * c2 * (spring_weight * u[new, n] * u[new, n]
-                                         + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
-                energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y_new - y[old])
-                rate = damper_factor * (delta - delta_ref)
-                energy[0, E_DISSIPATED_CONTACT] += b1 * rate * rate * tau
-                rate = damper_factor * (u[new, n] - u[ref, n])
-                energy[0, E_DISSIPATED_MEDIUM] += b2 * rate * rate * tau
-                energy[0, E_STRIKER_KINETIC] = striker_kinetic
-                energy[0, E_TOOL_KINETIC] = tool_kinetic
-                energy[0, E_TOOL_STRAIN] = tool_strain
-                energy[0, E_CONTACT_POTENTIAL] = contact_pot
-                energy[0, E_MEDIUM_POTENTIAL] = medium_pot
-                balance = (striker_kinetic + tool_kinetic + tool_strain + contact_pot + medium_pot
-                           + energy[0, E_DISSIPATED_CONTACT] + energy[0, E_DISSIPATED_MEDIUM]
-                           - initial_energy - energy[0, E_EXTERNAL_WORK])
-                trackers[T_POTENTIAL_BEFORE_THAT] = trackers[T_POTENTIAL_BEFORE]
-                trackers[T_POTENTIAL_BEFORE] = potential
-
-                # Contact intervals: a crossing placed on the parabola through the last overlaps.
-                if (delta >= 0.0) != (trackers[T_IN_CONTACT] != 0.0):
-                    t_cross = t - tau + tau * crossing(delta_old if m >= 2 else np.nan, delta_cur, delta)
-                    track_contact(trackers, contacts, t_cross, velocity, delta >= 0.0, tau)
-
-            if not abs(balance) < 1e300:
-                trackers[T_FAILED_TIME] = t
+            if not track_energy_excess(extremes, balance):
+                extremes[X_FAILED_TIME] = t
                 return STATUS_NON_FINITE, n_hist, n_field
-            if balance > trackers[T_ENERGY_EXCESS]:
-                trackers[T_ENERGY_EXCESS] = balance
-            s0 = -contact_force / end_area_0
-            sn = -medium_force / end_area_n
+            recorded = Recorded(row=rec, time=t_rec, velocity=velocity, contact_force=contact_force,
+                                medium_force=medium_force,
+                                struck_end_stress=-contact_force / tool.struck_end_area,
+                                working_end_stress=-medium_force / tool.working_end_area)
 
-        if m < lag:
+        if m < step.lag:
             continue  # the centred schemes record layer 0 once its forces are known
-        m_rec = m - lag
-
-        # Stress extremes along the tool: the layer's extreme node values. Not refined between
-        # nodes: next to a kink (a reflected front meeting the peak) a parabola through three
-        # nodes overshoots by O(h), where the nodes' own error is O(h²).
-        s_low, s_high = min(s0, low, sn), max(s0, high, sn)
-        for peak, value, interior, block, slot in (
-                (-s_low, s_low, low, low_block, T_MAX_COMPRESSION),
-                (s_high, s_high, high, high_block, T_MAX_TENSION)):
-            if peak > trackers[slot]:
-                # Where, only for a new record (most layers set none): the first node of that
-                # stress, from the struck end.
-                if value == s0:
-                    node = 0
-                elif value == interior:
-                    node = first_node(u, rec, half_e_over_h, block, value)
-                else:
-                    node = n
-                trackers[slot] = peak
-                trackers[slot + 1] = node * h
-                trackers[slot + 2] = t_rec
-        if contact_force > trackers[T_PEAK_FORCE]:
-            trackers[T_PEAK_FORCE] = contact_force
-            trackers[T_PEAK_FORCE_TIME] = t_rec
-        # Extremes of the end forces between layers: the vertex of the parabola through the last
-        # three, so that their error is the scheme's, not the sampling's.
-        f1, f2, f3 = trackers[T_FORCE_BEFORE], trackers[T_FORCE_BEFORE_THAT], trackers[T_FORCE_EARLIER]
-        g1, g2, g3 = (trackers[T_MEDIUM_FORCE], trackers[T_MEDIUM_FORCE_BEFORE],
-                      trackers[T_MEDIUM_FORCE_EARLIER])
-        if m_rec >= 3:
-            top, offset = vertex(f3, f2, f1, contact_force)
-            when = t_rec - tau + offset * tau
-            if top > trackers[T_PEAK_FORCE]:
-                trackers[T_PEAK_FORCE] = top
-                trackers[T_PEAK_FORCE_TIME] = when
-            track_end_extreme(trackers, T_MAX_COMPRESSION, top / end_area_0, 0.0, when)
-            top, offset = vertex(-f3, -f2, -f1, -contact_force)
-            track_end_extreme(trackers, T_MAX_TENSION, top / end_area_0, 0.0,
-                              t_rec - tau + offset * tau)
-            top, offset = vertex(g3, g2, g1, medium_force)
-            track_end_extreme(trackers, T_MAX_COMPRESSION, top / end_area_n, n * h,
-                              t_rec - tau + offset * tau)
-            top, offset = vertex(-g3, -g2, -g1, -medium_force)
-            track_end_extreme(trackers, T_MAX_TENSION, top / end_area_n, n * h,
-                              t_rec - tau + offset * tau)
-        trackers[T_FORCE_EARLIER] = f2
-        trackers[T_FORCE_BEFORE_THAT] = f1
-        trackers[T_FORCE_BEFORE] = contact_force
-        trackers[T_MEDIUM_FORCE_EARLIER] = g2
-        trackers[T_MEDIUM_FORCE_BEFORE] = g1
-        trackers[T_MEDIUM_FORCE] = medium_force
-
-        if history_stride > 0 and m_rec % history_stride == 0:
-            history[H_TIME, n_hist] = t_rec
-            history[H_STRIKER_DISP, n_hist] = y[rec]
-            history[H_STRIKER_VEL, n_hist] = velocity
-            history[H_STRUCK_END, n_hist] = u[rec, 0]
-            history[H_WORKING_END, n_hist] = u[rec, n]
-            history[H_CONTACT_FORCE, n_hist] = contact_force
-            history[H_OVERLAP, n_hist] = y[rec] - u[rec, 0]
-            history[H_MEDIUM_FORCE, n_hist] = medium_force
-            history[H_EXTERNAL_FORCE, n_hist] = external_force(
-                t_rec, force.kind, force.amplitude, force.omega, force.start, force.duration)
-            history[H_EXTERNAL_WORK, n_hist] = energy[0, E_EXTERNAL_WORK]
-            history[H_DISSIPATED_CONTACT, n_hist] = energy[0, E_DISSIPATED_CONTACT]
-            history[H_DISSIPATED_MEDIUM, n_hist] = energy[0, E_DISSIPATED_MEDIUM]
-            if m_rec == 0:
-                history[H_STRIKER_KINETIC, n_hist] = initial_energy
-                for c in range(H_TOOL_KINETIC, HISTORY_COLUMNS):
-                    history[c, n_hist] = 0.0
-            else:
-                history[H_STRIKER_KINETIC, n_hist] = energy[0, E_STRIKER_KINETIC]
-                history[H_TOOL_KINETIC, n_hist] = energy[0, E_TOOL_KINETIC]
-                history[H_TOOL_STRAIN, n_hist] = energy[0, E_TOOL_STRAIN]
-                history[H_CONTACT_POTENTIAL, n_hist] = energy[0, E_CONTACT_POTENTIAL]
-                history[H_MEDIUM_POTENTIAL, n_hist] = energy[0, E_MEDIUM_POTENTIAL]
-            for k in range(len(probe_node)):
-                j = probe_node[k]
-                w = probe_weight[k]
-                s = (1.0 - w) * node_stress(u, rec, j, n, e_over_h, s0, sn)
-                if w > 0.0:
-                    s += w * node_stress(u, rec, j + 1, n, e_over_h, s0, sn)
-                probes[n_hist, k] = s
+        m_rec = m - step.lag
+        track_stress_extremes(extremes, u, recorded, interior, rod, step)
+        track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step)
+        if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
+            record_history(recorders, n_hist, state, recorded, m_rec, force, step)
+            record_probes(recorders, n_hist, u, recorded, step)
             n_hist += 1
-        if field_stride > 0 and m_rec % field_stride == 0:
-            for i in range(n + 1):
-                field_u[n_field, i] = u[rec, i]
-                field_stress[n_field, i] = node_stress(u, rec, i, n, e_over_h, s0, sn)
+        if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
+            record_fields(recorders, n_field, u, recorded, step)
             n_field += 1
     return STATUS_OK, n_hist, n_field

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from . import kernel as K
+from . import layout as L
 from .case import Case, CaseError, FieldError
 from .grid import ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, tolerance_of
 
@@ -26,7 +26,7 @@ def output_values(case: Case, numerics: ResolvedNumerics) -> float:
     """How many numbers the run keeps for its outputs."""
     out = case.outputs
     rows = numerics.steps // out.history_stride + 1
-    values = rows * (K.HISTORY_COLUMNS + len(out.probes))
+    values = rows * (L.HISTORY_COLUMNS + len(out.probes))
     if out.fields and numerics.model == "rod":
         values += (numerics.steps // out.field_stride + 1) * 2 * (numerics.cells + 1)
     return float(values)

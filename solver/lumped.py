@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import kernel as K
+from . import layout as L
 from .case import Case, Force
 from .controller import HISTORY_PATHS
 from .errors import Cancelled, NumericalFailure
@@ -263,37 +263,37 @@ def history_table(case: Case, p: Parameters, time: np.ndarray, s: np.ndarray) ->
     """The rod model's histories from the sampled states; both tool ends are x2."""
     delta, rate = s[X1] - s[X2], s[V1] - s[V2]
     columns = {
-        K.H_TIME: time,
-        K.H_STRIKER_DISP: s[X1],
-        K.H_STRIKER_VEL: s[V1],
-        K.H_STRUCK_END: s[X2],
-        K.H_WORKING_END: s[X2],
-        K.H_CONTACT_FORCE: contact_force(delta, rate, p),
-        K.H_OVERLAP: delta,
-        K.H_MEDIUM_FORCE: p.c2 * s[X2] + p.b2 * s[V2],
-        K.H_EXTERNAL_FORCE: external_force(case.force, time),
-        K.H_EXTERNAL_WORK: s[WORK],
-        K.H_DISSIPATED_CONTACT: s[DISSIPATED_CONTACT],
-        K.H_DISSIPATED_MEDIUM: s[DISSIPATED_MEDIUM],
-        K.H_STRIKER_KINETIC: 0.5 * p.m1 * s[V1] ** 2,
-        K.H_TOOL_KINETIC: 0.5 * p.m2 * s[V2] ** 2,
-        K.H_TOOL_STRAIN: np.zeros_like(time),
-        K.H_CONTACT_POTENTIAL: contact_potential(delta, p),
-        K.H_MEDIUM_POTENTIAL: 0.5 * p.c2 * s[X2] ** 2,
+        L.H_TIME: time,
+        L.H_STRIKER_DISP: s[X1],
+        L.H_STRIKER_VEL: s[V1],
+        L.H_STRUCK_END: s[X2],
+        L.H_WORKING_END: s[X2],
+        L.H_CONTACT_FORCE: contact_force(delta, rate, p),
+        L.H_OVERLAP: delta,
+        L.H_MEDIUM_FORCE: p.c2 * s[X2] + p.b2 * s[V2],
+        L.H_EXTERNAL_FORCE: external_force(case.force, time),
+        L.H_EXTERNAL_WORK: s[WORK],
+        L.H_DISSIPATED_CONTACT: s[DISSIPATED_CONTACT],
+        L.H_DISSIPATED_MEDIUM: s[DISSIPATED_MEDIUM],
+        L.H_STRIKER_KINETIC: 0.5 * p.m1 * s[V1] ** 2,
+        L.H_TOOL_KINETIC: 0.5 * p.m2 * s[V2] ** 2,
+        L.H_TOOL_STRAIN: np.zeros_like(time),
+        L.H_CONTACT_POTENTIAL: contact_potential(delta, p),
+        L.H_MEDIUM_POTENTIAL: 0.5 * p.c2 * s[X2] ** 2,
     }
     return {path: np.array(columns[col], dtype=float) for path, col in HISTORY_PATHS.items()}
 
 
 def final_energy(p: Parameters, s: np.ndarray) -> np.ndarray:
     """The kernel's energy slots at the final state (no strain energy: the tool is rigid)."""
-    energy = np.zeros(K.ENERGY_SLOTS)
-    energy[K.E_EXTERNAL_WORK] = s[WORK]
-    energy[K.E_DISSIPATED_CONTACT] = s[DISSIPATED_CONTACT]
-    energy[K.E_DISSIPATED_MEDIUM] = s[DISSIPATED_MEDIUM]
-    energy[K.E_STRIKER_KINETIC] = 0.5 * p.m1 * s[V1] ** 2
-    energy[K.E_TOOL_KINETIC] = 0.5 * p.m2 * s[V2] ** 2
-    energy[K.E_CONTACT_POTENTIAL] = contact_potential(s[X1] - s[X2], p)
-    energy[K.E_MEDIUM_POTENTIAL] = 0.5 * p.c2 * s[X2] ** 2
+    energy = np.zeros(L.ENERGY_SLOTS)
+    energy[L.E_EXTERNAL_WORK] = s[WORK]
+    energy[L.E_DISSIPATED_CONTACT] = s[DISSIPATED_CONTACT]
+    energy[L.E_DISSIPATED_MEDIUM] = s[DISSIPATED_MEDIUM]
+    energy[L.E_STRIKER_KINETIC] = 0.5 * p.m1 * s[V1] ** 2
+    energy[L.E_TOOL_KINETIC] = 0.5 * p.m2 * s[V2] ** 2
+    energy[L.E_CONTACT_POTENTIAL] = contact_potential(s[X1] - s[X2], p)
+    energy[L.E_MEDIUM_POTENTIAL] = 0.5 * p.c2 * s[X2] ** 2
     return energy
 
 
@@ -344,21 +344,19 @@ def stress_extremes(case: Case, p: Parameters, history: dict[str, np.ndarray],
     return best
 
 
-def fill_trackers(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
+def fill_extremes(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
                   excess: float) -> np.ndarray:
-    """The kernel's trackers from the contact log, the refined peak force and the stress maxima."""
-    trackers = K.new_trackers()
-    trackers[K.T_PEAK_FORCE], trackers[K.T_PEAK_FORCE_TIME] = peak
-    (trackers[K.T_MAX_COMPRESSION], trackers[K.T_MAX_COMPRESSION_X],
-     trackers[K.T_MAX_COMPRESSION_TIME], trackers[K.T_MAX_TENSION], trackers[K.T_MAX_TENSION_X],
-     trackers[K.T_MAX_TENSION_TIME]) = stress
-    trackers[K.T_CONTACTS] = len(log.intervals)
-    trackers[K.T_IN_CONTACT] = float(log.in_contact)
-    trackers[K.T_CONTACT_START] = log.start
-    trackers[K.T_CO_IMPACT] = log.first_end
-    trackers[K.T_REBOUND_VELOCITY] = log.rebound_velocity
-    trackers[K.T_ENERGY_EXCESS] = excess
-    return trackers
+    """The kernel's extremes from the contact log, the refined peak force and the stress maxima."""
+    extremes = L.new_extremes()
+    extremes[L.X_PEAK_FORCE], extremes[L.X_PEAK_FORCE_TIME] = peak
+    (extremes[L.X_MAX_COMPRESSION], extremes[L.X_MAX_COMPRESSION_X],
+     extremes[L.X_MAX_COMPRESSION_TIME], extremes[L.X_MAX_TENSION], extremes[L.X_MAX_TENSION_X],
+     extremes[L.X_MAX_TENSION_TIME]) = stress
+    extremes[L.X_CONTACTS] = len(log.intervals)
+    extremes[L.X_CO_IMPACT] = log.first_end
+    extremes[L.X_REBOUND_VELOCITY] = log.rebound_velocity
+    extremes[L.X_ENERGY_EXCESS] = excess
+    return extremes
 
 
 def simulate_lumped(
@@ -397,10 +395,11 @@ def simulate_lumped(
 
     history = history_table(case, p, time, samples)
     initial = 0.5 * p.m1 * case.striker.velocity ** 2
-    trackers = fill_trackers(log, peak, stress_extremes(case, p, history, peak),
+    extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak),
                              energy_excess(history, initial))
     summary = build_summary(
-        case=case, numerics=num, trackers=trackers, contacts=contact_table(log),
+        case=case, numerics=num, extremes=extremes, contacts=contact_table(log),
+        open_contact=log.start if log.in_contact else None,
         energy=final_energy(p, final), history=history,
         extra_warnings=[NO_FIELDS_WARNING] if case.outputs.fields else [],
     )

@@ -11,7 +11,7 @@ from typing import Literal
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
 
-from . import kernel as K
+from . import layout as L
 from .case import Case
 from .grid import ResolvedNumerics
 
@@ -129,34 +129,35 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     return {key: history[path][pick].tolist() for key, path in FORCE_HISTORY.items()}
 
 
-def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
-                  contacts: np.ndarray, energy: np.ndarray, history: dict[str, np.ndarray],
-                  extra_warnings: list[str] | None = None) -> dict:
-    """Assemble the summary; `trackers`, `contacts` and `energy` use the kernel's slot layout, and
+def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
+                  contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
+                  history: dict[str, np.ndarray], extra_warnings: list[str] | None = None) -> dict:
+    """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
+    `open_contact` is the start of a contact still open at the end (None if there is none), and
     `history` needs the paths of FORCE_HISTORY only.
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
     follow (`solver.adaptive.annotate`).
     """
-    count = int(trackers[K.T_CONTACTS])
+    count = int(extremes[L.X_CONTACTS])
     intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[:min(count, len(contacts))]]
-    if trackers[K.T_IN_CONTACT]:
-        intervals.append({"start": float(trackers[K.T_CONTACT_START]), "end": None})
+    if open_contact is not None:
+        intervals.append({"start": float(open_contact), "end": None})
 
     initial = 0.5 * case.striker.mass * case.striker.velocity**2
     stored = {
-        "striker_kinetic": energy[K.E_STRIKER_KINETIC],
-        "tool_kinetic": energy[K.E_TOOL_KINETIC],
-        "tool_strain": energy[K.E_TOOL_STRAIN],
-        "contact_potential": energy[K.E_CONTACT_POTENTIAL],
-        "medium_potential": energy[K.E_MEDIUM_POTENTIAL],
+        "striker_kinetic": energy[L.E_STRIKER_KINETIC],
+        "tool_kinetic": energy[L.E_TOOL_KINETIC],
+        "tool_strain": energy[L.E_TOOL_STRAIN],
+        "contact_potential": energy[L.E_CONTACT_POTENTIAL],
+        "medium_potential": energy[L.E_MEDIUM_POTENTIAL],
     }
-    external = energy[K.E_EXTERNAL_WORK]
-    dissipated_contact = energy[K.E_DISSIPATED_CONTACT]
-    dissipated_medium = energy[K.E_DISSIPATED_MEDIUM]
+    external = energy[L.E_EXTERNAL_WORK]
+    dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
+    dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
     numerical = initial + external - sum(stored.values()) - dissipated_contact - dissipated_medium
     budget = initial + max(external, 0.0)
-    excess = trackers[K.T_ENERGY_EXCESS] / budget if budget > 0 else 0.0
+    excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     to_medium = float(stored["medium_potential"] + dissipated_medium)
     supplied = initial + external
 
@@ -165,18 +166,18 @@ def build_summary(case: Case, numerics: ResolvedNumerics, trackers: np.ndarray,
         "model": numerics.model,
         "scheme": numerics.scheme,
         "numerics": numerics.as_dict(),
-        "co_impact_time": _number(trackers[K.T_CO_IMPACT]),
+        "co_impact_time": _number(extremes[L.X_CO_IMPACT]),
         "contacts": intervals,
-        "contacts_total": count + (1 if trackers[K.T_IN_CONTACT] else 0),
-        "peak_contact_force": {"value": float(trackers[K.T_PEAK_FORCE]),
-                               "time": float(trackers[K.T_PEAK_FORCE_TIME])},
-        "max_compressive_stress": {"value": float(trackers[K.T_MAX_COMPRESSION]),
-                                   "x": float(trackers[K.T_MAX_COMPRESSION_X]),
-                                   "time": float(trackers[K.T_MAX_COMPRESSION_TIME])},
-        "max_tensile_stress": {"value": float(trackers[K.T_MAX_TENSION]),
-                               "x": float(trackers[K.T_MAX_TENSION_X]),
-                               "time": float(trackers[K.T_MAX_TENSION_TIME])},
-        "striker_rebound_velocity": _number(trackers[K.T_REBOUND_VELOCITY]),
+        "contacts_total": count + (0 if open_contact is None else 1),
+        "peak_contact_force": {"value": float(extremes[L.X_PEAK_FORCE]),
+                               "time": float(extremes[L.X_PEAK_FORCE_TIME])},
+        "max_compressive_stress": {"value": float(extremes[L.X_MAX_COMPRESSION]),
+                                   "x": float(extremes[L.X_MAX_COMPRESSION_X]),
+                                   "time": float(extremes[L.X_MAX_COMPRESSION_TIME])},
+        "max_tensile_stress": {"value": float(extremes[L.X_MAX_TENSION]),
+                               "x": float(extremes[L.X_MAX_TENSION_X]),
+                               "time": float(extremes[L.X_MAX_TENSION_TIME])},
+        "striker_rebound_velocity": _number(extremes[L.X_REBOUND_VELOCITY]),
         "energy": {
             "initial": initial,
             "external_work": float(external),

@@ -11,6 +11,7 @@ import pytest
 from scipy.linalg import solve_banded
 
 from percussim.solver import kernel as K
+from percussim.solver.controller import tool_on
 from percussim.solver.grid import make_grid
 from percussim.solver.presets import load_preset
 
@@ -39,11 +40,15 @@ def tool_rows(grid, r, weight_new, end_weight, end_stiffness, diag_n):
 def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, centered, end_masses):
     case = load_preset(preset)
     grid = make_grid(case.tool, cells, end_masses)
-    tau, r = 1e-6, 30.0
-    end_stiffness, c2, b2 = 2e8, 5e7, 3e3
-    p, inv_den, coefficient, coefficient_product, p_product = K.factor_tool_rows(
-        grid.lower, grid.upper, grid.node_area, end_stiffness, c2, b2, r, tau, grid.density,
-        grid.h, weight_new, centered, end_masses)
+    end_stiffness = 2e8
+    rod = K.Rod(cell_length=grid.h, time_step=1e-6, courant_squared=30.0,
+                youngs_modulus=grid.youngs_modulus, density=grid.density,
+                struck_end_stiffness=end_stiffness, working_end_stiffness=end_stiffness)
+    weights = K.Weights(new=weight_new, old=weight_new if centered else 0.0, centered=centered,
+                        end_masses=end_masses, impedance_ends=False)
+    medium = K.Medium(stiffness=5e7, damping=3e3, impedance=0.0)
+    rows = K.factor_tool_rows(tool_on(grid), rod, weights, medium)
+    p, inv_den = rows.p, rows.inv_den
     end_weight = weight_new if end_masses else 1.0
     diag_n = 1.0 / inv_den[cells]
     rhs = RNG.standard_normal(cells)  # rows 1 … N
@@ -52,13 +57,12 @@ def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, center
     u = np.zeros((3, cells + 1))
     u[1, 1:] = rhs * inv_den[1:]
     length, head = K.segment_layout(cells)
-    q_1, *carries = K.sweep_toward_struck_end(u, 1, coefficient, coefficient_product, length, head)
-    K.substitute_toward_working_end(u, 1, p, coefficient_product, p_product, length, head, u_0,
-                                    *carries)
+    q_1, carries = K.sweep_toward_struck_end(u, 1, rows, length, head)
+    K.substitute_toward_working_end(u, 1, rows, length, head, u_0, carries)
 
-    band = tool_rows(grid, r, weight_new, end_weight, end_stiffness, diag_n)
+    band = tool_rows(grid, rod.courant_squared, weight_new, end_weight, end_stiffness, diag_n)
     moved = rhs.copy()
-    moved[0] += weight_new * r * grid.lower[1] * u_0
+    moved[0] += weight_new * rod.courant_squared * grid.lower[1] * u_0
     expected = solve_banded((1, 1), band, moved)
     assert np.abs(u[1, 1:] - expected).max() <= 1e-11 * np.abs(expected).max()
     assert (length > 0) == (cells >= K.SEGMENTS * K.MIN_SEGMENT)

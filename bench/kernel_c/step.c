@@ -1,12 +1,12 @@
 /* A C yardstick for solver/kernel.py::advance on a uniform tool, summary only.
 
-   The same scheme, contact solve, energy audit and trackers as the Numba kernel (its slot layout
-   for trackers and energy), for a uniform tool with no external force. Written for speed: the tool
-   rows are eliminated once; a step is a vectorised pass for the right-hand sides, the Q sweep
-   toward the struck end and the forward substitution (one multiply-add a node on the critical
-   path of each, split like the kernel's into SEGMENTS independent chains with their carries; no
-   recurrence at all for the explicit scheme), the scalar contact solve, and one vectorised pass
-   that sums the energies and finds the stress extremes.
+   The same scheme, contact solve, energy audit and extremes as the Numba kernel (its slot layouts
+   for the ends, the extremes and the energy), for a uniform tool with no external force. Written
+   for speed: the tool rows are eliminated once; a step is a vectorised pass for the right-hand
+   sides, the Q sweep toward the struck end and the forward substitution (one multiply-add a node
+   on the critical path of each, split like the kernel's into SEGMENTS independent chains with
+   their carries; no recurrence at all for the explicit scheme), the scalar contact solve, and one
+   vectorised pass that sums the energies and finds the stress extremes.
 
    Built by bench/kernel.py: gcc -O3 -march=native -shared -fPIC. Not used by the product. */
 
@@ -22,13 +22,16 @@ enum {
     P_END_MASSES, P_M1, P_W1, P_C1, P_ALPHA, P_C0, P_B1, P_C2, P_B2
 };
 
-/* Tracker and energy slots: the kernel's */
+/* End, extreme and energy slots: the kernel's (those it uses) */
 enum {
-    T_PEAK_FORCE, T_PEAK_FORCE_TIME, T_MAX_COMPRESSION, T_MAX_COMPRESSION_X,
-    T_MAX_COMPRESSION_TIME, T_MAX_TENSION, T_MAX_TENSION_X, T_MAX_TENSION_TIME, T_IN_CONTACT,
-    T_CONTACT_START, T_CONTACTS, T_CO_IMPACT, T_REBOUND_VELOCITY, T_ENERGY_EXCESS, T_FAILED_TIME,
-    T_MIN_CONTACT_STEPS, T_FORCE_BEFORE, T_FORCE_BEFORE_THAT, T_POTENTIAL_BEFORE,
-    T_POTENTIAL_BEFORE_THAT
+    S_IN_CONTACT, S_CONTACT_START, S_FORCE_BEFORE, S_FORCE_BEFORE_THAT, S_FORCE_EARLIER,
+    S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER, S_POTENTIAL_BEFORE,
+    S_POTENTIAL_BEFORE_THAT
+};
+enum {
+    X_PEAK_FORCE, X_PEAK_FORCE_TIME, X_MAX_COMPRESSION, X_MAX_COMPRESSION_X,
+    X_MAX_COMPRESSION_TIME, X_MAX_TENSION, X_MAX_TENSION_X, X_MAX_TENSION_TIME, X_CONTACTS,
+    X_CO_IMPACT, X_REBOUND_VELOCITY, X_ENERGY_EXCESS, X_FAILED_TIME, X_MIN_CONTACT_STEPS
 };
 enum {
     E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM, E_STRIKER_KINETIC,
@@ -115,11 +118,11 @@ static double crossing(double before_that, double before, double now)
 /* A stress extreme `value` of the layer un[] (s0 at the struck end): the running maximum (the
    kernel's, not refined between nodes). Where it is, the first node of that stress from the struck
    end, is searched only for a new record: most layers set none. */
-static void record_stress(double *trk, int slot, double sign, double value, const double *un,
+static void record_stress(double *ext, int slot, double sign, double value, const double *un,
                           long n, double half_e_over_h, double s0, double h, double t)
 {
     double peak = sign * value;
-    if (peak > trk[slot]) {
+    if (peak > ext[slot]) {
         long node = n;
         if (value == s0)
             node = 0;
@@ -129,17 +132,17 @@ static void record_stress(double *trk, int slot, double sign, double value, cons
                     node = i;
                     break;
                 }
-        trk[slot] = peak;
-        trk[slot + 1] = node * h;
-        trk[slot + 2] = t;
+        ext[slot] = peak;
+        ext[slot + 1] = node * h;
+        ext[slot + 2] = t;
     }
 }
 
 /* Layers 0 … steps of the case in prm[] on n cells. u: 3·(n+1) (layer m in row m % 3), y: 3,
-   work: 4·(n+1), trk/en: the kernel's trackers (from new_trackers()) and energy (zeros),
-   contacts: max_contacts × 2. Returns 0, or 1 on a non-finite value. */
+   work: 4·(n+1), ends/ext/en: the kernel's ends (zeros), extremes (from new_extremes()) and
+   energy (zeros), contacts: max_contacts × 2. Returns 0, or 1 on a non-finite value. */
 int run(long n, long steps, const double *prm, double *u, double *y, double *work,
-        double *trk, double *en, double *contacts, long max_contacts)
+        double *ends, double *ext, double *en, double *contacts, long max_contacts)
 {
     const double h = prm[P_H], tau = prm[P_TAU], r = prm[P_R], area = prm[P_AREA];
     const double wn = prm[P_WEIGHT_NEW], wo = prm[P_WEIGHT_OLD], wc = 1.0 - wn - wo;
@@ -196,9 +199,9 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
     for (long i = 0; i < stride; i++) u[i] = u[2 * stride + i] = 0.0;
     y[0] = 0.0;
     y[2] = -w1 * tau;
-    trk[T_IN_CONTACT] = 1.0;
-    trk[T_CONTACT_START] = 0.0;
-    trk[T_POTENTIAL_BEFORE] = trk[T_POTENTIAL_BEFORE_THAT] = 0.0;  /* Φ(0); before impact */
+    ends[S_IN_CONTACT] = 1.0;
+    ends[S_CONTACT_START] = 0.0;
+    ends[S_POTENTIAL_BEFORE] = ends[S_POTENTIAL_BEFORE_THAT] = 0.0;  /* Φ(0); before impact */
 
     for (long m = 1; m <= steps; m++) {
         /* rows of layers m, m − 1, m − 2 and the reference layer (C's % keeps the sign) */
@@ -259,7 +262,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         double b_0 = mass_end * (2.0 * uc[0] - uo[0]) + ew * k_end * q1;
         if (end_masses) b_0 += k_end * (v_1 - v_0);
         /* Φ of the reference layer, as computed when it was new (0 before impact) */
-        const double ref_pot = trk[back == 1 ? T_POTENTIAL_BEFORE : T_POTENTIAL_BEFORE_THAT];
+        const double ref_pot = ends[back == 1 ? S_POTENTIAL_BEFORE : S_POTENTIAL_BEFORE_THAT];
         double delta = solve_overlap(b_y / m1_tau2 - b_0 / a_0, 1.0 / m1_tau2 + 1.0 / a_0,
                                      delta_ref, ref_pot, 2.0 * delta_cur - delta_old, &law,
                                      b1 * df);
@@ -268,7 +271,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         const double force = f + b1 * df * (delta - delta_ref);
         const double y_new = (b_y - force) / m1_tau2, u0 = (b_0 + force) / a_0;
         if (!(fabs(y_new) < 1e300 && fabs(u0) < 1e300)) {
-            trk[T_FAILED_TIME] = t;
+            ext[X_FAILED_TIME] = t;
             return 1;
         }
         y[now] = y_new;
@@ -374,7 +377,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
         /* Energy at layer m − ½ */
         const double dy = y_new - y_cur;
         const double striker_kinetic = 0.5 * m1 * dy * dy * inv_tau2;
-        const double contact_pot = sw * pot + (1.0 - sw) * trk[T_POTENTIAL_BEFORE];
+        const double contact_pot = sw * pot + (1.0 - sw) * ends[S_POTENTIAL_BEFORE];
         const double medium_pot = 0.5 * c2 * (sw * un[n] * un[n] + (1.0 - sw) * uc[n] * uc[n]);
         double rate = df * (delta - delta_ref);
         en[E_DISSIPATED_CONTACT] += b1 * rate * rate * tau;
@@ -389,52 +392,52 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
                                + medium_pot + en[E_DISSIPATED_CONTACT] + en[E_DISSIPATED_MEDIUM]
                                - initial_energy - en[E_EXTERNAL_WORK];
         if (!(fabs(balance) < 1e300)) {
-            trk[T_FAILED_TIME] = t;
+            ext[X_FAILED_TIME] = t;
             return 1;
         }
-        if (balance > trk[T_ENERGY_EXCESS]) trk[T_ENERGY_EXCESS] = balance;
+        if (balance > ext[X_ENERGY_EXCESS]) ext[X_ENERGY_EXCESS] = balance;
 
         /* Stress extremes, peak force, contact intervals */
-        record_stress(trk, T_MAX_COMPRESSION, -1.0, s_low, un, n, half_e_over_h, s0, h, t);
-        record_stress(trk, T_MAX_TENSION, 1.0, s_high, un, n, half_e_over_h, s0, h, t);
-        if (contact_force > trk[T_PEAK_FORCE]) {
-            trk[T_PEAK_FORCE] = contact_force;
-            trk[T_PEAK_FORCE_TIME] = t;
+        record_stress(ext, X_MAX_COMPRESSION, -1.0, s_low, un, n, half_e_over_h, s0, h, t);
+        record_stress(ext, X_MAX_TENSION, 1.0, s_high, un, n, half_e_over_h, s0, h, t);
+        if (contact_force > ext[X_PEAK_FORCE]) {
+            ext[X_PEAK_FORCE] = contact_force;
+            ext[X_PEAK_FORCE_TIME] = t;
         }
-        const double f1 = trk[T_FORCE_BEFORE], f2 = trk[T_FORCE_BEFORE_THAT];
+        const double f1 = ends[S_FORCE_BEFORE], f2 = ends[S_FORCE_BEFORE_THAT];
         if (m >= 3 && f1 >= f2 && f1 > contact_force) {
             double curvature = 2.0 * f1 - f2 - contact_force;
             double offset = 0.5 * (contact_force - f2) / curvature;
             double vertex = f1 + 0.25 * (contact_force - f2) * offset;
-            if (vertex > trk[T_PEAK_FORCE]) {
-                trk[T_PEAK_FORCE] = vertex;
-                trk[T_PEAK_FORCE_TIME] = t - tau + offset * tau;
+            if (vertex > ext[X_PEAK_FORCE]) {
+                ext[X_PEAK_FORCE] = vertex;
+                ext[X_PEAK_FORCE_TIME] = t - tau + offset * tau;
             }
         }
-        trk[T_FORCE_BEFORE_THAT] = f1;
-        trk[T_FORCE_BEFORE] = contact_force;
-        trk[T_POTENTIAL_BEFORE_THAT] = trk[T_POTENTIAL_BEFORE];
-        trk[T_POTENTIAL_BEFORE] = pot;
+        ends[S_FORCE_BEFORE_THAT] = f1;
+        ends[S_FORCE_BEFORE] = contact_force;
+        ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE];
+        ends[S_POTENTIAL_BEFORE] = pot;
 
-        const int in_contact = trk[T_IN_CONTACT] != 0.0;
+        const int in_contact = ends[S_IN_CONTACT] != 0.0;
         if (in_contact && delta < 0.0) {
             double t_cross = t - tau + tau * crossing(m >= 2 ? delta_old : NAN, delta_cur, delta);
-            long k = (long)trk[T_CONTACTS];
+            long k = (long)ext[X_CONTACTS];
             if (k < max_contacts) {
-                contacts[2 * k] = trk[T_CONTACT_START];
+                contacts[2 * k] = ends[S_CONTACT_START];
                 contacts[2 * k + 1] = t_cross;
             }
-            trk[T_CONTACTS] = k + 1;
-            double steps_in = (t_cross - trk[T_CONTACT_START]) / tau;
-            if (steps_in < trk[T_MIN_CONTACT_STEPS]) trk[T_MIN_CONTACT_STEPS] = steps_in;
+            ext[X_CONTACTS] = k + 1;
+            double steps_in = (t_cross - ends[S_CONTACT_START]) / tau;
+            if (steps_in < ext[X_MIN_CONTACT_STEPS]) ext[X_MIN_CONTACT_STEPS] = steps_in;
             if (k == 0) {
-                trk[T_CO_IMPACT] = t_cross;
-                trk[T_REBOUND_VELOCITY] = velocity;
+                ext[X_CO_IMPACT] = t_cross;
+                ext[X_REBOUND_VELOCITY] = velocity;
             }
-            trk[T_IN_CONTACT] = 0.0;
+            ends[S_IN_CONTACT] = 0.0;
         } else if (!in_contact && delta >= 0.0) {
-            trk[T_IN_CONTACT] = 1.0;
-            trk[T_CONTACT_START] = t - tau + tau * crossing(m >= 2 ? delta_old : NAN, delta_cur,
+            ends[S_IN_CONTACT] = 1.0;
+            ends[S_CONTACT_START] = t - tau + tau * crossing(m >= 2 ? delta_old : NAN, delta_cur,
                                                             delta);
         }
     }

@@ -1,0 +1,43 @@
+"""What a run records, slot by slot: the history's columns (`H_…`), the extremes it reports
+(`X_…`) and its energy terms (`E_…`). The kernel writes them; the controller, the lumped model,
+the summary and the limits read them. No Numba here: reading a layout loads no kernel."""
+
+from __future__ import annotations
+
+import numpy as np
+
+# History quantities: `history[H_…, k]` is the k-th kept layer's (one contiguous series each)
+H_TIME, H_STRIKER_DISP, H_STRIKER_VEL, H_STRUCK_END, H_WORKING_END = 0, 1, 2, 3, 4
+H_CONTACT_FORCE, H_OVERLAP, H_MEDIUM_FORCE, H_EXTERNAL_FORCE = 5, 6, 7, 8
+H_EXTERNAL_WORK, H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM = 9, 10, 11
+H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL = (
+    12, 13, 14, 15, 16)
+HISTORY_COLUMNS = 17
+
+# Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
+X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
+X_MAX_COMPRESSION, X_MAX_COMPRESSION_X, X_MAX_COMPRESSION_TIME = 2, 3, 4
+X_MAX_TENSION, X_MAX_TENSION_X, X_MAX_TENSION_TIME = 5, 6, 7
+X_CONTACTS = 8  # finished contact intervals
+X_CO_IMPACT, X_REBOUND_VELOCITY = 9, 10  # when the first contact ended, the striker's velocity then
+X_ENERGY_EXCESS = 11  # max over time of (stored + dissipated − input): > 0 means energy created
+X_FAILED_TIME = 12
+X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resolved by
+EXTREME_SLOTS = 14
+
+# Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
+# and dissipation, and the stored terms
+E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM = 0, 1, 2
+E_STRIKER_KINETIC, E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL = (
+    3, 4, 5, 6, 7)
+ENERGY_SLOTS = 8
+
+
+def new_extremes() -> np.ndarray:
+    """The extremes before a run: none yet (NaN where nothing may happen)."""
+    x = np.zeros(EXTREME_SLOTS)
+    x[X_CO_IMPACT] = np.nan
+    x[X_REBOUND_VELOCITY] = np.nan
+    x[X_FAILED_TIME] = np.nan
+    x[X_MIN_CONTACT_STEPS] = np.inf
+    return x
