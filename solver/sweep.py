@@ -20,7 +20,7 @@ from .limits import Limits, check_case
 
 MAX_VARIANTS = 10_000
 MAX_ERRORS = 20  # bad variants named before giving up
-# A table row needs only the summary's trackers: no fields, no probes, no history beyond step 0.
+# A table row needs only the summary's extremes: no fields, no probes, no history beyond step 0.
 TABLE_OUTPUTS = Outputs(history_stride=2**62)
 
 # The table's columns after the parameters: (name, where in the summary).
