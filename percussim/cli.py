@@ -13,6 +13,9 @@ from typing import Callable, Iterator
 
 EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 1, 2, 130, 141
 PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
+# What the optional installs bring (pyproject.toml's extras): a command needing one says which.
+EXTRA_OF = {"fastapi": "service", "starlette": "service", "uvicorn": "service", "celery": "service",
+            "kombu": "service", "redis": "service", "matplotlib": "plots"}
 
 
 def _no_such_file(path: str) -> int:
@@ -368,6 +371,13 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         return args.handler(args)
+    except ModuleNotFoundError as error:
+        extra = EXTRA_OF.get((error.name or "").partition(".")[0])
+        if extra is None:
+            raise
+        print(f"percussim: {args.command} needs the {extra!r} extra, which is not installed "
+              f"({error.name} is missing): pip install 'percussim[{extra}]'", file=sys.stderr)
+        return EXIT_FAILED
     except BrokenPipeError:
         # stdout closed early (`| head`): the files asked for are written; end quietly, as a
         # process stopped by SIGPIPE, instead of with a traceback when Python flushes stdout.

@@ -83,3 +83,17 @@ print(json.dumps({"lazy": lazy, "file": percussim.__file__, "version": percussim
     assert got["version"] == version("percussim")
     assert got["peak"] == here["peak_contact_force"]["value"]
     assert got["elsewhere"] == []
+
+
+def test_a_command_needing_an_extra_names_it(installed, tmp_path):
+    """The install has no extras: serving and plotting say what to install."""
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    bin_ = installed / "bin"
+    serve = subprocess.run([bin_ / "percussim", "serve", "--port", "1"], cwd=tmp_path, env=env,
+                           capture_output=True, text=True, timeout=60)
+    assert serve.returncode == 1 and "pip install 'percussim[service]'" in serve.stderr, serve.stderr
+    run([bin_ / "percussim", "run", "fig3", "--output", "fig3.h5"], cwd=tmp_path)
+    plot = subprocess.run([bin_ / "percussim", "plot", "fig3.h5"], cwd=tmp_path, env=env,
+                          capture_output=True, text=True, timeout=60)
+    assert plot.returncode == 1 and "pip install 'percussim[plots]'" in plot.stderr, plot.stderr
+    assert "Traceback" not in serve.stderr + plot.stderr
