@@ -4,8 +4,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Annotated, Literal
 
 import numpy as np
+from pydantic import ConfigDict, Field
 
 from .case import Case, CaseError, FieldError, Numerics, Tool
 from .schemes import Scheme, make_scheme, scheme_of
@@ -113,21 +115,26 @@ def check_stiff_ends(case: Case, weights: Scheme, cells: int, end_areas: tuple[f
 
 @dataclass(frozen=True)
 class ResolvedNumerics:
-    """The numerics a run actually uses; stored with every result."""
+    """The numerics a run actually uses; stored with every result, and its summary's `numerics`
+    (the descriptions are the response model's, `summary.Summary`)."""
 
-    model: str
-    scheme: str
-    time_step: float
-    cells: int
-    gamma: float
-    sigma: float
-    end_masses: bool
-    steps: int
-    courant: float  # a·τ/h
-    # How the tool's ends are treated: "impedance" (the explicit scheme at Courant number 1: each
-    # end integrates its own equations, `kernel.struck_end_step`), "mass" (half-cell end masses),
-    # "massless" (the paper's quasi-static ends), "none" (the lumped model).
-    ends: str = "mass"
+    __pydantic_config__ = ConfigDict(extra="forbid")
+
+    model: Annotated[Literal["rod", "lumped"], Field(
+        description="the tool as an elastic rod, or the two-mass model (21)–(25)")]
+    scheme: Annotated[str, Field(
+        description="'paper' (the weighted scheme (8), γ), 'sigma' (σ), 'explicit'; 'dop853' for the lumped model")]
+    time_step: Annotated[float, Field(description="τ, s")]
+    cells: Annotated[int, Field(description="N, cells along the tool (0 for the lumped model)")]
+    gamma: Annotated[float, Field(description="γ, the paper's weight of the new layer")]
+    sigma: Annotated[float, Field(description="σ, the weight of the σ-scheme")]
+    end_masses: Annotated[bool, Field(description="whether the tool's end nodes carry their half-cell mass")]
+    steps: Annotated[int, Field(description="M, time steps")]
+    courant: Annotated[float, Field(description="a·τ/h, 1")]
+    # "impedance": the explicit scheme at Courant number 1, each end integrating its own equations
+    # (`kernel.struck_end_step`).
+    ends: Annotated[str, Field(description="how the tool's ends are solved: 'impedance', 'mass' (half-cell "
+                                           "end masses), 'massless' (quasi-static) or 'none' (lumped)")] = "mass"
 
     def as_dict(self) -> dict:
         return dict(vars(self))  # its fields are scalars: dataclasses.asdict's deep copy is not needed

@@ -25,19 +25,6 @@ class _Part(BaseModel):
     model_config = ConfigDict(extra="forbid")
 
 
-class NumericsUsed(_Part):
-    model: Literal["rod", "lumped"] = Field(description="the tool as an elastic rod, or the two-mass model (21)–(25)")
-    scheme: str = Field(description="'paper' (the weighted scheme (8), γ), 'sigma' (σ), 'explicit'; 'dop853' for the lumped model")
-    time_step: float = Field(description="τ, s")
-    cells: int = Field(description="N, cells along the tool (0 for the lumped model)")
-    gamma: float = Field(description="γ, the paper's weight of the new layer")
-    sigma: float = Field(description="σ, the weight of the σ-scheme")
-    end_masses: bool = Field(description="whether the tool's end nodes carry their half-cell mass")
-    steps: int = Field(description="M, time steps")
-    courant: float = Field(description="a·τ/h, 1")
-    ends: str = Field(description="how the tool's ends are solved: 'impedance', 'mass', 'massless' or 'none'")
-
-
 class Contact(_Part):
     start: float = Field(description="s")
     end: float | None = Field(description="s; null while the contact lasts at the end of the run")
@@ -90,7 +77,7 @@ class Summary(_Part):
     name: str | None = Field(description="the case's name")
     model: Literal["rod", "lumped"]
     scheme: str
-    numerics: NumericsUsed
+    numerics: ResolvedNumerics
     co_impact_time: float | None = Field(description="end of the first contact, s; null if it never ends")
     contacts: list[Contact] = Field(description=f"the contact intervals (the first {MAX_CONTACTS})")
     contacts_total: int = Field(description="how many contacts, counting those not listed")
@@ -137,7 +124,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     `history` needs the paths of FORCE_HISTORY only.
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
-    follow (`solver.adaptive.annotate`).
+    follow (`add_accuracy`).
     """
     count = int(extremes[L.X_CONTACTS])
     intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[:min(count, len(contacts))]]

@@ -6,6 +6,7 @@ import copy
 
 import pytest
 
+from percussim.solver.presets import preset_json
 from percussim.solver.reference import LinearImpact
 
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
@@ -42,3 +43,11 @@ CHATTERS = merge(BASE_CASE, {"numerics": {"scheme": "sigma", "cells": 60, "time_
 @pytest.fixture
 def linear_impact() -> LinearImpact:
     return LinearImpact()
+
+
+def duration_only(name: str) -> dict:
+    """Preset `name` with only its duration in `numerics` (the default accuracy) and no outputs."""
+    case = preset_json(name)
+    case["numerics"] = {"duration": case["numerics"]["duration"]}
+    case.pop("outputs", None)
+    return case

@@ -9,7 +9,7 @@ import sys
 
 import pytest
 
-from conftest import merge
+from conftest import duration_only, merge
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.accuracy import (ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order,
                              quantity_error)
@@ -70,13 +70,6 @@ def test_grids_out_of_their_asymptotic_range_give_the_largest_change_and_say_so(
 
 
 # --- the default accuracy -------------------------------------------------------------------
-
-def duration_only(name: str) -> dict:
-    case = preset_json(name)
-    case["numerics"] = {"duration": case["numerics"]["duration"]}
-    case.pop("outputs", None)
-    return case
-
 
 @pytest.mark.parametrize("name", ["fig3", "fig9"])
 def test_a_case_that_gives_only_a_duration_is_within_one_percent_and_says_so(name):

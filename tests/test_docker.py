@@ -147,19 +147,13 @@ def test_the_builder_installs_the_project_not_editable(stages):
 
 def test_a_non_editable_install_carries_the_job_page_and_the_presets():
     """`pip install .` copies only Python modules unless package data names the rest."""
-    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    folders = setuptools["package-dir"]
-
-    def folder(package: str) -> Path:
-        parent = max((p for p in folders if package == p or package.startswith(p + ".")), key=len)
-        return ROOT / folders[parent] / Path(*package[len(parent) + 1:].split(".") if package != parent else ())
-
-    for read in (ROOT / "service" / "static", ROOT / "solver" / "presets"):
-        package = next(p for p in setuptools["package-data"] if folder(p) == read or folder(p) == read.parent)
-        files = [p.relative_to(folder(package)).as_posix() for p in read.rglob("*")
+    data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
+    for package, folder in (("percussim.service", ROOT / "service"),
+                            ("percussim.solver.presets", ROOT / "solver" / "presets")):
+        files = [p.relative_to(folder).as_posix() for p in folder.rglob("*")
                  if p.is_file() and p.suffix != ".py" and "__pycache__" not in p.parts]
-        patterns = setuptools["package-data"][package]
-        assert files and all(any(fnmatch(f, pattern) for pattern in patterns) for f in files), (package, files)
+        assert files and all(any(fnmatch(f, pattern) for pattern in data[package]) for f in files), (
+            package, files)
 
 
 def test_the_runtime_user_is_not_root(final):

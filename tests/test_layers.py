@@ -20,10 +20,10 @@ LAYERS = {
 }
 
 
-def imported(path: Path, package: str) -> set[str]:
-    """Every module `path` imports, relative imports resolved within `package`."""
+def imported(path: Path, folder: str) -> set[str]:
+    """Every module `path` (in `folder`) imports, relative imports resolved within its package."""
     names = set()
-    here = package.split(".") + list(path.relative_to(ROOT / path.parts[len(ROOT.parts)]).parent.parts)
+    here = LAYERS[folder][0].split(".") + list(path.parent.relative_to(ROOT / folder).parts)
     for node in ast.walk(ast.parse(path.read_text())):
         if isinstance(node, ast.Import):
             names |= {alias.name for alias in node.names}
@@ -39,7 +39,7 @@ def test_a_layer_imports_nothing_above_it(folder):
     package, forbidden = LAYERS[folder]
     wrong = {f"{path.relative_to(ROOT)}: {name}"
              for path in (ROOT / folder).rglob("*.py")
-             for name in imported(path, package)
+             for name in imported(path, folder)
              if any(name == f or name.startswith(f + ".") for f in forbidden)}
     assert not wrong, sorted(wrong)
 

@@ -3,13 +3,8 @@
 import pytest
 
 import percussim
+from conftest import duration_only
 from percussim.solver.summary import Summary
-
-
-def duration_only(name: str) -> dict:
-    case = percussim.load_preset(name).model_dump(exclude_none=True)
-    case["numerics"] = {"duration": case["numerics"]["duration"]}
-    return case
 
 
 @pytest.mark.parametrize("how", [
