@@ -75,8 +75,9 @@ from scipy.optimize import brentq
 from percussim.solver import kernel as K
 from percussim.solver.case import Case, load_case
 from percussim.solver.controller import (end_conditions, force_law, rod_constants, scheme_weights,
-                                         simulate_rod, tool_on)
+                                         simulate_rod, striker_on, tool_on)
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
+from percussim.solver.layout import HISTORY_COLUMNS
 from percussim.solver.summary import MAX_CONTACTS
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -159,12 +160,13 @@ def numba_run(s: Setup) -> dict[str, float]:
     state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
     no_fields = np.empty((0, s.n + 1))
     recorders = K.Recorders(
-        history=np.empty((K.HISTORY_COLUMNS, 0)), history_stride=0,
+        history=np.empty((HISTORY_COLUMNS, 0)), history_stride=0,
         probe_node=np.empty(0, np.int64), probe_weight=np.empty(0), probes=np.empty((0, 0)),
         field_u=no_fields, field_stress=no_fields, field_stride=0)
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
-    status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, medium,
-                             force_law(case), state, observed, recorders)
+    striker = striker_on(case, s.num, s.tool, s.rod)
+    status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, striker,
+                             medium, force_law(case), state, observed, recorders)
     assert status == K.STATUS_OK
     return reported(state, observed)
 

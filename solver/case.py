@@ -45,13 +45,6 @@ def _field_error(model: str, loc: tuple, message: str, value: Any) -> Validation
     return ValidationError.from_exception_data(model, [detail])
 
 
-class Striker(_Model):
-    """The lumped striker: mass `m1` (kg) and pre-impact velocity `W1` (m/s, + toward the tool)."""
-
-    mass: Mass
-    velocity: Speed
-
-
 class Profile(_Model):
     """Piecewise-linear cross-section `S(x)`: stations `x` (m, from the struck end) and areas (m²)."""
 
@@ -62,7 +55,7 @@ class Profile(_Model):
     @classmethod
     def _increasing(cls, x: list[float]) -> list[float]:
         if x[0] != 0.0:
-            raise PydanticCustomError("value_error", "x[0] must be 0 (the struck end)")
+            raise PydanticCustomError("value_error", "x[0] must be 0 (the struck end, or a striker's impact face)")
         for i in range(1, len(x)):
             if x[i] <= x[i - 1]:
                 raise PydanticCustomError(
@@ -97,18 +90,72 @@ class Tool(_Model):
 
     @model_validator(mode="after")
     def _one_shape(self) -> "Tool":
-        if (self.area is None) == (self.profile is None):
-            raise _field_error(
-                "Tool", ("area",), "give exactly one of tool.area (uniform) or tool.profile", self.area
-            )
-        if self.profile is not None:
-            last = self.profile.x[-1]
-            if abs(last - self.length) > 1e-9 * self.length:
-                raise _field_error(
-                    "Tool", ("profile", "x", len(self.profile.x) - 1),
-                    f"the last station must equal tool.length = {self.length} m", last,
-                )
+        _check_shape(self, "tool")
         return self
+
+
+def _check_shape(rod: "Tool | Striker", name: str) -> None:
+    """A rod has a uniform `area` or a `profile` whose last station is its length."""
+    if (rod.area is None) == (rod.profile is None):
+        raise _field_error(name, ("area",),
+                           f"give exactly one of {name}.area (uniform) or {name}.profile", rod.area)
+    if rod.profile is not None:
+        last = rod.profile.x[-1]
+        if abs(last - rod.length) > 1e-9 * rod.length:
+            raise _field_error(name, ("profile", "x", len(rod.profile.x) - 1),
+                               f"the last station must equal {name}.length = {rod.length} m", last)
+
+
+class Striker(_Model):
+    """The striker at its pre-impact velocity `W1` (m/s, + toward the tool): lumped, of mass `m1`
+    (kg), or an elastic rod (a piston) of `length`, `youngs_modulus`, `density` and a uniform
+    `area` or a `profile` (stations from its impact face, the end that meets the tool)."""
+
+    velocity: Speed
+    mass: Mass | None = None
+    length: Length | None = None
+    youngs_modulus: Modulus | None = None
+    density: Density | None = None
+    area: Area | None = None
+    profile: Profile | None = None
+
+    @model_validator(mode="after")
+    def _lumped_or_rod(self) -> "Striker":
+        if self.mass is not None and self.length is not None:
+            raise _field_error(
+                "Striker", ("mass",),
+                "cannot be given with striker.length: striker.mass makes a lumped striker, "
+                "striker.length an elastic rod; give one of them", self.mass)
+        if self.mass is None and self.length is None:
+            raise _field_error(
+                "Striker", ("mass",),
+                "is required (a lumped striker), unless the striker is an elastic rod "
+                "(striker.length, youngs_modulus, density and area or profile)", None)
+        rod_fields = ("youngs_modulus", "density", "area", "profile")
+        if self.mass is not None:
+            for name in rod_fields:
+                if getattr(self, name) is not None:
+                    raise _field_error(
+                        "Striker", (name,),
+                        "belongs to an elastic striker (with striker.length), not a lumped one "
+                        "(striker.mass)", getattr(self, name))
+            return self
+        for name in ("youngs_modulus", "density"):
+            if getattr(self, name) is None:
+                raise _field_error("Striker", (name,),
+                                   "is required for an elastic striker (striker.length)", None)
+        _check_shape(self, "striker")
+        return self
+
+    @property
+    def elastic(self) -> bool:
+        """Whether the striker is an elastic rod (else lumped)."""
+        return self.length is not None
+
+    def rod(self) -> "Tool":
+        """The elastic striker as a rod (its x from the impact face)."""
+        return Tool(length=self.length, youngs_modulus=self.youngs_modulus, density=self.density,
+                    area=self.area, profile=self.profile)
 
 
 class Contact(_Model):
@@ -123,11 +170,78 @@ class Contact(_Model):
     damping: Damping = 0.0
 
 
-class Medium(_Model):
-    """Working medium at x = L (4): spring `c2` (N/m) and damper `b2` (N·s/m)."""
+class Anvil(_Model):
+    """A lumped body between the striker and the tool (an anvil, an adapter, the paper's second
+    striker): `mass` (kg), `velocity` (m/s at impact) and its `contact` with the tool; the case's
+    `contact` is then the striker's with the anvil."""
 
-    stiffness: Stiffness
+    mass: Mass
+    velocity: Speed = 0.0
+    contact: Contact
+
+
+MEDIUM_FIELDS = {
+    "linear": ("stiffness", "damping"),
+    "bilinear": ("stiffness", "unloading_stiffness", "damping"),
+    "smith": ("ultimate_resistance", "quake", "damping_factor"),
+}
+MEDIUM_REQUIRED = {"linear": ("stiffness",), "bilinear": ("stiffness", "unloading_stiffness"),
+                   "smith": ("ultimate_resistance", "quake")}
+
+
+class Medium(_Model):
+    """Working medium at x = L (4), pressed by the tool's working end (penetration u_N ≥ 0):
+
+    - `linear`: spring `c2` (N/m) and damper `b2` (N·s/m), as in the paper;
+    - `bilinear`: rock (Lundberg): `stiffness` k while loading, `unloading_stiffness` k_u ≥ k,
+      damper `damping`; the penetration left when the force is off is permanent, and the medium
+      does not pull;
+    - `smith`: soil at a pile's toe (Smith): static resistance `R_s`, elastic–perfectly plastic up
+      to `ultimate_resistance` R_u (N) at `quake` q (m), unloading with the same stiffness R_u/q,
+      times `(1 + J·v)` with the `damping_factor` J (s/m); it does not pull.
+    """
+
+    kind: Literal["linear", "bilinear", "smith"] = "linear"
+    stiffness: Stiffness | None = None
     damping: Damping = 0.0
+    unloading_stiffness: Stiffness | None = None
+    ultimate_resistance: Annotated[float, Field(gt=0, le=1e12)] | None = None
+    quake: Annotated[float, Field(gt=0, le=1.0)] | None = None
+    damping_factor: Annotated[float, Field(ge=0, le=1e3)] = 0.0
+
+    @model_validator(mode="after")
+    def _fields_of_kind(self) -> "Medium":
+        allowed = MEDIUM_FIELDS[self.kind]
+        for name, spec in type(self).model_fields.items():
+            value = getattr(self, name)
+            # given: a value other than the field's default (a stored case spells out defaults)
+            if name != "kind" and value is not None and value != spec.default and name not in allowed:
+                raise _field_error(
+                    "Medium", (name,),
+                    f"is not a field of a {self.kind} medium (its fields: {', '.join(allowed)})",
+                    getattr(self, name))
+        for name in MEDIUM_REQUIRED[self.kind]:
+            if getattr(self, name) is None:
+                raise _field_error("Medium", (name,), f"is required for a {self.kind} medium", None)
+        if self.kind == "bilinear" and self.unloading_stiffness < self.stiffness:
+            raise _field_error(
+                "Medium", ("unloading_stiffness",),
+                f"must be ≥ medium.stiffness = {self.stiffness:.6g} N/m: rock unloads at least as "
+                "stiffly as it loads", self.unloading_stiffness)
+        return self
+
+    @property
+    def loading_stiffness(self) -> float:
+        """The medium's stiffness while it is loaded (N/m): c2, k, or R_u/q."""
+        if self.kind == "smith":
+            return self.ultimate_resistance / self.quake
+        return self.stiffness
+
+
+class Blows(_Model):
+    """Blow after blow: `count` blows of `numerics.duration` each."""
+
+    count: int = Field(ge=1, le=1000, description="how many blows")
 
 
 class SineForce(_Model):
@@ -248,15 +362,18 @@ class Outputs(_Model):
 
 
 class Case(_Model):
-    """One impact case: striker, tool, contact, optional medium and force, numerics, outputs."""
+    """One impact case: striker, tool, contact, optional anvil, medium, force and blows, numerics,
+    outputs."""
 
     name: str = "case"
     description: str | None = None
     striker: Striker
     tool: Tool
     contact: Contact
+    anvil: Anvil | None = None
     medium: Medium | None = None
     force: Force | None = None
+    blows: Blows | None = None
     numerics: Numerics
     outputs: Outputs = Field(default_factory=Outputs)
 
@@ -269,6 +386,21 @@ class Case(_Model):
                     f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m", x,
                 )
         return self
+
+    @property
+    def beyond_paper(self) -> list[str]:
+        """The fields that ask for more than the paper's model (a lumped striker, no anvil, a
+        linear medium, one blow), which only the ends that integrate their own equations take."""
+        fields = []
+        if self.striker.elastic:
+            fields.append("striker.length")
+        if self.anvil is not None:
+            fields.append("anvil")
+        if self.medium is not None and self.medium.kind != "linear":
+            fields.append("medium.kind")
+        if self.blows is not None and self.blows.count > 1:
+            fields.append("blows.count")
+        return fields
 
 
 class FieldError(BaseModel):

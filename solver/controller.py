@@ -11,9 +11,10 @@ import numpy as np
 
 from . import kernel as K
 from . import layout as L
-from .case import Case
+from .case import Case, Medium
 from .errors import Cancelled, NumericalFailure
-from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
+from .grid import (Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass,
+                   wave_speed)
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
 from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows
 
@@ -39,6 +40,22 @@ HISTORY_PATHS = {
     "energy/contact_potential": L.H_CONTACT_POTENTIAL,
     "energy/medium_potential": L.H_MEDIUM_POTENTIAL,
 }
+# A medium that yields adds these.
+YIELDING_PATHS = {
+    "medium/penetration": L.H_WORKING_END,
+    "medium/permanent_penetration": L.H_PERMANENT_PENETRATION,
+    "energy/medium_plastic": L.H_MEDIUM_PLASTIC,
+}
+
+
+def history_paths(case: Case) -> dict[str, int]:
+    """The history columns a case keeps, by HDF5 path: only what its model has."""
+    paths = dict(HISTORY_PATHS)
+    if case.medium is not None and case.medium.kind != "linear":
+        paths.update(YIELDING_PATHS)
+    if case.striker.elastic:
+        paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
+    return paths
 
 
 def _kept(first: int, last: int, stride: int) -> int:
@@ -66,17 +83,44 @@ def force_law(case: Case) -> K.ForceLaw:
     return K.ForceLaw(kind=kind, amplitude=f.amplitude, omega=f.omega, start=0.0, duration=0.0)
 
 
+MEDIUM_KINDS = {"linear": K.MEDIUM_LINEAR, "bilinear": K.MEDIUM_BILINEAR, "smith": K.MEDIUM_SMITH}
+
+
 def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
     """The striker and contact, and the medium, with the impedances of the tool's end cells."""
     c, m = case.contact, case.medium
     impedance = grid.density * wave_speed(case.tool)
-    contact = K.Contact(striker_mass=case.striker.mass, striker_velocity=case.striker.velocity,
+    contact = K.Contact(striker_mass=striker_mass(case.striker), striker_velocity=case.striker.velocity,
                         stiffness=c.stiffness, exponent=c.exponent,
                         tension_stiffness=c.tension_stiffness, damping=c.damping,
                         impedance=impedance * grid.end_area[0])
-    medium = K.Medium(stiffness=m.stiffness if m else 0.0, damping=m.damping if m else 0.0,
-                      impedance=impedance * grid.end_area[1])
+    if m is None:
+        m = Medium(stiffness=0.0)
+    medium = K.Medium(kind=MEDIUM_KINDS[m.kind], stiffness=m.loading_stiffness, damping=m.damping,
+                      impedance=impedance * grid.end_area[1],
+                      unloading_stiffness=m.unloading_stiffness or 0.0,
+                      ultimate_resistance=m.ultimate_resistance or 0.0,
+                      damping_factor=m.damping_factor)
     return contact, medium
+
+
+def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K.Striker:
+    """The striker as the kernel takes it: an elastic one on its grid at Courant number 1; a lumped
+    one as `elastic = False` (its mass is the `Contact`'s; the tool's bundles fill the rest)."""
+    striker = case.striker
+    if not striker.elastic:
+        return K.Striker(elastic=False, tool=tool, rod=rod, impedance=1.0, back_impedance=1.0,
+                         mass=striker.mass, back_delay=0.0)
+    grid, back_delay = striker_grid(striker, num.time_step)
+    impedance = grid.density * wave_speed(striker.rod())
+    return K.Striker(
+        elastic=True, tool=tool_on(grid),
+        rod=K.Rod(cell_length=grid.h, time_step=num.time_step, courant_squared=1.0,
+                  youngs_modulus=grid.youngs_modulus, density=grid.density,
+                  struck_end_stiffness=grid.end_area[0] * grid.youngs_modulus / grid.h,
+                  working_end_stiffness=grid.end_area[1] * grid.youngs_modulus / grid.h),
+        impedance=impedance * grid.end_area[0], back_impedance=impedance * grid.end_area[1],
+        mass=striker_mass(striker), back_delay=back_delay)
 
 
 def tool_on(grid: Grid) -> K.Tool:
@@ -105,17 +149,19 @@ def scheme_weights(num: ResolvedNumerics) -> K.Weights:
                      end_masses=scheme.end_masses, impedance_ends=num.ends == "impedance")
 
 
-def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool
-              ) -> np.ndarray:
+def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool,
+              elastic_striker: bool = False) -> np.ndarray:
     """The energy terms at `duration`, interpolated between the kernel's last two layers (`energy`
     row 0 after layer `last`, row 1 before it): the run's last layer can lie up to a step beyond
     the duration. The terms are at layer m − ½ in the scheme's own form, but for the ends that
     integrate their own equations (`ends_at_layer`), whose work, dissipation and stored energy are
-    at layer m."""
+    at layer m (but for an elastic striker's, at m − ½ as the tool's)."""
     at = np.full(L.ENERGY_SLOTS, (last - 0.5) * tau)
     if ends_at_layer:
         at[[L.E_EXTERNAL_WORK, L.E_DISSIPATED_CONTACT, L.E_DISSIPATED_MEDIUM, L.E_STRIKER_KINETIC,
-            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL]] = last * tau
+            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL, L.E_MEDIUM_PLASTIC]] = last * tau
+        if elastic_striker:
+            at[L.E_STRIKER_KINETIC] = (last - 0.5) * tau
     if last < 2:
         return energy[0].copy()
     weight = (duration - at) / tau  # 0 at row 0, −1 at row 1
@@ -140,13 +186,14 @@ def simulate_rod(
     n, tau = grid.cells, num.time_step
     tool, rod = tool_on(grid), rod_constants(case, num, grid)
     contact, medium = end_conditions(case, grid)
+    striker = striker_on(case, num, tool, rod)
     rows = K.factor_tool_rows(tool, rod, weights, medium)
     force = force_law(case)
 
     out = case.outputs
     probe_node, probe_weight = _probe_nodes(grid, out.probes)
     field_stride = out.field_stride if out.fields else 0
-    state = K.new_state(n)
+    state = K.new_state(n, len(striker.tool.node_area) - 1 if striker.elastic else 0)
     observed = K.new_observed(MAX_CONTACTS)
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
     lag = 1 if weights.centered and not weights.impedance_ends else 0
@@ -157,7 +204,8 @@ def simulate_rod(
     total_rows = _kept(0, num.steps, out.history_stride)
     total_frames = _kept(0, num.steps, field_stride)
     probe_x = np.asarray(out.probes, float)
-    for path in HISTORY_PATHS:
+    paths = history_paths(case)
+    for path in paths:
         recorder.create(path, (total_rows,))
     recorder.create("probes/x", probe_x.shape)
     recorder.append("probes/x", probe_x)
@@ -188,12 +236,12 @@ def simulate_rod(
             probes=np.empty((kept_rows, len(probe_node))),
             field_u=np.empty((frames, n + 1)), field_stress=np.empty((frames, n + 1)),
             field_stride=field_stride)
-        status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, medium,
-                                            force, state, observed, recorders)
+        status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, striker,
+                                            medium, force, state, observed, recorders)
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
         history = recorders.history
-        for path, column in HISTORY_PATHS.items():
+        for path, column in paths.items():
             recorder.append(path, history[column, :n_hist])
         recorder.append("probes/stress", recorders.probes[:n_hist])
         low, high = np.searchsorted(summary_rows, (row, row + n_hist))
@@ -217,8 +265,9 @@ def simulate_rod(
         case=case, numerics=num, extremes=observed.extremes, contacts=observed.contacts,
         open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
         energy=energy_at(state.energy, last_layer, tau, case.numerics.duration,
-                         weights.impedance_ends),
+                         weights.impedance_ends, striker.elastic),
         history=dict(zip(FORCE_HISTORY.values(), table)),
+        permanent_penetration=ends[K.S_MEDIUM_SET],
     )
     held = recorder.held()
     if held is None:

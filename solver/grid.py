@@ -9,7 +9,7 @@ from typing import Annotated, Literal
 import numpy as np
 from pydantic import ConfigDict, Field
 
-from .case import Case, CaseError, FieldError, Numerics, Tool
+from .case import Case, CaseError, FieldError, Numerics, Profile, Striker, Tool
 from .schemes import Scheme, make_scheme, scheme_of
 
 DEFAULT_CELLS = 100
@@ -42,13 +42,47 @@ def wave_speed(tool: Tool) -> float:
     return math.sqrt(tool.youngs_modulus / tool.density)
 
 
+def striker_mass(striker: Striker) -> float:
+    """m1 (kg): a lumped striker's mass, or an elastic one's `ρ∫S dx`."""
+    return striker.mass if not striker.elastic else tool_mass(striker.rod())
+
+
+def striker_transit(striker: Striker) -> float:
+    """An elastic striker's wave transit time `L_s/a_s` (s; 0 for a lumped one)."""
+    return striker.length / wave_speed(striker.rod()) if striker.elastic else 0.0
+
+
+MIN_STRIKER_CELLS = 2  # an elastic striker's fewest cells: its face and back ends need one between
+
+
+def striker_cells(striker: Striker, tau: float) -> int:
+    """The cells of an elastic striker at Courant number 1 with the time step τ: the whole number
+    of steps its wave transit takes (the rest of its length lies beyond its last node)."""
+    return int(math.floor(striker_transit(striker) / tau * (1.0 + 1e-12)))
+
+
+def striker_grid(striker: Striker, tau: float) -> tuple["Grid", float]:
+    """An elastic striker on its grid (`striker_cells`, cells of `a_s·τ` from its face) and the
+    back delay: twice the transit time of its part beyond the last node (< 2τ)."""
+    rod = striker.rod()
+    cells = striker_cells(striker, tau)
+    gridded = cells * wave_speed(rod) * tau
+    if rod.profile is not None:
+        x = [xi for xi in rod.profile.x if xi < gridded] + [gridded]
+        part = rod.model_copy(update={"length": gridded, "profile": Profile(
+            x=x, area=list(np.interp(x, rod.profile.x, rod.profile.area)))})
+    else:
+        part = rod.model_copy(update={"length": gridded})
+    return make_grid(part, cells, True), max(0.0, 2.0 * (striker_transit(striker) - cells * tau))
+
+
 def rigid_wall_depth(case: Case) -> float | None:
     """The contact's deepest compression δ against a rigid wall (m): from the impact velocity, or
     with none from the external force; None when neither acts."""
     c1, p = case.contact.stiffness, 1.0 + case.contact.exponent  # p: the force's exponent
     w1 = abs(case.striker.velocity)
     if w1 > 0:
-        return ((p + 1.0) * case.striker.mass * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
+        return ((p + 1.0) * striker_mass(case.striker) * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
     if case.force is not None and case.force.amplitude != 0:
         return (abs(case.force.amplitude) / c1) ** (1.0 / p)
     return None
@@ -66,7 +100,7 @@ def contact_time_estimate(case: Case) -> float:
     stiffness = case.contact.stiffness * depth**case.contact.exponent
     # A depth that underflowed to 0 (a striker of a few yoctograms) leaves the contact too short
     # to estimate: 0, which the caller refuses as "no time step can be chosen".
-    return math.pi * math.sqrt(case.striker.mass / stiffness) if stiffness > 0 else 0.0
+    return math.pi * math.sqrt(striker_mass(case.striker) / stiffness) if stiffness > 0 else 0.0
 
 
 def contact_stiffness_estimate(case: Case) -> float:
@@ -96,7 +130,7 @@ def check_stiff_ends(case: Case, weights: Scheme, cells: int, end_areas: tuple[f
     errors = []
     for field, stiffness, area in (
             ("contact.stiffness", contact_stiffness_estimate(case), end_areas[0]),
-            ("medium.stiffness", case.medium.stiffness if case.medium else 0.0, end_areas[1])):
+            ("medium.stiffness", case.medium.loading_stiffness if case.medium else 0.0, end_areas[1])):
         end_cell = case.tool.youngs_modulus * area / h
         if stiffness > limit * end_cell:
             needed = cells * stiffness / (limit * end_cell)
@@ -184,11 +218,27 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
                     f"{cells} cells gives {courant:.4g}: set numerics.time_step ≤ {h / a:.4g} s, "
                     "use fewer cells, or numerics.scheme = 'sigma'")])
     steps = max(1, math.ceil(steps - 1e-9))
+    ends = None
     if model != "rod":
         ends = "none"
     elif weights.name == "explicit" and weights.end_masses and courant >= IMPEDANCE_COURANT:
         ends = "impedance"
-    else:
+    if case.beyond_paper and ends != "impedance":
+        field = case.beyond_paper[0]
+        raise CaseError([FieldError(
+            field=field,
+            message=f"{field} is solved only with the tool as a rod, by the explicit scheme at "
+                    "Courant number 1 (its ends integrate their own equations): leave "
+                    "numerics.model, cells, time_step and scheme out (the default accuracy), give "
+                    "numerics.tolerance, or numerics.scheme = 'explicit' with numerics.cells only")])
+    if ends == "impedance" and case.striker.elastic and striker_cells(case.striker, tau) < MIN_STRIKER_CELLS:
+        need = math.ceil(MIN_STRIKER_CELLS * cells * (h / a) / striker_transit(case.striker))
+        raise CaseError([FieldError(
+            field="numerics.cells",
+            message=f"the elastic striker's wave transit, {striker_transit(case.striker):.3g} s, "
+                    f"is under {MIN_STRIKER_CELLS} time steps of {tau:.3g} s: give at least {need} "
+                    "cells, or leave numerics.cells out (the default accuracy)")])
+    if model == "rod" and ends != "impedance":
         ends = "mass" if weights.end_masses else "massless"
         check_stiff_ends(case, weights, cells,
                          tuple(tool_area(case.tool, np.array([0.0, case.tool.length]))))
@@ -280,11 +330,11 @@ def rigidity(case: Case) -> float:
     The contact is linearised at the depth of a rigid-wall impact (the estimate the time step
     starts from too): tangent stiffness `(1+α)·c1·depth^α`.
     """
-    alpha, m1 = case.contact.exponent, case.striker.mass
+    alpha, m1 = case.contact.exponent, striker_mass(case.striker)
     m2 = tool_mass(case.tool)
     period = contact_time_estimate(case)
     k_contact = (1.0 + alpha) * m1 * (math.pi / period) ** 2  # = (1+α)·G at the rigid-wall depth
-    k_medium = case.medium.stiffness if case.medium else 0.0
+    k_medium = case.medium.loading_stiffness if case.medium else 0.0
     # The larger root of det(K − ω²M) = 0 for K = [[k, −k], [−k, k + k_medium]], M = diag(m1, m2):
     # a quadratic whose roots are real and whose larger one suffers no cancellation.
     half_trace = 0.5 * (k_contact / m1 + (k_contact + k_medium) / m2)
@@ -299,8 +349,13 @@ def time_scale(case: Case) -> float:
     rise is left to the ends' substeps."""
     tool = case.tool
     area = tool.area if tool.area is not None else tool.profile.area[0]
-    braking = case.striker.mass / (tool.density * wave_speed(tool) * area)
-    return max(contact_time_estimate(case), braking)
+    braking = striker_mass(case.striker) / (tool.density * wave_speed(tool) * area)
+    scale = max(contact_time_estimate(case), braking)
+    if case.striker.elastic:
+        # an elastic striker's pulse has the striker's transit as its features' length: on the
+        # first grid it has `MIN_STRIKER_CELLS` (at a tolerance of 1e-2)
+        scale = min(scale, 2.0 * striker_transit(case.striker))
+    return scale
 
 
 def profile_cells(case: Case) -> int:
@@ -325,7 +380,7 @@ def first_cells(case: Case, tol: float) -> int:
     if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
         raise CaseError([FieldError(
             field="striker",
-            message=f"the contact of a {case.striker.mass:.3g}-kg striker at {case.striker.velocity:.3g} "
+            message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.striker.velocity:.3g} "
                     "m/s lasts no time that a grid can resolve: give values of a real striker")])
     return max(MIN_CELLS, profile_cells(case),
                math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))

@@ -71,17 +71,22 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .layout import (ENERGY_SLOTS, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
-                     E_EXTERNAL_WORK, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC, E_TOOL_KINETIC,
-                     E_TOOL_STRAIN, HISTORY_COLUMNS, H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
+                     E_EXTERNAL_WORK, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
+                     E_STRIKER_STRAIN, E_TOOL_KINETIC,
+                     E_TOOL_STRAIN, H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
                      H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
-                     H_MEDIUM_FORCE, H_MEDIUM_POTENTIAL, H_OVERLAP, H_STRIKER_DISP,
+                     H_MEDIUM_FORCE, H_MEDIUM_PLASTIC, H_MEDIUM_POTENTIAL, H_OVERLAP,
+                     H_PERMANENT_PENETRATION, H_STRIKER_DISP, H_STRIKER_STRAIN,
                      H_STRIKER_KINETIC, H_STRIKER_VEL, H_STRUCK_END, H_TIME, H_TOOL_KINETIC,
                      H_TOOL_STRAIN, H_WORKING_END, X_CONTACTS, X_CO_IMPACT, X_ENERGY_EXCESS,
-                     X_FAILED_TIME, X_MAX_COMPRESSION, X_MAX_TENSION, X_MIN_CONTACT_STEPS,
+                     X_FAILED_TIME, X_MAX_COMPRESSION, X_MAX_PENETRATION, X_MAX_TENSION,
+                     X_MIN_CONTACT_STEPS,
                      X_PEAK_FORCE, X_PEAK_FORCE_TIME, X_REBOUND_VELOCITY, new_extremes)
 
 # Force kinds (`force_kind`)
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
+# Medium kinds (`Medium.kind`)
+MEDIUM_LINEAR, MEDIUM_BILINEAR, MEDIUM_SMITH = 0, 1, 2
 
 # End slots (`ends[S_…]`): what the next step needs of the ends beyond the layers. Whether the
 # striker is in contact and since when; the end forces and the contact potential at the last
@@ -94,7 +99,16 @@ S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER = 5, 6, 7
 S_POTENTIAL_BEFORE, S_POTENTIAL_BEFORE_THAT = 8, 9  # contact potential Φ at layers m−1, m−2
 S_STRIKER_VELOCITY = 10
 S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
-END_SLOTS = 15
+# A medium that yields: its permanent penetration (the set) and, for rock, the deepest penetration
+S_MEDIUM_SET, S_MEDIUM_DEEPEST = 15, 16
+# An elastic striker: the incoming waves' displacements G at its face and at its back end (layers
+# m−1, m−2), the back end's incoming rate over the last two steps (mean and slope of each: the
+# free end returns it after the `back_delay`), and the contact's impulse so far
+S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE = 17, 18, 19, 20
+S_BACK_RATE = 21  # 21, 22: mean, slope of step m−1; 23, 24: of step m−2
+S_IMPULSE = 25
+S_BACK_ENERGY = 26  # the energy of the waves beyond the striker's last node, at layer m − ½
+END_SLOTS = 27
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
@@ -122,15 +136,22 @@ Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponen
 """The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
 contact and `c0·δ` in separation (c1, α, c0), its damper (b1), and the impedance ρ·a·S of the
 tool's end cell (N·s/m)."""
-Medium = namedtuple("Medium", "stiffness damping impedance")
-"""The working end: the medium's spring and damper (c2, b2; 0 for a free end) and the impedance
-of the tool's end cell."""
+Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness "
+                               "ultimate_resistance damping_factor")
+"""The working end: the medium's `MEDIUM_…` kind, its loading stiffness (c2, rock's k, or soil's
+R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading
+stiffness k_u, soil's ultimate resistance R_u and Smith damping J (s/m)."""
 ForceLaw = namedtuple("ForceLaw", "kind amplitude omega start duration")
 """R(t) on the striker: a `FORCE_…` kind and its parameters."""
-State = namedtuple("State", "u y ends energy")
-"""What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's `y` (3),
-the ends' slots (`S_…`) and the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at the
-one before)."""
+Striker = namedtuple("Striker", "elastic tool rod impedance back_impedance mass back_delay")
+"""The striker as a rod (when `elastic`): its `Tool` and `Rod` on its own grid (node 0 its impact
+face, at Courant number 1 with the tool's time step), the impedances ρ·a·S of its face and back
+cells, its mass, and `back_delay`: the time a wave takes there and back over the part of the striker beyond
+its last node, less than 2τ (its length is rarely a whole number of cells)."""
+State = namedtuple("State", "u y ends energy striker")
+"""What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
+(3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
+the one before) and an elastic striker's layers (3 × (N_s+1); its node 0 is `y`)."""
 Observed = namedtuple("Observed", "extremes contacts")
 """What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
 intervals (start, end; one row each, those beyond its rows counted only)."""
@@ -164,10 +185,11 @@ SEGMENTS = 4
 MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swept serially
 
 
-def new_state(cells: int) -> State:
-    """The state before a run on `cells` cells (`advance` sets layer 0 and the one before)."""
+def new_state(cells: int, striker_cells: int = 0) -> State:
+    """The state before a run on `cells` cells, with an elastic striker on `striker_cells`
+    (`advance` sets layer 0 and the one before)."""
     return State(u=np.zeros((3, cells + 1)), y=np.zeros(3), ends=np.zeros(END_SLOTS),
-                 energy=np.zeros((2, ENERGY_SLOTS)))
+                 energy=np.zeros((2, ENERGY_SLOTS)), striker=np.zeros((3, striker_cells + 1)))
 
 
 def new_observed(max_contacts: int) -> Observed:
@@ -542,6 +564,32 @@ def struck_end_stage(base, g, r, v_in, guess, contact):
 
 
 @njit(cache=True, inline="always")
+def rod_striker_stage(base, g, v_in, v_face, guess, contact, striker):
+    """`struck_end_stage` for an elastic striker: its face moves as `y' = 2·v_face − F/Z_s` under
+    the wave `v_face` arriving at it from inside the striker, so that δ gives way to F through both
+    impedances. Returns `(y, y', u_0, F, δ)`."""
+    by, bu = base
+    z, z_s, b1 = contact.impedance, striker.impedance, contact.damping
+    compliance = g / z_s + g / z
+    denominator = 1.0 + b1 / z_s + b1 / z
+    pushed = 2.0 * b1 * (v_face - v_in)
+    free = by - bu + 2.0 * g * (v_face - v_in)  # δ were F = 0
+    delta = solve_spring_balance(free - compliance * pushed / denominator, compliance / denominator,
+                                 guess, contact)
+    force = (contact_spring(delta, contact)[0] + pushed) / denominator
+    face_velocity = 2.0 * v_face - force / z_s
+    return by + g * face_velocity, face_velocity, bu + g * (force / z + 2.0 * v_in), force, delta
+
+
+@njit(cache=True, inline="always")
+def rod_face_force(delta, v_face, v_in, contact, striker):
+    """`struck_end_force` for an elastic striker: `F·(1 + b1/Z_s + b1/Z) = Φ'(δ) + 2·b1·(v_face − v_in)`."""
+    b1 = contact.damping
+    spring = contact_spring(delta, contact)[0]
+    return (spring + 2.0 * b1 * (v_face - v_in)) / (1.0 + b1 / striker.impedance + b1 / contact.impedance)
+
+
+@njit(cache=True, inline="always")
 def force_on_substep(t, t_a, t_b, force):
     """R at t on a substep [t_a, t_b] that no break of R crosses: a pulse takes its value at the
     substep's midpoint, so that both ends of the substep see its side of a jump."""
@@ -603,27 +651,37 @@ def limited_slope(before, now, after, tau):
 
 
 @njit(cache=True)
-def struck_end_step(t0, tau, state, v_mean, v_slope, contact, force, events):
-    """Advance the striker and the struck end over [t0, t0 + τ] under the incoming wave's rate
-    `v_in(t) = v_mean + v_slope·(t − t0 − τ/2)`, split where R jumps or kinks.
+def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
+    """Advance the striker and the struck end over [t0, t0 + τ] under the incoming waves' rates
+    `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
+    `v(t) = mean + slope·(t − t0 − τ/2)`; split where R jumps or kinks.
 
-    `state` = (y, w, u_0, F) at t0 on entry, at t0 + τ on return. Returns the work of R and what
-    the damper b1 dissipated over the step, the number of changes of sign of δ, each written to
-    `events` (time, striker velocity, +1 into contact or −1 out of it; at most
-    `events.shape[0]`), and `(largest force, its time, least force, its time)` at the substeps'
-    ends (a stiff contact's substeps see a peak the layers miss).
+    `state` = (y, w, u_0, F, I) at t0 on entry, at t0 + τ on return: w the striker's velocity (its
+    face's when elastic), I the contact's impulse. Returns the work of R and what the damper b1
+    dissipated over the step, the number of changes of sign of δ, each written to `events` (time,
+    striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
+    striker's velocity is its mean, its momentum over its mass), and `(largest force, its time,
+    least force, its time)` at the substeps' ends (a stiff contact's substeps see a peak the
+    layers miss).
     """
     m1, z, b1 = contact.striker_mass, contact.impedance, contact.damping
+    v_mean, v_slope, face_mean, face_slope = waves
+    elastic = striker.elastic
     gamma = SDIRK_GAMMA
     t_a = t0
     t_end = t0 + tau
     work = 0.0
     dissipated = 0.0
     count = 0
-    y, w, u0 = state[0], state[1], state[2]
+    y, w, u0, impulse = state[0], state[1], state[2], state[4]
     v_start = v_mean - 0.5 * tau * v_slope
-    # under the wave arriving now: F can jump at t0
-    f = struck_end_force(y - u0, w, v_start, contact)
+    face_start = face_mean - 0.5 * tau * face_slope
+    # under the waves arriving now: F can jump at t0
+    if elastic:
+        f = rod_face_force(y - u0, face_start, v_start, contact, striker)
+        w = 2.0 * face_start - f / striker.impedance
+    else:
+        f = struck_end_force(y - u0, w, v_start, contact)
     f_max, t_max, f_min, t_min = f, t0, f, t0
     t_stop = t0
     sub = tau
@@ -634,30 +692,43 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, contact, force, events):
             t_next = min(t_end, next_break(t_a, force))
             reach = abs(y - u0) + (t_next - t_a) * abs(w - f / z - 2.0 * v_mean)
             stiffness = max(contact_spring(reach, contact)[1], contact.tension_stiffness)
-            braking = (z + b1) / m1
-            count_sub = substeps(stiffness / (z + b1), t_next - t_a,
-                                 min(SDIRK_MONOTONE, STIFF_RISE_STEPS * braking * tau))
+            if elastic:
+                limit = SDIRK_MONOTONE
+                z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
+                rate = stiffness / (z_both + b1)
+            else:
+                limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / m1 * tau)
+                rate = stiffness / (z + b1)
+            count_sub = substeps(rate, t_next - t_a, limit)
             sub = (t_next - t_a) / count_sub
             t_stop = t_next
         t_b = t_stop if t_a + 1.5 * sub >= t_stop else t_a + sub
         span = t_b - t_a
         g = gamma * span
-        # stage 1 at t_a + γ·span
+        step = (1.0 - gamma) * span
+        # stage 1 at t_a + γ·span, stage 2 at t_b: the new state (stiffly accurate)
         t1 = t_a + g
         r1 = force_on_substep(t1, t_a, t_b, force)
-        v1 = v_start + v_slope * (t1 - t0)
-        y1, w1, u1, f1, d1 = struck_end_stage((y, w, u0), g, r1, v1, y - u0, contact)
-        ky, kw, ku = w1, (r1 - f1) / m1, f1 / z + 2.0 * v1
-        # stage 2 at t_b: the new state (stiffly accurate)
         r2 = force_on_substep(t_b, t_a, t_b, force)
+        v1 = v_start + v_slope * (t1 - t0)
         v2 = v_start + v_slope * (t_b - t0)
-        step = (1.0 - gamma) * span
-        y2, w2, u2, f2, d2 = struck_end_stage((y + step * ky, w + step * kw, u0 + step * ku), g,
-                                              r2, v2, d1, contact)
+        if elastic:
+            y1, w1, u1, f1, d1 = rod_striker_stage(
+                (y, u0), g, v1, face_start + face_slope * (t1 - t0), y - u0, contact, striker)
+            ku = f1 / z + 2.0 * v1
+            y2, w2, u2, f2, d2 = rod_striker_stage(
+                (y + step * w1, u0 + step * ku), g, v2, face_start + face_slope * (t_b - t0), d1,
+                contact, striker)
+        else:
+            y1, w1, u1, f1, d1 = struck_end_stage((y, w, u0), g, r1, v1, y - u0, contact)
+            kw, ku = (r1 - f1) / m1, f1 / z + 2.0 * v1
+            y2, w2, u2, f2, d2 = struck_end_stage(
+                (y + step * w1, w + step * kw, u0 + step * ku), g, r2, v2, d1, contact)
         rate1 = w1 - ku
         rate2 = w2 - (f2 / z + 2.0 * v2)
         work += span * ((1.0 - gamma) * r1 * w1 + gamma * r2 * w2)
         dissipated += span * b1 * ((1.0 - gamma) * rate1 * rate1 + gamma * rate2 * rate2)
+        impulse_b = impulse + span * ((1.0 - gamma) * f1 + gamma * f2)
         # a change of sign of δ: where, on the cubic through the ends' values and rates
         delta_a = y - u0
         if (delta_a >= 0.0) != (d2 >= 0.0) and count < events.shape[0]:
@@ -665,16 +736,20 @@ def struck_end_step(t0, tau, state, v_mean, v_slope, contact, force, events):
             rate_a = w - (f / z + 2.0 * (v_start + v_slope * (t_a - t0)))
             s = hermite_root(delta_a, d2, rate_a, rate2, span)
             events[count, 0] = t_a + s * span
-            events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
+            if elastic:
+                events[count, 1] = (contact.striker_velocity
+                                    - (impulse + s * (impulse_b - impulse)) / striker.mass)
+            else:
+                events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
             events[count, 2] = 1.0 if d2 >= 0.0 else -1.0
             count += 1
-        y, w, u0, f = y2, w2, u2, f2
+        y, w, u0, f, impulse = y2, w2, u2, f2, impulse_b
         t_a = t_b
         if f > f_max:
             f_max, t_max = f, t_a
         if f < f_min:
             f_min, t_min = f, t_a
-    state[0], state[1], state[2], state[3] = y, w, u0, f
+    state[0], state[1], state[2], state[3], state[4] = y, w, u0, f, impulse
     return work, dissipated, count, (f_max, t_max, f_min, t_min)
 
 
@@ -686,6 +761,8 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
     directly, in substeps for the medium's relaxation `c2/(Z + b2)`. `state` = (u_N, F_m).
     Returns what the damper b2 dissipated and `(largest F_m, its offset, least F_m, its offset)`
     just after the step's start and at the substeps' ends, offsets from the step's start."""
+    if medium.kind != MEDIUM_LINEAR:
+        return yielding_end_step(tau, state, v_mean, v_slope, medium)
     z, c2, b2 = medium.impedance, medium.stiffness, medium.damping
     gamma = SDIRK_GAMMA
     z_total = z + b2
@@ -715,6 +792,136 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
             f_min, t_min = f, t_a + span
     state[0] = u
     state[1] = c2 * u + b2 * k2
+    return dissipated, (f_max, t_max, f_min, t_min)
+
+
+# --- Media that yield (at the ends that integrate their own equations) ------------------------------
+#
+# The medium's static resistance F_s(u) at the penetration u = u_N is piecewise linear and depends
+# on its state, the slots `S_MEDIUM_SET` (the permanent penetration u_p) and `S_MEDIUM_DEEPEST`
+# (rock's deepest penetration u_max): held fixed over a substep, updated after it. Each branch of the
+# law is linear (or, for Smith's damping, quadratic) in u, so each implicit stage is solved exactly
+# on the one branch where it lands: F_s is non-decreasing in u, which makes that branch unique.
+# The energies are those of the state: rock stores F_s²/(2k_u) and has spent ½k·u_max²·(1 − k/k_u)
+# on the permanent penetration; soil stores F_s²/(2k) and has spent R_u·u_p. Only the dampers'
+# dissipation is integrated, so the energy audit checks the stages against the law.
+
+
+@njit(cache=True, inline="always")
+def medium_set(deepest, set_, medium):
+    """The permanent penetration u_p: rock's from its deepest penetration, `u_max·(1 − k/k_u)`."""
+    if medium.kind == MEDIUM_BILINEAR:
+        return deepest - deepest * medium.stiffness / medium.unloading_stiffness
+    return set_
+
+
+@njit(cache=True, inline="always")
+def static_resistance(u, deepest, set_, medium):
+    """F_s(u): rock loads at k beyond its deepest penetration and unloads at k_u above its set;
+    soil is elastic at k = R_u/q above its set up to R_u; neither pulls (F_s ≥ 0)."""
+    k = medium.stiffness
+    if medium.kind == MEDIUM_BILINEAR:
+        if u >= deepest:
+            return k * u
+        return max(0.0, medium.unloading_stiffness * (u - set_))
+    return min(medium.ultimate_resistance, max(0.0, k * (u - set_)))
+
+
+@njit(cache=True, inline="always")
+def medium_energy(u, deepest, set_, medium):
+    """`(stored, plastic)`: what the medium would give back unloading from u, and what its
+    permanent penetration cost (module comment above)."""
+    k = medium.stiffness
+    if medium.kind == MEDIUM_LINEAR:
+        return 0.5 * k * u * u, 0.0
+    f = static_resistance(u, deepest, set_, medium)
+    if medium.kind == MEDIUM_BILINEAR:
+        k_u = medium.unloading_stiffness
+        return 0.5 * f * f / k_u, 0.5 * k * deepest * deepest * (1.0 - k / k_u)
+    return 0.5 * f * f / k, medium.ultimate_resistance * set_
+
+
+@njit(cache=True, inline="always")
+def yielding_stage(base, g, v_in, deepest, set_, medium):
+    """One implicit stage `u = base + g·u'(u)` of the working end on a yielding medium, with
+    `u' = 2·v_in − F/Z`. Returns `(u, u', F, F_s)`.
+
+    Neither acts while the end is off its set (no contact). Rock: `F = F_s(u) + b2·u'`, so
+    `u + g·F_s(u)/(Z + b2) = base + 2g·Z·v_in/(Z + b2)`, solved on the branch the left side's
+    breakpoints (the set, the deepest penetration) place it on.
+    Soil: `F = F_s(u)·(1 + J·u')`, not below 0 (the toe does not pull): with F_s fixed (no contact,
+    or plastic at R_u) `u'` is direct; on the elastic branch the stage is a quadratic in F_s."""
+    z = medium.impedance
+    free = base + 2.0 * g * v_in  # u with no resistance
+    if free <= set_:
+        return free, 2.0 * v_in, 0.0, 0.0
+    if medium.kind == MEDIUM_BILINEAR:
+        k, k_u, b2 = medium.stiffness, medium.unloading_stiffness, medium.damping
+        c = g / (z + b2)
+        target = base + 2.0 * g * z * v_in / (z + b2)
+        if target <= set_:
+            # in contact, the damper alone would take the end back past the surface: it stops there
+            rate = (set_ - base) / g
+            return set_, rate, z * (2.0 * v_in - rate), 0.0
+        if target < deepest + c * k * deepest:
+            u = (target + c * k_u * set_) / (1.0 + c * k_u)
+        else:
+            u = target / (1.0 + c * k)
+        f_s = static_resistance(u, deepest, set_, medium)
+        rate = (2.0 * z * v_in - f_s) / (z + b2)
+        return u, rate, f_s + b2 * rate, f_s
+    k, r_u, j = medium.stiffness, medium.ultimate_resistance, medium.damping_factor
+    if 1.0 + 2.0 * j * v_in <= 0.0:
+        return free, 2.0 * v_in, 0.0, 0.0
+    plastic_rate = (2.0 * v_in - r_u / z) / (1.0 + j * r_u / z)
+    u = base + g * plastic_rate
+    if u >= set_ + r_u / k:
+        return u, plastic_rate, r_u * (1.0 + j * plastic_rate), r_u
+    # F_s = s on (0, R_u): (u_p + s/k − base)(1 + J·s/Z) = g·(2·v_in − s/Z), one positive root
+    a = j / (k * z)
+    b = 1.0 / k + (set_ - base) * j / z + g / z
+    c0 = set_ - free  # < 0 here
+    root = math.sqrt(b * b - 4.0 * a * c0)
+    f_s = -2.0 * c0 / (b + root) if b >= 0.0 else (root - b) / (2.0 * a)
+    rate = (2.0 * v_in - f_s / z) / (1.0 + j * f_s / z)
+    return set_ + f_s / k, rate, f_s * (1.0 + j * rate), f_s
+
+
+@njit(cache=True)
+def yielding_end_step(tau, state, v_mean, v_slope, medium):
+    """`working_end_step` for a medium that yields: `state` = (u_N, F_m, u_p, u_max) (the
+    `S_MEDIUM_…` slots' values); the dampers' dissipation (b2, or Smith's F_s·J·u'²) and the
+    force's extremes as `working_end_step` returns them."""
+    z = medium.impedance
+    gamma = SDIRK_GAMMA
+    stiffest = max(medium.stiffness, medium.unloading_stiffness)
+    count = substeps(stiffest / (z + medium.damping), tau, SDIRK_MONOTONE)
+    span = tau / count
+    g = gamma * span
+    u, set_, deepest = state[0], state[2], state[3]
+    v_start = v_mean - 0.5 * tau * v_slope
+    _, _, f, _ = yielding_stage(u, 0.0, v_start, deepest, set_, medium)  # under the wave arriving now
+    f_max = f_min = f
+    t_max = t_min = 0.0
+    dissipated = 0.0
+    for j in range(count):
+        t_a = j * span
+        v1 = v_start + v_slope * (t_a + g)
+        u1, k1, f1, s1 = yielding_stage(u, g, v1, deepest, set_, medium)
+        v2 = v_start + v_slope * (t_a + span)
+        u, k2, f, s2 = yielding_stage(u + (1.0 - gamma) * span * k1, g, v2, deepest, set_, medium)
+        loss1, loss2 = f1 - s1, f - s2  # the damper's share of F
+        dissipated += span * ((1.0 - gamma) * loss1 * k1 + gamma * loss2 * k2)
+        if medium.kind == MEDIUM_BILINEAR:
+            deepest = max(deepest, u)
+            set_ = medium_set(deepest, set_, medium)
+        elif medium.stiffness * (u - set_) > medium.ultimate_resistance:
+            set_ = u - medium.ultimate_resistance / medium.stiffness
+        if f > f_max:
+            f_max, t_max = f, t_a + span
+        if f < f_min:
+            f_min, t_min = f, t_a + span
+    state[0], state[1], state[2], state[3] = u, f, set_, deepest
     return dissipated, (f_max, t_max, f_min, t_min)
 
 
@@ -925,24 +1132,48 @@ def step_constants(tool, rod, weights, contact):
 
 
 @njit(cache=True, inline="always")
-def start_impact(state, layer, t, tool, rod, weights, contact, step):
+def launch_striker(state, row, row_before, at, contact, striker, tau):
+    """The striker at `at` in the layer in `row`, moving at W1 in it and in the layer before
+    (`row_before`), unstrained: an elastic striker's incoming waves each carry W1/2."""
+    y, ends, striker_u = state.y, state.ends, state.striker
+    velocity = contact.striker_velocity
+    y[row] = at
+    y[row_before] = at - velocity * tau
+    ends[S_STRIKER_VELOCITY] = velocity
+    ends[S_IMPULSE] = 0.0
+    if striker.elastic:
+        for i in range(striker_u.shape[1]):
+            striker_u[row, i] = at
+            striker_u[row_before, i] = at - velocity * tau
+        for slot in (S_FACE_INCOMING, S_BACK_INCOMING):
+            ends[slot] = 0.0  # G of the layer in `row` (only its differences count)
+            ends[slot + 1] = -0.5 * velocity * tau
+        for slot in (S_BACK_RATE, S_BACK_RATE + 2):
+            ends[slot] = 0.5 * velocity
+            ends[slot + 1] = 0.0
+        ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
+
+
+@njit(cache=True, inline="always")
+def start_impact(state, layer, t, tool, rod, weights, contact, striker, step):
     """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
     from the first instant); and layer −1 (row 2) one step before. Returns layer 0 as recorded."""
-    u, y, ends, energy = state
+    u, y, ends, energy, striker_u = state
     striker_velocity = contact.striker_velocity
     for i in range(step.n + 1):
         u[layer.new, i] = 0.0
         u[2, i] = 0.0
-    y[layer.new] = 0.0
-    y[2] = -striker_velocity * rod.time_step
+    launch_striker(state, layer.new, 2, 0.0, contact, striker, rod.time_step)
     ends[S_IN_CONTACT] = 1.0
     ends[S_CONTACT_START] = 0.0
     # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
     ends[S_POTENTIAL_BEFORE] = 0.0
     ends[S_POTENTIAL_BEFORE_THAT] = 0.0
     if weights.impedance_ends:
-        contact_force = struck_end_force(0.0, striker_velocity, 0.0, contact)
-        ends[S_STRIKER_VELOCITY] = striker_velocity
+        if striker.elastic:
+            contact_force = rod_face_force(0.0, 0.5 * striker_velocity, 0.0, contact, striker)
+        else:
+            contact_force = struck_end_force(0.0, striker_velocity, 0.0, contact)
         energy[0, E_STRIKER_KINETIC] = step.initial_energy
     else:
         contact_force = contact.damping * striker_velocity
@@ -969,16 +1200,8 @@ def right_hand_sides(u, layer, tool, rows, rod, weights, step):
     new, cur, old, _ = layer
     n, r, weight_cur, weight_old = step.n, rod.courant_squared, step.weight_cur, weights.old
     grid_lower, grid_upper, inv_den = tool.lower, tool.upper, rows.inv_den
-    if step.explicit and tool.uniform:
-        # v = u^n, and the interior rows are uncoupled (den_i = 1, nothing carried)
-        for i in range(1, n):
-            u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                         + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
-    elif step.explicit:
-        for i in range(1, n):
-            u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                         + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
-                                + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
+    if step.explicit:
+        explicit_interior(u, layer, tool, r, n)
     elif tool.uniform:
         for i in range(1, n):
             v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
@@ -989,6 +1212,22 @@ def right_hand_sides(u, layer, tool, rows, rod, weights, step):
             v_left, v_mid, v_right = known_layers(u, layer, i, weight_cur, weight_old)
             lap = grid_lower[i] * (v_left - v_mid) + grid_upper[i] * (v_right - v_mid)
             u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
+
+
+@njit(cache=True, inline="always")
+def explicit_interior(u, layer, tool, r, n):
+    """The explicit scheme's interior nodes 1 … n−1 of the new layer: uncoupled (den_i = 1)."""
+    new, cur, old, _ = layer
+    grid_lower, grid_upper = tool.lower, tool.upper
+    if tool.uniform:
+        for i in range(1, n):
+            u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                         + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
+    else:
+        for i in range(1, n):
+            u[new, i] = (2.0 * u[cur, i] - u[old, i]
+                         + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
+                                + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
 
 
 NO_CARRIES = (0.0, 0.0, 0.0, 0.0)
@@ -1072,7 +1311,7 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
     R(t_n) = `r_n` is explicit in row (11). Returns `(y, u_0, F)` of the new layer, F the force the
     scheme applies in the step (centred on layer n, or on the new layer for the paper's).
     """
-    u, y, ends, _ = state
+    u, y, ends, _, _ = state
     _, cur, old, _ = layer
     delta_cur, delta_old, delta_ref = overlaps.cur, overlaps.old, overlaps.ref
     p_1, q_1 = link
@@ -1098,27 +1337,36 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
 
 
 @njit(cache=True, inline="always")
-def integrate_ends(state, observed, layer, t, tool, rod, contact, medium, force, scratch, step):
+def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, medium, force, scratch,
+                   step):
     """The ends that integrate their own equations, over the step to `t`: the waves arriving at
-    them, then the striker and the struck end (`struck_end_step`) and the working end
-    (`working_end_step`), with the contacts and the end forces' extremes their substeps see. Returns
-    whether the new ends are finite (they are written to the new layer only then), the striker's
-    velocity, the contact and medium forces, and `(work of R, dissipated by b1, by b2)` over the
-    step. `scratch`: room for the struck end's and the working end's states and the events."""
-    u, y, ends, _ = state
+    them, then the striker and the struck end (`struck_end_step`), an elastic striker's back end
+    (`free_back_end`) and the working end (`working_end_step`), with the contacts and the end
+    forces' extremes their substeps see. Returns whether the new ends are finite (they are written
+    to the new layer only then), the striker's velocity, the contact and medium forces, and `(work
+    of R, dissipated by b1, by b2)` over the step. `scratch`: room for the struck end's and the
+    working end's states and the events."""
+    u, y, ends, _, striker_u = state
     new, cur, _, _ = layer
     n, tau = step.n, rod.time_step
     end_state, far_state, events = scratch
     v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, S_INCOMING, tau)
     v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, S_FAR_INCOMING, tau)
+    face_in, face_slope = 0.0, 0.0
+    if striker.elastic:
+        face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, S_FACE_INCOMING, tau)
     end_state[0] = y[cur]
     end_state[1] = ends[S_STRIKER_VELOCITY]
     end_state[2] = u[cur, 0]
     end_state[3] = ends[S_FORCE_BEFORE]
+    end_state[4] = ends[S_IMPULSE]
     work, dissipated, crossings, struck_range = struck_end_step(
-        t - tau, tau, end_state, v_in, v_slope, contact, force, events)
+        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, force,
+        events)
     far_state[0] = u[cur, n]
     far_state[1] = ends[S_MEDIUM_FORCE]
+    far_state[2] = ends[S_MEDIUM_SET]
+    far_state[3] = ends[S_MEDIUM_DEEPEST]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, struck_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
@@ -1126,13 +1374,66 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, medium, force,
             and abs(far_state[0]) < 1e300):
         return False, 0.0, 0.0, 0.0, flows
     y[new] = end_state[0]
-    velocity = end_state[1]
     u[new, 0] = end_state[2]
     u[new, n] = far_state[0]
-    ends[S_STRIKER_VELOCITY] = velocity
+    ends[S_MEDIUM_SET] = far_state[2]
+    ends[S_MEDIUM_DEEPEST] = far_state[3]
+    ends[S_STRIKER_VELOCITY] = end_state[1]
+    ends[S_IMPULSE] = end_state[4]
+    velocity = end_state[1]
+    if striker.elastic:
+        striker_u[new, 0] = y[new]
+        free_back_end(striker_u, layer, ends, striker, tau)
+        velocity = contact.striker_velocity - end_state[4] / striker.mass
     for k in range(crossings):
         track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
     return True, velocity, end_state[3], far_state[1], flows
+
+
+@njit(cache=True, inline="always")
+def rate_integral(rates, tau, a, b, power):
+    """∫ v(s)^power ds over [a, b] (power 1 or 2) for a rate linear within each step: `rates` =
+    (mean, slope) of this step, on [0, τ], and of the two before it, on [−τ, 0] and [−2τ, −τ]."""
+    total = 0.0
+    for j in range(3):
+        mean, slope = rates[j]
+        low = -j * tau
+        mid = low + 0.5 * tau
+        p, q = max(a, low) - mid, min(b, low + tau) - mid
+        if q > p:
+            if power == 1:
+                total += mean * (q - p) + 0.5 * slope * (q * q - p * p)
+            else:
+                total += (mean * mean * (q - p) + mean * slope * (q * q - p * p)
+                          + slope * slope * (q * q * q - p * p * p) / 3.0)
+    return total
+
+
+@njit(cache=True, inline="always")
+def back_rates(ends, now):
+    """The back end's incoming rate over this step (`now`) and the two before, for `rate_integral`."""
+    return (now, (ends[S_BACK_RATE], ends[S_BACK_RATE + 1]),
+            (ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3]))
+
+
+@njit(cache=True, inline="always")
+def free_back_end(striker_u, layer, ends, striker, tau):
+    """An elastic striker's back end, free, `back_delay` beyond its last node: the node moves at
+    the wave arriving at it plus that wave as the free end returns it, `back_delay` later:
+    `y_N' = v_b(t) + v_b(t − d)`, integrated over the step exactly for rates linear in each step."""
+    new, cur, _, _ = layer
+    n_s = striker_u.shape[1] - 1
+    now = incoming_wave(striker_u, layer, n_s - 1, n_s, ends, S_BACK_INCOMING, tau)
+    d = striker.back_delay
+    rates = back_rates(ends, now)
+    returned = rate_integral(rates, tau, -d, tau - d, 1)
+    striker_u[new, n_s] = striker_u[cur, n_s] + tau * now[0] + returned
+    # each wave there carries Z·v² of power, the arriving one for the last d/2, the returned one
+    # for the d/2 before: Z·∫v_b² over [t − d, t], at the step's middle as the grid's energy is
+    ends[S_BACK_ENERGY] = striker.back_impedance * rate_integral(rates, tau, 0.5 * tau - d,
+                                                                  0.5 * tau, 2)
+    ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3] = ends[S_BACK_RATE], ends[S_BACK_RATE + 1]
+    ends[S_BACK_RATE], ends[S_BACK_RATE + 1] = now
 
 
 @njit(cache=True, inline="always")
@@ -1162,7 +1463,7 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
     the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
     `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
-    u, y, ends, energy = state
+    u, y, ends, energy, _ = state
     new, cur, old, ref = layer
     delta = y[new] - u[new, 0]
     n, tau = step.n, rod.time_step
@@ -1193,28 +1494,42 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
 
 
 @njit(cache=True, inline="always")
-def audit_impedance_energy(state, layer, flows, velocity, contact, medium, tool, step):
+def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medium, tool, step):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
     at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
-    tool's at m − ½ (the form the explicit scheme conserves); the balance compares them at m − ½."""
-    u, y, _, energy = state
+    tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
+    compares them at m − ½."""
+    u, y, ends, energy, striker_u = state
     new, cur, _, _ = layer
     n = step.n
     work, dissipated, dissipated_far = flows
     delta = y[new] - u[new, 0]
     potential = contact_law(delta, contact)[1]
+    stored, plastic = medium_energy(u[new, n], ends[S_MEDIUM_DEEPEST], ends[S_MEDIUM_SET], medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
     energy[0, E_EXTERNAL_WORK] += work
     energy[0, E_DISSIPATED_CONTACT] += dissipated
     energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
-    energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
     energy[0, E_TOOL_KINETIC] = tool_kinetic * step.kinetic_factor
     energy[0, E_TOOL_STRAIN] = tool_strain * 0.5 * step.e_over_h
     energy[0, E_CONTACT_POTENTIAL] = potential
-    energy[0, E_MEDIUM_POTENTIAL] = 0.5 * medium.stiffness * u[new, n] * u[new, n]
+    energy[0, E_MEDIUM_POTENTIAL] = stored
+    energy[0, E_MEDIUM_PLASTIC] = plastic
     balance = energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
-    for slot in (E_STRIKER_KINETIC, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL,
+    if striker.elastic:
+        s_tool, s_rod = striker.tool, striker.rod
+        e_over_h = s_rod.youngs_modulus / s_rod.cell_length
+        kinetic, strain, _, _, _, _ = tool_energy_and_stresses(
+            striker_u, new, cur, new, s_tool.node_area, s_tool.area_mid, step.strain_sigma,
+            0.5 * e_over_h)
+        energy[0, E_STRIKER_KINETIC] = kinetic * 0.5 * s_rod.density * s_rod.cell_length * step.inv_tau2
+        energy[0, E_STRIKER_STRAIN] = strain * 0.5 * e_over_h + ends[S_BACK_ENERGY]
+        balance += energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
+    else:
+        energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
+        balance += 0.5 * (energy[0, E_STRIKER_KINETIC] + energy[1, E_STRIKER_KINETIC])
+    for slot in (E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL, E_MEDIUM_PLASTIC,
                  E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM):
         balance += 0.5 * (energy[0, slot] + energy[1, slot])
     balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
@@ -1319,7 +1634,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, step):
     """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
     them; none yet for layer 0, whose energy is all the striker's)."""
     history = recorders.history
-    u, y, _, energy = state
+    u, y, _, energy, _ = state
     rec, t_rec = recorded.row, recorded.time
     history[H_TIME, column] = t_rec
     history[H_STRIKER_DISP, column] = y[rec]
@@ -1333,9 +1648,12 @@ def record_history(recorders, column, state, recorded, m_rec, force, step):
     history[H_EXTERNAL_WORK, column] = energy[0, E_EXTERNAL_WORK]
     history[H_DISSIPATED_CONTACT, column] = energy[0, E_DISSIPATED_CONTACT]
     history[H_DISSIPATED_MEDIUM, column] = energy[0, E_DISSIPATED_MEDIUM]
+    history[H_PERMANENT_PENETRATION, column] = state.ends[S_MEDIUM_SET]
+    history[H_STRIKER_STRAIN, column] = energy[0, E_STRIKER_STRAIN]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
-        for c in range(H_TOOL_KINETIC, HISTORY_COLUMNS):
+        for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL,
+                  H_MEDIUM_PLASTIC):
             history[c, column] = 0.0
     else:
         history[H_STRIKER_KINETIC, column] = energy[0, E_STRIKER_KINETIC]
@@ -1343,6 +1661,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, step):
         history[H_TOOL_STRAIN, column] = energy[0, E_TOOL_STRAIN]
         history[H_CONTACT_POTENTIAL, column] = energy[0, E_CONTACT_POTENTIAL]
         history[H_MEDIUM_POTENTIAL, column] = energy[0, E_MEDIUM_POTENTIAL]
+        history[H_MEDIUM_PLASTIC, column] = energy[0, E_MEDIUM_PLASTIC]
 
 
 @njit(cache=True, inline="always")
@@ -1370,13 +1689,13 @@ def record_fields(recorders, row, u, recorded, step):
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
 @njit(cache=True, fastmath={"contract"})
-def advance(first, last, tool, rows, rod, weights, contact, medium, force, state, observed,
-            recorders):
+def advance(first, last, tool, rows, rod, weights, contact, striker, medium, force, state,
+            observed, recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
     The `Tool` with its rows factored (`ToolRows`), the `Rod`'s constants and the scheme's
-    `Weights`; the ends: the `Contact` (the striker at the struck end) and the `Medium` (at the
-    working end), and R(t) on the striker (`ForceLaw`). The `State` carries the layers from call to
+    `Weights`; the ends: the `Contact` at the struck end, the `Striker` when it is a rod, the
+    `Medium` (at the working end), and R(t) on the striker (`ForceLaw`). The `State` carries the layers from call to
     call, the `Observed` extremes and contacts accumulate, and the `Recorders` take the layers
     this call records, from the first of each buffer.
 
@@ -1397,14 +1716,15 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
     Returns `(status, layers of history written, rows of fields written)`; on a non-finite value
     it stops with `STATUS_NON_FINITE` and the time in `extremes[X_FAILED_TIME]`.
     """
-    tool, rows, state, observed, recorders = uncounted((tool, rows, state, observed, recorders))
+    tool, rows, striker, state, observed, recorders = uncounted(
+        (tool, rows, striker, state, observed, recorders))
     step = step_constants(tool, rod, weights, contact)
-    u, y, ends, energy = state
+    u, y, ends, energy, striker_u = state
     extremes = observed.extremes
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(4), np.empty(2), np.empty((4, 3)))
+    scratch = (np.empty(5), np.empty(4), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 
@@ -1414,7 +1734,7 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
         new, cur, old, ref = layer
         t = m * tau
         if m == 0:
-            recorded = start_impact(state, layer, t, tool, rod, weights, contact, step)
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, step)
             interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
         else:
             for slot in range(ENERGY_SLOTS):
@@ -1424,17 +1744,19 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
             if not weights.impedance_ends:
                 working_end_row(u, layer, rows, rod, weights, medium, step)
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
+            if striker.elastic:
+                explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
 
             if weights.impedance_ends:
                 finite, velocity, contact_force, medium_force, flows = integrate_ends(
-                    state, observed, layer, t, tool, rod, contact, medium, force,
+                    state, observed, layer, t, tool, rod, contact, striker, medium, force,
                     uncounted(scratch), step)
                 if not finite:
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 rec, t_rec = new, t
                 balance, interior = audit_impedance_energy(
-                    state, layer, flows, velocity, contact, medium, tool, step)
+                    state, layer, flows, velocity, contact, striker, medium, tool, step)
             else:
                 overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0],
                                     ref=y[ref] - u[ref, 0])
@@ -1477,6 +1799,7 @@ def advance(first, last, tool, rows, rod, weights, contact, medium, force, state
             continue  # the centred schemes record layer 0 once its forces are known
         m_rec = m - step.lag
         track_stress_extremes(extremes, u, recorded, interior, rod, step)
+        extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
         track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step)
         if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
             record_history(recorders, n_hist, state, recorded, m_rec, force, step)

@@ -12,7 +12,8 @@ H_CONTACT_FORCE, H_OVERLAP, H_MEDIUM_FORCE, H_EXTERNAL_FORCE = 5, 6, 7, 8
 H_EXTERNAL_WORK, H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM = 9, 10, 11
 H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL = (
     12, 13, 14, 15, 16)
-HISTORY_COLUMNS = 17
+H_MEDIUM_PLASTIC, H_PERMANENT_PENETRATION, H_STRIKER_STRAIN = 17, 18, 19
+HISTORY_COLUMNS = 20
 
 # Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
@@ -23,14 +24,17 @@ X_CO_IMPACT, X_REBOUND_VELOCITY = 9, 10  # when the first contact ended, the str
 X_ENERGY_EXCESS = 11  # max over time of (stored + dissipated − input): > 0 means energy created
 X_FAILED_TIME = 12
 X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resolved by
-EXTREME_SLOTS = 14
+X_MAX_PENETRATION = 14  # the working end's deepest penetration into the medium
+EXTREME_SLOTS = 15
 
 # Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
 # and dissipation, and the stored terms
 E_EXTERNAL_WORK, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM = 0, 1, 2
 E_STRIKER_KINETIC, E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL = (
     3, 4, 5, 6, 7)
-ENERGY_SLOTS = 8
+E_MEDIUM_PLASTIC = 8  # the medium's work into permanent penetration
+E_STRIKER_STRAIN = 9  # an elastic striker's
+ENERGY_SLOTS = 10
 
 
 def new_extremes() -> np.ndarray:
@@ -40,4 +44,5 @@ def new_extremes() -> np.ndarray:
     x[X_REBOUND_VELOCITY] = np.nan
     x[X_FAILED_TIME] = np.nan
     x[X_MIN_CONTACT_STEPS] = np.inf
+    x[X_MAX_PENETRATION] = -np.inf
     return x

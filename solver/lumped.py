@@ -397,6 +397,7 @@ def simulate_lumped(
     initial = 0.5 * p.m1 * case.striker.velocity ** 2
     extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak),
                              energy_excess(history, initial))
+    extremes[L.X_MAX_PENETRATION] = np.max(history["tool/working_end_displacement"])
     summary = build_summary(
         case=case, numerics=num, extremes=extremes, contacts=contact_table(log),
         open_contact=log.start if log.in_contact else None,

@@ -13,7 +13,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from . import layout as L
 from .case import Case
-from .grid import ResolvedNumerics
+from .grid import ResolvedNumerics, striker_mass
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 FORCE_HISTORY_POINTS = 2000
@@ -44,17 +44,24 @@ class PeakStress(_Part):
 class Energy(_Part):
     initial: float = Field(description="the striker's kinetic energy at impact, J")
     external_work: float = Field(description="work of the external force, J")
-    to_medium: float = Field(description="stored in and dissipated by the medium, J")
+    to_medium: float = Field(description="net work on the medium: stored, dissipated and plastic, J")
     transfer_efficiency: float = Field(description="to_medium over the energy supplied, 1")
     dissipated_contact: float = Field(description="by the contact's damper b1, J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
     numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated), J")
     striker_kinetic: float = Field(description="J, at the end of the run")
+    striker_strain: float = Field(description="an elastic striker's, J, at the end of the run")
     tool_kinetic: float = Field(description="J, at the end of the run")
     tool_strain: float = Field(description="J, at the end of the run")
     contact_potential: float = Field(description="Φ(δ), J, at the end of the run")
-    medium_potential: float = Field(description="J, at the end of the run")
+    medium_potential: float = Field(description="what the medium would give back unloading, J, at the end of the run")
+    medium_plastic: float = Field(description="the medium's work into permanent penetration, J")
     max_excess_fraction: float = Field(description="largest energy created over the energy supplied, 1 (0 for a stable scheme)")
+
+
+class Penetration(_Part):
+    max: float = Field(description="the working end's deepest penetration into the medium, m")
+    permanent: float = Field(description="what remains when the medium is unloaded, m (0 for a linear medium)")
 
 
 class ForceHistory(_Part):
@@ -86,6 +93,7 @@ class Summary(_Part):
     max_tensile_stress: PeakStress
     striker_rebound_velocity: float | None = Field(
         description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)")
+    medium_penetration: Penetration | None = Field(description="null without a medium")
     energy: Energy
     force_history: ForceHistory
     warnings: list[str] = Field(description="what the answer cannot promise, in words")
@@ -118,10 +126,12 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
 
 def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                   contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
-                  history: dict[str, np.ndarray], extra_warnings: list[str] | None = None) -> dict:
+                  history: dict[str, np.ndarray], extra_warnings: list[str] | None = None,
+                  permanent_penetration: float = 0.0) -> dict:
     """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
-    `open_contact` is the start of a contact still open at the end (None if there is none), and
-    `history` needs the paths of FORCE_HISTORY only.
+    `open_contact` is the start of a contact still open at the end (None if there is none),
+    `history` needs the paths of FORCE_HISTORY only, and `permanent_penetration` is the medium's
+    at the end.
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
     follow (`add_accuracy`).
@@ -131,21 +141,23 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
-    initial = 0.5 * case.striker.mass * case.striker.velocity**2
-    stored = {
+    initial = 0.5 * striker_mass(case.striker) * case.striker.velocity**2
+    at_end = {
         "striker_kinetic": energy[L.E_STRIKER_KINETIC],
+        "striker_strain": energy[L.E_STRIKER_STRAIN],
         "tool_kinetic": energy[L.E_TOOL_KINETIC],
         "tool_strain": energy[L.E_TOOL_STRAIN],
         "contact_potential": energy[L.E_CONTACT_POTENTIAL],
         "medium_potential": energy[L.E_MEDIUM_POTENTIAL],
+        "medium_plastic": energy[L.E_MEDIUM_PLASTIC],
     }
     external = energy[L.E_EXTERNAL_WORK]
     dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
-    numerical = initial + external - sum(stored.values()) - dissipated_contact - dissipated_medium
+    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
-    to_medium = float(stored["medium_potential"] + dissipated_medium)
+    to_medium = float(at_end["medium_potential"] + at_end["medium_plastic"] + dissipated_medium)
     supplied = initial + external
 
     return {
@@ -165,15 +177,17 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                                "x": float(extremes[L.X_MAX_TENSION_X]),
                                "time": float(extremes[L.X_MAX_TENSION_TIME])},
         "striker_rebound_velocity": _number(extremes[L.X_REBOUND_VELOCITY]),
+        "medium_penetration": None if case.medium is None else {
+            "max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},
         "energy": {
             "initial": initial,
             "external_work": float(external),
             "to_medium": to_medium,
-            "transfer_efficiency": to_medium / supplied if supplied > 0 else 0.0,
+            "transfer_efficiency": float(to_medium / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
             "numerical": float(numerical),
-            **{k: float(v) for k, v in stored.items()},
+            **{k: float(v) for k, v in at_end.items()},
             "max_excess_fraction": float(excess),
         },
         "force_history": _downsample(history),

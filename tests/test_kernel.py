@@ -46,7 +46,8 @@ def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, center
                 struck_end_stiffness=end_stiffness, working_end_stiffness=end_stiffness)
     weights = K.Weights(new=weight_new, old=weight_new if centered else 0.0, centered=centered,
                         end_masses=end_masses, impedance_ends=False)
-    medium = K.Medium(stiffness=5e7, damping=3e3, impedance=0.0)
+    medium = K.Medium(kind=K.MEDIUM_LINEAR, stiffness=5e7, damping=3e3, impedance=0.0,
+                      unloading_stiffness=0.0, ultimate_resistance=0.0, damping_factor=0.0)
     rows = K.factor_tool_rows(tool_on(grid), rod, weights, medium)
     p, inv_den = rows.p, rows.inv_den
     end_weight = weight_new if end_masses else 1.0

@@ -76,7 +76,7 @@ def test_the_folder_comes_from_the_environment_and_names_never_leave_it(tmp_path
 def test_an_invalid_preset_file_is_reported_as_an_invalid_case(tmp_path, monkeypatch):
     (tmp_path / "broken.json").write_text(json.dumps(preset_json("fig3") | {"striker": {}}))
     monkeypatch.setenv(PRESETS_ENV, str(tmp_path))
-    with pytest.raises(CaseError, match="striker.mass"):
+    with pytest.raises(CaseError, match="striker.velocity"):
         load_preset("broken")
 
 
