@@ -499,6 +499,8 @@ SDIRK_MONOTONE = 2.0
 # rate the tool brakes the striker at: the bias then falls as τ² with the rest of the scheme's error.
 STIFF_RISE_STEPS = 4.0
 MAX_SUBSTEPS = 100_000
+# An overlap within this fraction of the ends' displacements is rounding: it changes no contact
+GRAZING = 1e-12
 
 
 @njit(cache=True, inline="always")
@@ -656,8 +658,8 @@ def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
     `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
     `v(t) = mean + slope·(t − t0 − τ/2)`; split where R jumps or kinks.
 
-    `state` = (y, w, u_0, F, I) at t0 on entry, at t0 + τ on return: w the striker's velocity (its
-    face's when elastic), I the contact's impulse. Returns the work of R and what the damper b1
+    `state` = (y, w, u_0, F, I, in contact) at t0 on entry, at t0 + τ on return: w the striker's
+    velocity (its face's when elastic), I the contact's impulse. Returns the work of R and what the damper b1
     dissipated over the step, the number of changes of sign of δ, each written to `events` (time,
     striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
     striker's velocity is its mean, its momentum over its mass), and `(largest force, its time,
@@ -674,6 +676,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
     dissipated = 0.0
     count = 0
     y, w, u0, impulse = state[0], state[1], state[2], state[4]
+    in_contact = state[5] != 0.0
     v_start = v_mean - 0.5 * tau * v_slope
     face_start = face_mean - 0.5 * tau * face_slope
     # under the waves arriving now: F can jump at t0
@@ -729,19 +732,24 @@ def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
         work += span * ((1.0 - gamma) * r1 * w1 + gamma * r2 * w2)
         dissipated += span * b1 * ((1.0 - gamma) * rate1 * rate1 + gamma * rate2 * rate2)
         impulse_b = impulse + span * ((1.0 - gamma) * f1 + gamma * f2)
-        # a change of sign of δ: where, on the cubic through the ends' values and rates
+        # a change of sign of δ beyond rounding (faces that part at the same speed graze, δ ≈ 0,
+        # for as long as nothing else moves them): where, on the cubic through the ends' values
+        # and rates
         delta_a = y - u0
-        if (delta_a >= 0.0) != (d2 >= 0.0) and count < events.shape[0]:
+        noise = GRAZING * (abs(y) + abs(u0))
+        edge = -noise if in_contact else noise
+        if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
             rate_a = w - (f / z + 2.0 * (v_start + v_slope * (t_a - t0)))
-            s = hermite_root(delta_a, d2, rate_a, rate2, span)
+            s = hermite_root(delta_a - edge, d2 - edge, rate_a, rate2, span)
+            in_contact = not in_contact
             events[count, 0] = t_a + s * span
             if elastic:
                 events[count, 1] = (contact.striker_velocity
                                     - (impulse + s * (impulse_b - impulse)) / striker.mass)
             else:
                 events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
-            events[count, 2] = 1.0 if d2 >= 0.0 else -1.0
+            events[count, 2] = 1.0 if in_contact else -1.0
             count += 1
         y, w, u0, f, impulse = y2, w2, u2, f2, impulse_b
         t_a = t_b
@@ -1360,6 +1368,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
     end_state[2] = u[cur, 0]
     end_state[3] = ends[S_FORCE_BEFORE]
     end_state[4] = ends[S_IMPULSE]
+    end_state[5] = ends[S_IN_CONTACT]
     work, dissipated, crossings, struck_range = struck_end_step(
         t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, force,
         events)
@@ -1724,7 +1733,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(5), np.empty(4), np.empty((4, 3)))
+    scratch = (np.empty(6), np.empty(4), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 

@@ -1,0 +1,140 @@
+"""The striker as an elastic rod (a piston) against the closed forms of one-dimensional impact.
+
+A piston of impedance Z_s = ρ·a·S_s at velocity v strikes a tool of impedance Z through a stiff
+contact. While the wave that the impact sends into the piston runs to its free back end and back
+(2·L_s/a_s), the force is that of two impedances in series, `Z_s·Z·v/(Z_s + Z)`. Then:
+- equal impedances: the returning wave unloads the face, the force drops to 0 and the piston is
+  left at rest, having passed all its energy;
+- a lower-impedance piston separates, having passed `4r/(1 + r)²` of its energy (r = Z_s/Z);
+- a higher-impedance one stays on, and the force steps down by `R = (Z_s − Z)/(Z_s + Z)` every
+  2·L_s/a_s.
+A lumped striker of the same mass meets none of these: its force rises and decays smoothly.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import percussim
+from percussim.solver.case import CaseError
+
+from conftest import STEEL
+
+V = 10.0
+AREA = 1e-3
+SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
+Z = STEEL["density"] * SPEED * AREA
+PISTON = 0.2  # m
+T = 2.0 * PISTON / SPEED  # the piston's wave there and back
+FINE = {"scheme": "explicit", "cells": 2000}
+DURATION = 1.5e-4  # past the pulse (T = 77 µs), before the tool's far end sends anything back (5T)
+
+
+def piston_case(ratio: float, numerics: dict | None = None, **changes) -> dict:
+    return {
+        "striker": {"velocity": V, "length": PISTON, "area": ratio * AREA, **STEEL},
+        "tool": {"length": 1.0, "area": AREA, **STEEL},
+        "contact": {"stiffness": 1e13, "exponent": 0.0},
+        "numerics": {"duration": DURATION, **(numerics or {})},
+        "outputs": {"history_stride": 1},
+        **changes,
+    }
+
+
+def force_at(result, fraction: float) -> float:
+    """The contact force at `fraction` of the piston's round trip."""
+    return float(np.interp(fraction * T, result.history["time"], result.history["contact/force"]))
+
+
+@pytest.fixture(scope="module", params=["fine", "tolerance"])
+def accuracy(request) -> dict:
+    return FINE if request.param == "fine" else {"tolerance": 0.01}
+
+
+def test_equal_impedances_give_a_rectangular_pulse_and_leave_the_piston_at_rest(accuracy):
+    result = percussim.simulate(piston_case(1.0, accuracy))
+    summary = result.summary
+    height = Z * V / 2.0
+    for fraction in (0.05, 0.3, 0.6, 0.95):
+        assert force_at(result, fraction) == pytest.approx(height, rel=2e-3)
+    for fraction in (1.05, 1.3, 1.8):
+        assert abs(force_at(result, fraction)) < 1e-3 * height
+    assert summary["peak_contact_force"]["value"] == pytest.approx(height, rel=1e-3)
+    energy = summary["energy"]
+    left = energy["striker_kinetic"] + energy["striker_strain"]
+    assert left < 5e-3 * energy["initial"]
+    assert abs(energy["numerical"]) < 5e-3 * energy["initial"]
+
+
+def test_a_lower_impedance_piston_passes_4r_over_1_plus_r_squared(accuracy):
+    r = 0.5
+    result = percussim.simulate(piston_case(r, accuracy))
+    summary = result.summary
+    assert summary["peak_contact_force"]["value"] == pytest.approx(r * Z * Z * V / (r * Z + Z), rel=2e-3)
+    assert force_at(result, 0.5) == pytest.approx(r * Z * Z * V / (r * Z + Z), rel=2e-3)
+    energy = summary["energy"]
+    passed = (energy["tool_kinetic"] + energy["tool_strain"]) / energy["initial"]
+    assert passed == pytest.approx(4 * r / (1 + r) ** 2, rel=1e-2)
+    # it leaves at the velocity its momentum says: v − impulse/m, the impulse F·T
+    assert summary["striker_rebound_velocity"] == pytest.approx(
+        V - (r * Z * Z * V / (r * Z + Z)) * T / (STEEL["density"] * r * AREA * PISTON), rel=1e-2)
+    assert summary["co_impact_time"] == pytest.approx(T, rel=1e-2)
+
+
+def test_a_higher_impedance_piston_gives_the_stepped_pulse(accuracy):
+    r = 2.0
+    result = percussim.simulate(piston_case(r, {**accuracy, "duration": 3.2 * T}))
+    first = r * Z * Z * V / (r * Z + Z)
+    reflection = (r - 1.0) / (r + 1.0)
+    for step in range(3):
+        assert force_at(result, step + 0.5) == pytest.approx(first * reflection**step, rel=1e-2)
+    assert abs(result.summary["energy"]["numerical"]) < 5e-3 * result.summary["energy"]["initial"]
+
+
+def test_a_lumped_striker_of_the_same_mass_is_not_the_piston():
+    """The comparisons above tell the models apart: the lumped striker's force is no rectangle."""
+    mass = STEEL["density"] * AREA * PISTON
+    lumped = piston_case(1.0, FINE)
+    lumped["striker"] = {"mass": mass, "velocity": V}
+    result = percussim.simulate(lumped)
+    assert abs(force_at(result, 0.6) - Z * V / 2.0) > 0.05 * Z * V / 2.0
+
+
+def test_a_profiled_piston_on_a_whole_and_a_fractional_number_of_cells_agree():
+    """A stepped piston (the rod model's profile) whose length is not a whole number of cells
+    converges to the run whose is: the part beyond the last node is a delay at the free end."""
+    profile = {"x": [0.0, 0.1, 0.1 + 1e-9, PISTON], "area": [AREA, AREA, 2 * AREA, 2 * AREA]}
+    base = piston_case(1.0, {"scheme": "explicit", "cells": 2000})
+    base["striker"] = {"velocity": V, "length": PISTON, "profile": profile, **STEEL}
+    whole = percussim.simulate(base).summary
+    odd = piston_case(1.0, {"scheme": "explicit", "cells": 2003})
+    odd["striker"] = base["striker"]
+    fractional = percussim.simulate(odd).summary
+    for quantity in ("peak_contact_force", "max_compressive_stress"):
+        assert fractional[quantity]["value"] == pytest.approx(whole[quantity]["value"], rel=2e-3)
+    assert fractional["energy"]["tool_kinetic"] + fractional["energy"]["tool_strain"] == pytest.approx(
+        whole["energy"]["tool_kinetic"] + whole["energy"]["tool_strain"], rel=2e-3)
+    assert abs(fractional["energy"]["numerical"]) < 5e-3 * fractional["energy"]["initial"]
+
+
+def test_the_striker_is_lumped_or_a_rod_not_both():
+    case = piston_case(1.0)
+    case["striker"]["mass"] = 1.0
+    with pytest.raises(CaseError, match=r"striker\.mass.*striker\.length"):
+        percussim.simulate(case)
+
+
+def test_a_grid_too_coarse_for_the_piston_is_refused_naming_the_cells():
+    with pytest.raises(CaseError, match="numerics.cells") as refused:
+        percussim.simulate(piston_case(1.0, {"scheme": "explicit", "cells": 6}))
+    assert "at least 10 cells" in str(refused.value)
+
+
+@pytest.mark.parametrize("numerics", [{"cells": 200}, {"scheme": "sigma", "cells": 200},
+                                      {"model": "lumped"}])
+def test_other_schemes_refuse_an_elastic_striker_naming_the_field(numerics):
+    with pytest.raises(CaseError, match="striker.length: .*explicit scheme at Courant number 1"):
+        percussim.simulate(piston_case(1.0, numerics))
