@@ -11,6 +11,7 @@ import numpy as np
 
 from . import kernel as K
 from . import layout as L
+from .blows import BlowLog
 from .case import Case, Medium
 from .errors import Cancelled, NumericalFailure
 from .grid import (Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass,
@@ -195,6 +196,10 @@ def simulate_rod(
     field_stride = out.field_stride if out.fields else 0
     state = K.new_state(n, len(striker.tool.node_area) - 1 if striker.elastic else 0)
     observed = K.new_observed(MAX_CONTACTS)
+    blows = case.blows.count if case.blows else 1
+    blow, blow_steps = 0, num.steps // blows
+    log = BlowLog(launch_energy=0.5 * contact.striker_mass * contact.striker_velocity**2)
+    log.start(state.energy[0])
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
     lag = 1 if weights.centered and not weights.impedance_ends else 0
     last_layer = num.steps + lag
@@ -226,7 +231,8 @@ def simulate_rod(
     chunk = max(1, CHUNK_NODE_STEPS // (n + 1))
     first = 0
     while first <= last_layer:
-        last = min(last_layer, first + chunk - 1)
+        boundary = (blow + 1) * blow_steps if blow < blows - 1 else last_layer
+        last = min(boundary, first + chunk - 1)
         recorded = (max(0, first - lag), last - lag)  # the layers this chunk records
         kept_rows = _kept(*recorded, out.history_stride)
         frames = _kept(*recorded, field_stride)
@@ -254,6 +260,13 @@ def simulate_rod(
             recorder.append("fields/displacement", recorders.field_u[:n_field])
             recorder.append("fields/stress", recorders.field_stress[:n_field])
         first = last + 1
+        if last == boundary and blow < blows - 1:
+            ended = state.energy[0].copy()
+            K.start_blow(last, state, observed, contact, striker, tau)
+            log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
+            observed = K.new_observed(MAX_CONTACTS)
+            log.start(state.energy[0])
+            blow += 1
         if progress is not None:
             progress(min(1.0, first / (last_layer + 1)))
         if cancelled is not None and first <= last_layer and cancelled():
@@ -261,13 +274,14 @@ def simulate_rod(
 
     table = np.concatenate(summary_table, axis=1)
     ends = state.ends
+    energy = energy_at(state.energy, last_layer, tau, blows * case.numerics.duration,
+                       weights.impedance_ends, striker.elastic)
+    log.finish(energy, observed, ends[K.S_MEDIUM_SET])
     summary = build_summary(
-        case=case, numerics=num, extremes=observed.extremes, contacts=observed.contacts,
+        case=case, numerics=num, extremes=log.extremes(), contacts=log.contacts(),
         open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
-        energy=energy_at(state.energy, last_layer, tau, case.numerics.duration,
-                         weights.impedance_ends, striker.elastic),
-        history=dict(zip(FORCE_HISTORY.values(), table)),
-        permanent_penetration=ends[K.S_MEDIUM_SET],
+        energy=energy, history=dict(zip(FORCE_HISTORY.values(), table)),
+        permanent_penetration=ends[K.S_MEDIUM_SET], blows=log.table() if case.blows else None,
     )
     held = recorder.held()
     if held is None:

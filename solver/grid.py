@@ -163,7 +163,7 @@ class ResolvedNumerics:
     gamma: Annotated[float, Field(description="γ, the paper's weight of the new layer")]
     sigma: Annotated[float, Field(description="σ, the weight of the σ-scheme")]
     end_masses: Annotated[bool, Field(description="whether the tool's end nodes carry their half-cell mass")]
-    steps: Annotated[int, Field(description="M, time steps")]
+    steps: Annotated[int, Field(description="M, time steps (of all blows)")]
     courant: Annotated[float, Field(description="a·τ/h, 1")]
     # "impedance": the explicit scheme at Courant number 1, each end integrating its own equations
     # (`kernel.struck_end_step`).
@@ -217,12 +217,15 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
             message=f"the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = {tau:.4g} s on "
                     f"{cells} cells gives {courant:.4g}: set numerics.time_step ≤ {h / a:.4g} s, "
                     "use fewer cells, or numerics.scheme = 'sigma'")])
-    steps = max(1, math.ceil(steps - 1e-9))
+    # every blow has the same steps
+    steps = max(1, math.ceil(steps - 1e-9)) * (case.blows.count if case.blows else 1)
     ends = None
     if model != "rod":
         ends = "none"
     elif weights.name == "explicit" and weights.end_masses and courant >= IMPEDANCE_COURANT:
         ends = "impedance"
+    if case.anvil is not None:
+        raise CaseError([FieldError(field="anvil", message="an anvil is not solved yet: leave it out")])
     if case.beyond_paper and ends != "impedance":
         field = case.beyond_paper[0]
         raise CaseError([FieldError(

@@ -71,8 +71,8 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .layout import (ENERGY_SLOTS, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
-                     E_EXTERNAL_WORK, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
-                     E_STRIKER_STRAIN, E_TOOL_KINETIC,
+                     E_EXTERNAL_WORK, E_LAUNCHED, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
+                     E_STRIKER_STRAIN, E_TOOL_KINETIC, E_WITHDRAWN,
                      E_TOOL_STRAIN, H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
                      H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
                      H_MEDIUM_FORCE, H_MEDIUM_PLASTIC, H_MEDIUM_POTENTIAL, H_OVERLAP,
@@ -100,6 +100,7 @@ S_POTENTIAL_BEFORE, S_POTENTIAL_BEFORE_THAT = 8, 9  # contact potential Φ at la
 S_STRIKER_VELOCITY = 10
 S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
 # A medium that yields: its permanent penetration (the set) and, for rock, the deepest penetration
+# of the present loading, the surface it started from and the plastic work of the loadings before
 S_MEDIUM_SET, S_MEDIUM_DEEPEST = 15, 16
 # An elastic striker: the incoming waves' displacements G at its face and at its back end (layers
 # m−1, m−2), the back end's incoming rate over the last two steps (mean and slope of each: the
@@ -108,7 +109,8 @@ S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE
 S_BACK_RATE = 21  # 21, 22: mean, slope of step m−1; 23, 24: of step m−2
 S_IMPULSE = 25
 S_BACK_ENERGY = 26  # the energy of the waves beyond the striker's last node, at layer m − ½
-END_SLOTS = 27
+S_MEDIUM_SURFACE, S_MEDIUM_SPENT = 27, 28
+END_SLOTS = 29
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
@@ -806,59 +808,75 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
 # --- Media that yield (at the ends that integrate their own equations) ------------------------------
 #
 # The medium's static resistance F_s(u) at the penetration u = u_N is piecewise linear and depends
-# on its state, the slots `S_MEDIUM_SET` (the permanent penetration u_p) and `S_MEDIUM_DEEPEST`
-# (rock's deepest penetration u_max): held fixed over a substep, updated after it. Each branch of the
-# law is linear (or, for Smith's damping, quadratic) in u, so each implicit stage is solved exactly
-# on the one branch where it lands: F_s is non-decreasing in u, which makes that branch unique.
-# The energies are those of the state: rock stores F_s²/(2k_u) and has spent ½k·u_max²·(1 − k/k_u)
-# on the permanent penetration; soil stores F_s²/(2k) and has spent R_u·u_p. Only the dampers'
-# dissipation is integrated, so the energy audit checks the stages against the law.
+# on its state `(set, deepest, surface, spent)`: the permanent penetration u_p; for rock, the
+# deepest penetration u_max of the present loading, the surface u_0 it started from and the plastic
+# work of the loadings before. The state is held fixed over a substep and updated after it. Each
+# branch of the law is linear (or, for Smith's damping, quadratic) in u, so each implicit stage is
+# solved exactly on the one branch where it lands: F_s is non-decreasing in u, which makes that
+# branch unique. Rock that the end leaves is crushed to its set: the next loading starts there, so
+# that blow after blow drills on. The energies are those of the state: rock stores F_s²/(2k_u)
+# and has spent ½k·(u_max − u_0)²·(1 − k/k_u) on each loading; soil stores F_s²/(2k) and has spent
+# R_u·u_p. Only the dampers' dissipation is integrated, so the energy audit checks the stages
+# against the law.
 
 
 @njit(cache=True, inline="always")
-def medium_set(deepest, set_, medium):
-    """The permanent penetration u_p: rock's from its deepest penetration, `u_max·(1 − k/k_u)`."""
-    if medium.kind == MEDIUM_BILINEAR:
-        return deepest - deepest * medium.stiffness / medium.unloading_stiffness
-    return set_
-
-
-@njit(cache=True, inline="always")
-def static_resistance(u, deepest, set_, medium):
+def static_resistance(u, state, medium):
     """F_s(u): rock loads at k beyond its deepest penetration and unloads at k_u above its set;
     soil is elastic at k = R_u/q above its set up to R_u; neither pulls (F_s ≥ 0)."""
+    set_, deepest, surface, _ = state
     k = medium.stiffness
     if medium.kind == MEDIUM_BILINEAR:
         if u >= deepest:
-            return k * u
+            return k * (u - surface)
         return max(0.0, medium.unloading_stiffness * (u - set_))
     return min(medium.ultimate_resistance, max(0.0, k * (u - set_)))
 
 
 @njit(cache=True, inline="always")
-def medium_energy(u, deepest, set_, medium):
+def medium_energy(u, state, medium):
     """`(stored, plastic)`: what the medium would give back unloading from u, and what its
     permanent penetration cost (module comment above)."""
     k = medium.stiffness
     if medium.kind == MEDIUM_LINEAR:
         return 0.5 * k * u * u, 0.0
-    f = static_resistance(u, deepest, set_, medium)
+    set_, deepest, surface, spent = state
+    f = static_resistance(u, state, medium)
     if medium.kind == MEDIUM_BILINEAR:
         k_u = medium.unloading_stiffness
-        return 0.5 * f * f / k_u, 0.5 * k * deepest * deepest * (1.0 - k / k_u)
+        depth = deepest - surface
+        return 0.5 * f * f / k_u, spent + 0.5 * k * depth * depth * (1.0 - k / k_u)
     return 0.5 * f * f / k, medium.ultimate_resistance * set_
 
 
 @njit(cache=True, inline="always")
-def yielding_stage(base, g, v_in, deepest, set_, medium):
-    """One implicit stage `u = base + g·u'(u)` of the working end on a yielding medium, with
-    `u' = 2·v_in − F/Z`. Returns `(u, u', F, F_s)`.
+def yielded(u, state, medium):
+    """The medium's state after a substep that ended at u."""
+    set_, deepest, surface, spent = state
+    k = medium.stiffness
+    if medium.kind == MEDIUM_BILINEAR:
+        if u <= set_ and deepest > surface:  # off the rock: this loading's crushing is done
+            depth = deepest - surface
+            spent += 0.5 * k * depth * depth * (1.0 - k / medium.unloading_stiffness)
+            return set_, set_, set_, spent
+        deepest = max(deepest, u)
+        return deepest - k * (deepest - surface) / medium.unloading_stiffness, deepest, surface, spent
+    if k * (u - set_) > medium.ultimate_resistance:
+        set_ = u - medium.ultimate_resistance / k
+    return set_, deepest, surface, spent
+
+
+@njit(cache=True, inline="always")
+def yielding_stage(base, g, v_in, state, medium):
+    """One implicit stage `u = base + g·u'(u)` of the working end on a yielding medium in `state`,
+    with `u' = 2·v_in − F/Z`. Returns `(u, u', F, F_s)`.
 
     Neither acts while the end is off its set (no contact). Rock: `F = F_s(u) + b2·u'`, so
     `u + g·F_s(u)/(Z + b2) = base + 2g·Z·v_in/(Z + b2)`, solved on the branch the left side's
     breakpoints (the set, the deepest penetration) place it on.
     Soil: `F = F_s(u)·(1 + J·u')`, not below 0 (the toe does not pull): with F_s fixed (no contact,
     or plastic at R_u) `u'` is direct; on the elastic branch the stage is a quadratic in F_s."""
+    set_, deepest, surface, _ = state
     z = medium.impedance
     free = base + 2.0 * g * v_in  # u with no resistance
     if free <= set_:
@@ -871,11 +889,11 @@ def yielding_stage(base, g, v_in, deepest, set_, medium):
             # in contact, the damper alone would take the end back past the surface: it stops there
             rate = (set_ - base) / g
             return set_, rate, z * (2.0 * v_in - rate), 0.0
-        if target < deepest + c * k * deepest:
+        if target < deepest + c * k * (deepest - surface):
             u = (target + c * k_u * set_) / (1.0 + c * k_u)
         else:
-            u = target / (1.0 + c * k)
-        f_s = static_resistance(u, deepest, set_, medium)
+            u = (target + c * k * surface) / (1.0 + c * k)
+        f_s = static_resistance(u, state, medium)
         rate = (2.0 * z * v_in - f_s) / (z + b2)
         return u, rate, f_s + b2 * rate, f_s
     k, r_u, j = medium.stiffness, medium.ultimate_resistance, medium.damping_factor
@@ -897,39 +915,37 @@ def yielding_stage(base, g, v_in, deepest, set_, medium):
 
 @njit(cache=True)
 def yielding_end_step(tau, state, v_mean, v_slope, medium):
-    """`working_end_step` for a medium that yields: `state` = (u_N, F_m, u_p, u_max) (the
-    `S_MEDIUM_…` slots' values); the dampers' dissipation (b2, or Smith's F_s·J·u'²) and the
-    force's extremes as `working_end_step` returns them."""
+    """`working_end_step` for a medium that yields: `state` = (u_N, F_m, set, deepest, surface,
+    spent) (the medium's state, the `S_MEDIUM_…` slots' values); the dampers' dissipation (b2, or
+    Smith's F_s·J·u'²) and the force's extremes as `working_end_step` returns them."""
     z = medium.impedance
     gamma = SDIRK_GAMMA
     stiffest = max(medium.stiffness, medium.unloading_stiffness)
     count = substeps(stiffest / (z + medium.damping), tau, SDIRK_MONOTONE)
     span = tau / count
     g = gamma * span
-    u, set_, deepest = state[0], state[2], state[3]
+    u = state[0]
+    held = (state[2], state[3], state[4], state[5])
     v_start = v_mean - 0.5 * tau * v_slope
-    _, _, f, _ = yielding_stage(u, 0.0, v_start, deepest, set_, medium)  # under the wave arriving now
+    _, _, f, _ = yielding_stage(u, 0.0, v_start, held, medium)  # under the wave arriving now
     f_max = f_min = f
     t_max = t_min = 0.0
     dissipated = 0.0
     for j in range(count):
         t_a = j * span
         v1 = v_start + v_slope * (t_a + g)
-        u1, k1, f1, s1 = yielding_stage(u, g, v1, deepest, set_, medium)
+        u1, k1, f1, s1 = yielding_stage(u, g, v1, held, medium)
         v2 = v_start + v_slope * (t_a + span)
-        u, k2, f, s2 = yielding_stage(u + (1.0 - gamma) * span * k1, g, v2, deepest, set_, medium)
+        u, k2, f, s2 = yielding_stage(u + (1.0 - gamma) * span * k1, g, v2, held, medium)
         loss1, loss2 = f1 - s1, f - s2  # the damper's share of F
         dissipated += span * ((1.0 - gamma) * loss1 * k1 + gamma * loss2 * k2)
-        if medium.kind == MEDIUM_BILINEAR:
-            deepest = max(deepest, u)
-            set_ = medium_set(deepest, set_, medium)
-        elif medium.stiffness * (u - set_) > medium.ultimate_resistance:
-            set_ = u - medium.ultimate_resistance / medium.stiffness
+        held = yielded(u, held, medium)
         if f > f_max:
             f_max, t_max = f, t_a + span
         if f < f_min:
             f_min, t_min = f, t_a + span
-    state[0], state[1], state[2], state[3] = u, f, set_, deepest
+    state[0], state[1] = u, f
+    state[2], state[3], state[4], state[5] = held
     return dissipated, (f_max, t_max, f_min, t_min)
 
 
@@ -1162,6 +1178,32 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
         ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
 
 
+@njit(cache=True)
+def start_blow(m, state, observed, contact, striker, tau):
+    """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
+    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at the struck end
+    at W1 (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there."""
+    u, _, ends, energy, _ = state
+    row, row_before = m % 3, (m - 1) % 3
+    t = m * tau
+    energy[0, E_WITHDRAWN] += (energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
+                               + energy[0, E_CONTACT_POTENTIAL])
+    launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
+    energy[0, E_LAUNCHED] += launched
+    energy[0, E_STRIKER_KINETIC] = launched
+    energy[0, E_STRIKER_STRAIN] = 0.0
+    energy[0, E_CONTACT_POTENTIAL] = 0.0
+    if ends[S_IN_CONTACT] != 0.0:
+        track_contact(ends, observed, t, contact.striker_velocity - ends[S_IMPULSE] / striker.mass
+                      if striker.elastic else ends[S_STRIKER_VELOCITY], False, tau)
+    launch_striker(state, row, row_before, u[row, 0], contact, striker, tau)
+    if striker.elastic:
+        energy[0, E_STRIKER_STRAIN] = ends[S_BACK_ENERGY]
+        energy[0, E_STRIKER_KINETIC] = launched - ends[S_BACK_ENERGY]
+    ends[S_IN_CONTACT] = 1.0
+    ends[S_CONTACT_START] = t
+
+
 @njit(cache=True, inline="always")
 def start_impact(state, layer, t, tool, rod, weights, contact, striker, step):
     """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
@@ -1376,6 +1418,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
     far_state[1] = ends[S_MEDIUM_FORCE]
     far_state[2] = ends[S_MEDIUM_SET]
     far_state[3] = ends[S_MEDIUM_DEEPEST]
+    far_state[4] = ends[S_MEDIUM_SURFACE]
+    far_state[5] = ends[S_MEDIUM_SPENT]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, struck_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
@@ -1387,6 +1431,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
     u[new, n] = far_state[0]
     ends[S_MEDIUM_SET] = far_state[2]
     ends[S_MEDIUM_DEEPEST] = far_state[3]
+    ends[S_MEDIUM_SURFACE] = far_state[4]
+    ends[S_MEDIUM_SPENT] = far_state[5]
     ends[S_STRIKER_VELOCITY] = end_state[1]
     ends[S_IMPULSE] = end_state[4]
     velocity = end_state[1]
@@ -1514,7 +1560,8 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     work, dissipated, dissipated_far = flows
     delta = y[new] - u[new, 0]
     potential = contact_law(delta, contact)[1]
-    stored, plastic = medium_energy(u[new, n], ends[S_MEDIUM_DEEPEST], ends[S_MEDIUM_SET], medium)
+    stored, plastic = medium_energy(u[new, n], (ends[S_MEDIUM_SET], ends[S_MEDIUM_DEEPEST],
+                                                ends[S_MEDIUM_SURFACE], ends[S_MEDIUM_SPENT]), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
     energy[0, E_EXTERNAL_WORK] += work
@@ -1525,7 +1572,8 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     energy[0, E_CONTACT_POTENTIAL] = potential
     energy[0, E_MEDIUM_POTENTIAL] = stored
     energy[0, E_MEDIUM_PLASTIC] = plastic
-    balance = energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
+    balance = (energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
+               + energy[0, E_WITHDRAWN] - energy[0, E_LAUNCHED])
     if striker.elastic:
         s_tool, s_rod = striker.tool, striker.rod
         e_over_h = s_rod.youngs_modulus / s_rod.cell_length
@@ -1733,7 +1781,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(6), np.empty(4), np.empty((4, 3)))
+    scratch = (np.empty(6), np.empty(6), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 

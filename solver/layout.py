@@ -34,7 +34,9 @@ E_STRIKER_KINETIC, E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_
     3, 4, 5, 6, 7)
 E_MEDIUM_PLASTIC = 8  # the medium's work into permanent penetration
 E_STRIKER_STRAIN = 9  # an elastic striker's
-ENERGY_SLOTS = 10
+# Blow after blow: the strikers launched after the first, and what each had left when withdrawn
+E_LAUNCHED, E_WITHDRAWN = 10, 11
+ENERGY_SLOTS = 12
 
 
 def new_extremes() -> np.ndarray:

@@ -42,13 +42,14 @@ class PeakStress(_Part):
 
 
 class Energy(_Part):
-    initial: float = Field(description="the striker's kinetic energy at impact, J")
+    initial: float = Field(description="the striker's kinetic energy at impact (every blow's), J")
     external_work: float = Field(description="work of the external force, J")
     to_medium: float = Field(description="net work on the medium: stored, dissipated and plastic, J")
     transfer_efficiency: float = Field(description="to_medium over the energy supplied, 1")
     dissipated_contact: float = Field(description="by the contact's damper b1, J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
-    numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated), J")
+    numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
+    striker_withdrawn: float = Field(description="what the striker still had when each blow ended and the next began, J")
     striker_kinetic: float = Field(description="J, at the end of the run")
     striker_strain: float = Field(description="an elastic striker's, J, at the end of the run")
     tool_kinetic: float = Field(description="J, at the end of the run")
@@ -62,6 +63,15 @@ class Energy(_Part):
 class Penetration(_Part):
     max: float = Field(description="the working end's deepest penetration into the medium, m")
     permanent: float = Field(description="what remains when the medium is unloaded, m (0 for a linear medium)")
+
+
+class Blow(_Part):
+    peak_contact_force: float = Field(description="N")
+    max_compressive_stress: float = Field(description="Pa, as a magnitude")
+    to_medium: float = Field(description="net work on the medium during the blow, J")
+    transfer_efficiency: float = Field(description="to_medium over the blow's striker energy and external work, 1")
+    permanent_penetration: float = Field(description="the medium's, at the blow's end, m")
+    set: float = Field(description="the permanent penetration this blow added, m")
 
 
 class ForceHistory(_Part):
@@ -96,6 +106,7 @@ class Summary(_Part):
     medium_penetration: Penetration | None = Field(description="null without a medium")
     energy: Energy
     force_history: ForceHistory
+    blows: list[Blow] | None = Field(description="one entry per blow; null when the case has no `blows`")
     warnings: list[str] = Field(description="what the answer cannot promise, in words")
     why: str = Field(description="why this model, scheme and grid")
     tolerance: float | None = Field(description="the relative accuracy asked, 1; null for a fixed grid")
@@ -127,11 +138,11 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
 def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                   contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
                   history: dict[str, np.ndarray], extra_warnings: list[str] | None = None,
-                  permanent_penetration: float = 0.0) -> dict:
+                  permanent_penetration: float = 0.0, blows: list[dict] | None = None) -> dict:
     """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
     `open_contact` is the start of a contact still open at the end (None if there is none),
-    `history` needs the paths of FORCE_HISTORY only, and `permanent_penetration` is the medium's
-    at the end.
+    `history` needs the paths of FORCE_HISTORY only, `permanent_penetration` is the medium's
+    at the end and `blows` each blow's row of the `blows` table (None: the case has no `blows`).
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
     follow (`add_accuracy`).
@@ -141,7 +152,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
-    initial = 0.5 * striker_mass(case.striker) * case.striker.velocity**2
+    initial = 0.5 * striker_mass(case.striker) * case.striker.velocity**2 + energy[L.E_LAUNCHED]
     at_end = {
         "striker_kinetic": energy[L.E_STRIKER_KINETIC],
         "striker_strain": energy[L.E_STRIKER_STRAIN],
@@ -154,7 +165,9 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     external = energy[L.E_EXTERNAL_WORK]
     dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
-    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium
+    withdrawn = energy[L.E_WITHDRAWN]
+    numerical = (initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium
+                 - withdrawn)
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     to_medium = float(at_end["medium_potential"] + at_end["medium_plastic"] + dissipated_medium)
@@ -180,17 +193,19 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
         "medium_penetration": None if case.medium is None else {
             "max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},
         "energy": {
-            "initial": initial,
+            "initial": float(initial),
             "external_work": float(external),
             "to_medium": to_medium,
             "transfer_efficiency": float(to_medium / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
             "numerical": float(numerical),
+            "striker_withdrawn": float(withdrawn),
             **{k: float(v) for k, v in at_end.items()},
             "max_excess_fraction": float(excess),
         },
         "force_history": _downsample(history),
+        "blows": blows,
         "warnings": list(extra_warnings or []),
     }
 

@@ -1,0 +1,84 @@
+"""Blow after blow: what each blow saw, and the whole run's extremes made from them.
+
+The kernel observes one blow at a time (`kernel.Observed`); between two blows the controller
+launches the striker again (`kernel.start_blow`). `BlowLog` keeps each blow's extremes, its contact
+intervals and its energy at its start and end: the summary's `blows` table, and the run's own
+extremes (the largest of the blows', the first blow's co-impact time and rebound).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from . import layout as L
+
+# Each extreme with the slots that go with it (where, when)
+_LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETRATION,
+            L.X_ENERGY_EXCESS)
+_WITH = {L.X_PEAK_FORCE: (L.X_PEAK_FORCE_TIME,),
+         L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
+         L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME)}
+
+
+def to_medium(energy: np.ndarray) -> float:
+    """The net work on the medium so far (`energy` in the kernel's slots)."""
+    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC]
+                 + energy[L.E_DISSIPATED_MEDIUM])
+
+
+class BlowLog:
+    """Each blow's observations, in order (`start` one, `finish` it)."""
+
+    def __init__(self, launch_energy: float):
+        self.launch_energy = launch_energy
+        self.blows: list[dict] = []
+        self._start: np.ndarray | None = None
+        self._set = 0.0
+
+    def start(self, energy: np.ndarray) -> None:
+        """A blow starts with the energy terms `energy` (after its striker's launch)."""
+        self._start = energy.copy()
+
+    def finish(self, energy: np.ndarray, observed, permanent_penetration: float) -> None:
+        """The blow ends with `energy`, having observed `observed` (its extremes and contacts),
+        the medium's permanent penetration then `permanent_penetration`."""
+        x = observed.extremes
+        medium = to_medium(energy) - to_medium(self._start)
+        supplied = self.launch_energy + energy[L.E_EXTERNAL_WORK] - self._start[L.E_EXTERNAL_WORK]
+        count = int(x[L.X_CONTACTS])
+        self.blows.append({
+            "row": {
+                "peak_contact_force": float(x[L.X_PEAK_FORCE]),
+                "max_compressive_stress": float(x[L.X_MAX_COMPRESSION]),
+                "to_medium": medium,
+                "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
+                "permanent_penetration": float(permanent_penetration),
+                "set": float(permanent_penetration - self._set),
+            },
+            "extremes": x.copy(),
+            "contacts": observed.contacts[:min(count, len(observed.contacts))].copy(),
+        })
+        self._set = permanent_penetration
+
+    def table(self) -> list[dict]:
+        return [blow["row"] for blow in self.blows]
+
+    def extremes(self) -> np.ndarray:
+        """The whole run's extremes: the largest of the blows' (with where and when), the first
+        blow's co-impact time and rebound, every contact counted."""
+        run = L.new_extremes()
+        for blow in self.blows:
+            x = blow["extremes"]
+            for slot in _LARGEST:
+                if x[slot] > run[slot]:
+                    run[slot] = x[slot]
+                    for other in _WITH.get(slot, ()):
+                        run[other] = x[other]
+            run[L.X_CONTACTS] += x[L.X_CONTACTS]
+            run[L.X_MIN_CONTACT_STEPS] = min(run[L.X_MIN_CONTACT_STEPS], x[L.X_MIN_CONTACT_STEPS])
+        first = self.blows[0]["extremes"]
+        run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
+        return run
+
+    def contacts(self) -> np.ndarray:
+        return np.concatenate([blow["contacts"] for blow in self.blows]).reshape(-1, 2)
