@@ -387,6 +387,15 @@ class Case(_Model):
                 )
         return self
 
+    @model_validator(mode="after")
+    def _force_on_a_lumped_striker(self) -> "Case":
+        if self.force is not None and self.striker.elastic:
+            raise _field_error(
+                "Case", ("force",),
+                "acts on a lumped striker (striker.mass); an elastic striker (striker.length) is "
+                "driven by its velocity at impact only", self.force.kind)
+        return self
+
     @property
     def beyond_paper(self) -> list[str]:
         """The fields that ask for more than the paper's model (a lumped striker, no anvil, a

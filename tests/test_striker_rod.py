@@ -138,3 +138,10 @@ def test_a_grid_too_coarse_for_the_piston_is_refused_naming_the_cells():
 def test_other_schemes_refuse_an_elastic_striker_naming_the_field(numerics):
     with pytest.raises(CaseError, match="striker.length: .*explicit scheme at Courant number 1"):
         percussim.simulate(piston_case(1.0, numerics))
+
+
+def test_an_external_force_on_an_elastic_striker_is_refused():
+    case = piston_case(1.0)
+    case["force"] = {"kind": "pulse", "amplitude": 1e3, "duration": 1e-4}
+    with pytest.raises(CaseError, match="force: acts on a lumped striker"):
+        percussim.simulate(case)
