@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from . import layout as L
+from .summary import to_medium
 
 # Each extreme with the slots that go with it (where, when)
 _LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETRATION,
@@ -18,12 +19,6 @@ _LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETR
 _WITH = {L.X_PEAK_FORCE: (L.X_PEAK_FORCE_TIME,),
          L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
          L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME)}
-
-
-def to_medium(energy: np.ndarray) -> float:
-    """The net work on the medium so far (`energy` in the kernel's slots)."""
-    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC]
-                 + energy[L.E_DISSIPATED_MEDIUM])
 
 
 class BlowLog:

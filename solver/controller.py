@@ -115,11 +115,7 @@ def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K
     grid, back_delay = striker_grid(striker, num.time_step)
     impedance = grid.density * wave_speed(striker.rod())
     return K.Striker(
-        elastic=True, tool=tool_on(grid),
-        rod=K.Rod(cell_length=grid.h, time_step=num.time_step, courant_squared=1.0,
-                  youngs_modulus=grid.youngs_modulus, density=grid.density,
-                  struck_end_stiffness=grid.end_area[0] * grid.youngs_modulus / grid.h,
-                  working_end_stiffness=grid.end_area[1] * grid.youngs_modulus / grid.h),
+        elastic=True, tool=tool_on(grid), rod=rod_on(grid, num.time_step, 1.0),
         impedance=impedance * grid.end_area[0], back_impedance=impedance * grid.end_area[1],
         mass=striker_mass(striker), back_delay=back_delay)
 
@@ -132,15 +128,21 @@ def tool_on(grid: Grid) -> K.Tool:
 
 
 def rod_constants(case: Case, num: ResolvedNumerics, grid: Grid) -> K.Rod:
-    """The rod's constants on the grid and time step."""
+    """The tool's constants on the grid and time step."""
     tool, tau, h = case.tool, num.time_step, grid.h
     impedance_ends = num.ends == "impedance"
     # Courant number 1 exactly where the ends rely on the end rows being the characteristic relation
     r = 1.0 if impedance_ends else (tool.youngs_modulus / tool.density) * tau * tau / (h * h)
-    return K.Rod(cell_length=h, time_step=tau, courant_squared=r,
-                 youngs_modulus=tool.youngs_modulus, density=tool.density,
-                 struck_end_stiffness=grid.end_area[0] * tool.youngs_modulus / h,
-                 working_end_stiffness=grid.end_area[1] * tool.youngs_modulus / h)
+    return rod_on(grid, tau, r)
+
+
+def rod_on(grid: Grid, tau: float, courant_squared: float) -> K.Rod:
+    """A rod's constants on its grid (h, E, ρ, the end cells' S·E/h), time step and (a·τ/h)²."""
+    h, modulus = grid.h, grid.youngs_modulus
+    return K.Rod(cell_length=h, time_step=tau, courant_squared=courant_squared,
+                 youngs_modulus=modulus, density=grid.density,
+                 struck_end_stiffness=grid.end_area[0] * modulus / h,
+                 working_end_stiffness=grid.end_area[1] * modulus / h)
 
 
 def scheme_weights(num: ResolvedNumerics) -> K.Weights:

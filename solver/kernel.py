@@ -101,15 +101,16 @@ S_STRIKER_VELOCITY = 10
 S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
 # A medium that yields: its permanent penetration (the set) and, for rock, the deepest penetration
 # of the present loading, the surface it started from and the plastic work of the loadings before
-S_MEDIUM_SET, S_MEDIUM_DEEPEST = 15, 16
+S_MEDIUM = 15  # 15 … 18: set, deepest, surface, spent (`MEDIUM_STATE` slots)
+MEDIUM_STATE = 4
+S_MEDIUM_SET = S_MEDIUM
 # An elastic striker: the incoming waves' displacements G at its face and at its back end (layers
 # m−1, m−2), the back end's incoming rate over the last two steps (mean and slope of each: the
 # free end returns it after the `back_delay`), and the contact's impulse so far
-S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE = 17, 18, 19, 20
-S_BACK_RATE = 21  # 21, 22: mean, slope of step m−1; 23, 24: of step m−2
-S_IMPULSE = 25
-S_BACK_ENERGY = 26  # the energy of the waves beyond the striker's last node, at layer m − ½
-S_MEDIUM_SURFACE, S_MEDIUM_SPENT = 27, 28
+S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE = 19, 20, 21, 22
+S_BACK_RATE = 23  # 23, 24: mean, slope of step m−1; 25, 26: of step m−2
+S_IMPULSE = 27
+S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at layer m − ½
 END_SLOTS = 29
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
@@ -580,7 +581,7 @@ def rod_striker_stage(base, g, v_in, v_face, guess, contact, striker):
     free = by - bu + 2.0 * g * (v_face - v_in)  # δ were F = 0
     delta = solve_spring_balance(free - compliance * pushed / denominator, compliance / denominator,
                                  guess, contact)
-    force = (contact_spring(delta, contact)[0] + pushed) / denominator
+    force = rod_face_force(delta, v_face, v_in, contact, striker)
     face_velocity = 2.0 * v_face - force / z_s
     return by + g * face_velocity, face_velocity, bu + g * (force / z + 2.0 * v_in), force, delta
 
@@ -591,6 +592,13 @@ def rod_face_force(delta, v_face, v_in, contact, striker):
     b1 = contact.damping
     spring = contact_spring(delta, contact)[0]
     return (spring + 2.0 * b1 * (v_face - v_in)) / (1.0 + b1 / striker.impedance + b1 / contact.impedance)
+
+
+@njit(cache=True, inline="always")
+def mean_velocity(impulse, contact, striker):
+    """An elastic striker's mean velocity, its momentum over its mass, after the contact's
+    `impulse`."""
+    return contact.striker_velocity - impulse / striker.mass
 
 
 @njit(cache=True, inline="always")
@@ -747,8 +755,8 @@ def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
             in_contact = not in_contact
             events[count, 0] = t_a + s * span
             if elastic:
-                events[count, 1] = (contact.striker_velocity
-                                    - (impulse + s * (impulse_b - impulse)) / striker.mass)
+                events[count, 1] = mean_velocity(impulse + s * (impulse_b - impulse), contact,
+                                                 striker)
             else:
                 events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
             events[count, 2] = 1.0 if in_contact else -1.0
@@ -1188,18 +1196,17 @@ def start_blow(m, state, observed, contact, striker, tau):
     t = m * tau
     energy[0, E_WITHDRAWN] += (energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
                                + energy[0, E_CONTACT_POTENTIAL])
-    launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
-    energy[0, E_LAUNCHED] += launched
-    energy[0, E_STRIKER_KINETIC] = launched
-    energy[0, E_STRIKER_STRAIN] = 0.0
-    energy[0, E_CONTACT_POTENTIAL] = 0.0
     if ends[S_IN_CONTACT] != 0.0:
-        track_contact(ends, observed, t, contact.striker_velocity - ends[S_IMPULSE] / striker.mass
+        track_contact(ends, observed, t, mean_velocity(ends[S_IMPULSE], contact, striker)
                       if striker.elastic else ends[S_STRIKER_VELOCITY], False, tau)
     launch_striker(state, row, row_before, u[row, 0], contact, striker, tau)
-    if striker.elastic:
-        energy[0, E_STRIKER_STRAIN] = ends[S_BACK_ENERGY]
-        energy[0, E_STRIKER_KINETIC] = launched - ends[S_BACK_ENERGY]
+    launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
+    # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
+    beyond = ends[S_BACK_ENERGY] if striker.elastic else 0.0
+    energy[0, E_LAUNCHED] += launched
+    energy[0, E_STRIKER_KINETIC] = launched - beyond
+    energy[0, E_STRIKER_STRAIN] = beyond
+    energy[0, E_CONTACT_POTENTIAL] = 0.0
     ends[S_IN_CONTACT] = 1.0
     ends[S_CONTACT_START] = t
 
@@ -1416,10 +1423,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
         events)
     far_state[0] = u[cur, n]
     far_state[1] = ends[S_MEDIUM_FORCE]
-    far_state[2] = ends[S_MEDIUM_SET]
-    far_state[3] = ends[S_MEDIUM_DEEPEST]
-    far_state[4] = ends[S_MEDIUM_SURFACE]
-    far_state[5] = ends[S_MEDIUM_SPENT]
+    for k in range(MEDIUM_STATE):
+        far_state[2 + k] = ends[S_MEDIUM + k]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, struck_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
@@ -1429,17 +1434,15 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
     y[new] = end_state[0]
     u[new, 0] = end_state[2]
     u[new, n] = far_state[0]
-    ends[S_MEDIUM_SET] = far_state[2]
-    ends[S_MEDIUM_DEEPEST] = far_state[3]
-    ends[S_MEDIUM_SURFACE] = far_state[4]
-    ends[S_MEDIUM_SPENT] = far_state[5]
+    for k in range(MEDIUM_STATE):
+        ends[S_MEDIUM + k] = far_state[2 + k]
     ends[S_STRIKER_VELOCITY] = end_state[1]
     ends[S_IMPULSE] = end_state[4]
     velocity = end_state[1]
     if striker.elastic:
         striker_u[new, 0] = y[new]
         free_back_end(striker_u, layer, ends, striker, tau)
-        velocity = contact.striker_velocity - end_state[4] / striker.mass
+        velocity = mean_velocity(end_state[4], contact, striker)
     for k in range(crossings):
         track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
     return True, velocity, end_state[3], far_state[1], flows
@@ -1560,8 +1563,8 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     work, dissipated, dissipated_far = flows
     delta = y[new] - u[new, 0]
     potential = contact_law(delta, contact)[1]
-    stored, plastic = medium_energy(u[new, n], (ends[S_MEDIUM_SET], ends[S_MEDIUM_DEEPEST],
-                                                ends[S_MEDIUM_SURFACE], ends[S_MEDIUM_SPENT]), medium)
+    stored, plastic = medium_energy(u[new, n], (ends[S_MEDIUM], ends[S_MEDIUM + 1],
+                                                ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
     energy[0, E_EXTERNAL_WORK] += work

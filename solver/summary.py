@@ -135,6 +135,13 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
     return {key: history[path][pick].tolist() for key, path in FORCE_HISTORY.items()}
 
 
+def to_medium(energy: np.ndarray) -> float:
+    """The net work on the medium so far (`energy` in the kernel's slots): stored, plastic and
+    dissipated."""
+    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC]
+                 + energy[L.E_DISSIPATED_MEDIUM])
+
+
 def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                   contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
                   history: dict[str, np.ndarray], extra_warnings: list[str] | None = None,
@@ -170,7 +177,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                  - withdrawn)
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
-    to_medium = float(at_end["medium_potential"] + at_end["medium_plastic"] + dissipated_medium)
+    medium = to_medium(energy)
     supplied = initial + external
 
     return {
@@ -195,8 +202,8 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
         "energy": {
             "initial": float(initial),
             "external_work": float(external),
-            "to_medium": to_medium,
-            "transfer_efficiency": float(to_medium / supplied) if supplied > 0 else 0.0,
+            "to_medium": medium,
+            "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
             "numerical": float(numerical),
