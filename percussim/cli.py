@@ -334,7 +334,8 @@ def parser() -> argparse.ArgumentParser:
                        help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
     sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
     sweep.set_defaults(handler=_sweep)
-    presets = commands.add_parser("presets", help="list the presets (the paper's cases), or give one's case JSON")
+    presets = commands.add_parser(
+        "presets", help="list the presets (the paper's cases, a rock drill, a pile), or give one's case JSON")
     which = presets.add_mutually_exclusive_group()
     which.add_argument("name", nargs="?", help="print this preset's case JSON")
     which.add_argument("--write", metavar="DIR", help="write every preset's case JSON into DIR as NAME.json")

@@ -31,7 +31,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="percussim",
         summary="Simulation of percussive impact devices: striker, tool, contact and medium.",
         description="Submit an impact case (SI units) as a job, follow it, then fetch its pulse "
-                    "summary and its HDF5 result. The presets are the paper's cases. "
+                    "summary and its HDF5 result. The presets are the paper's cases, a rock drill and a pile. "
                     "In a browser, [the job page](/) does all of this.",
         version="1",
     )

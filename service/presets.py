@@ -1,4 +1,5 @@
-"""`/v1/presets`: the paper's cases as ready case JSON, also the request examples in /docs."""
+"""`/v1/presets`: the presets (the paper's cases, a rock drill, a pile) as ready case JSON, also the
+request examples in /docs."""
 
 from __future__ import annotations
 

@@ -35,13 +35,24 @@ class SweepView(BaseModel):
     rows: list[dict[str, Any]]
 
 
+# The request examples: (name, preset, summary, parameters), each offered when its preset is there.
+EXAMPLES = (
+    ("fig5-velocity-stiffness", "fig5", "Fig. 5: striker velocity × contact stiffness (6 variants)",
+     {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}),
+    ("rock_drill-piston-length", "rock_drill",
+     "Rock drill: piston length (its efficiency rises to Lundberg's optimum, then falls) × the rock's "
+     "unloading stiffness (6 variants)",
+     {"striker.length": [0.15, 0.3, 0.6], "medium.unloading_stiffness": [2e9, 5e9]}),
+    ("pile-quake-blows", "pile", "Pile: the toe's quake × blows (6 variants)",
+     {"medium.quake": [1.5e-3, 2.54e-3, 5e-3], "blows.count": [1, 3]}),
+)
+
+
 def _example() -> dict | None:
-    if "fig5" not in preset_names():
-        return None
-    return {"fig5-velocity-stiffness": {
-        "summary": "Fig. 5: striker velocity × contact stiffness (6 variants)",
-        "value": {"case": preset_json("fig5"),
-                  "parameters": {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}}}}
+    known = preset_names()
+    examples = {name: {"summary": summary, "value": {"case": preset_json(preset), "parameters": parameters}}
+                for name, preset, summary, parameters in EXAMPLES if preset in known}
+    return examples or None
 
 
 def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:

@@ -6,6 +6,10 @@
 - `RigidImpact`: Saint-Venant's problem, a rigid mass striking a uniform bar whose far end is
   fixed; the struck end's stress is `σ0·e^(−βt)` until the wave is back at 2L/a, then the
   reflected wave adds to it.
+- `CushionedImpact`: a lumped ram on a long uniform pile through a linear cushion, of any damping
+  ratio (a pile hammer's first peak force, before the toe's reflection is back).
+- `LundbergRock`: a rectangular wave on rock with a bilinear force–penetration law (Lundberg):
+  the peak force at the bit, the penetration, the share of the wave's energy the rock keeps.
 - `recorded_force`: a run's recorded contact force against an independent solver's.
 """
 
@@ -17,6 +21,7 @@ from typing import NamedTuple
 import numpy as np
 
 from .accuracy import headline
+from .grid import wave_speed
 
 
 class LinearImpact:
@@ -136,6 +141,74 @@ class RigidImpact:
             "medium": {"stiffness": 100.0 * k},
             "numerics": {"duration": 1.1 * self.contact_time},
         }
+
+
+def impedance(rod) -> float:
+    """`Z = ρ·a·A` of a uniform rod: a `Tool`, or an elastic striker's `rod()`."""
+    return rod.density * wave_speed(rod) * rod.area
+
+
+class CushionedImpact:
+    """A lumped ram `mass` at `velocity` on a uniform rod of impedance `impedance` (a pile) through
+    a linear cushion of `stiffness`, until the far end's reflection is back (t < 2L/a): the
+    cushion's compression obeys `δ'' + (k/Z)·δ' + (k/m)·δ = 0`, δ(0) = 0, δ'(0) = v, its force is
+    k·δ. The damping ratio `ζ = √(k·m)/(2Z)` is any: a soft cushion rings (ζ < 1), a stiff one
+    (ζ > 1) gives nearly the rigid ram's Z·v at once and lets it decay."""
+
+    def __init__(self, mass: float, velocity: float, stiffness: float, impedance: float):
+        omega = math.sqrt(stiffness / mass)
+        self.zeta = math.sqrt(stiffness * mass) / (2.0 * impedance)
+        decay = self.zeta * omega
+        if self.zeta < 1.0:
+            omega_d = omega * math.sqrt(1.0 - self.zeta**2)
+            self.peak_time = math.atan2(omega_d, decay) / omega_d
+            overlap = velocity / omega_d * math.exp(-decay * self.peak_time) * math.sin(omega_d * self.peak_time)
+        elif self.zeta == 1.0:
+            self.peak_time = 1.0 / omega
+            overlap = velocity * self.peak_time * math.exp(-1.0)
+        else:  # δ = v·(e^(r1·t) − e^(r2·t))/(r1 − r2), its maximum where r1·e^(r1·t) = r2·e^(r2·t)
+            spread = omega * math.sqrt(self.zeta**2 - 1.0)
+            r1, r2 = -decay + spread, -decay - spread
+            self.peak_time = math.log(r2 / r1) / (r1 - r2)
+            overlap = velocity * (math.exp(r1 * self.peak_time) - math.exp(r2 * self.peak_time)) / (r1 - r2)
+        self.peak_force = stiffness * overlap
+
+    @classmethod
+    def of_case(cls, case) -> "CushionedImpact":
+        """A case's lumped striker on its uniform tool through its linear contact (exponent 0,
+        no damper: what the closed form assumes, the caller checks)."""
+        return cls(case.striker.mass, case.striker.velocity, case.contact.stiffness, impedance(case.tool))
+
+
+class LundbergRock:
+    """Lundberg's rock under a rectangular incident wave of force `incident` lasting `duration`
+    in a rod of impedance `impedance`, the bit resting on the rock: loading at `stiffness` k,
+    `u' = (2F_i − F)/Z` gives `F = 2F_i·(1 − e^(−kt/Z))` until the wave has passed, then the rock
+    unloads at `unloading_stiffness` k_u. With `x = k·T/Z` the bit's peak force is
+    `2F_i·(1 − e^(−x))`, the deepest penetration that over k, the permanent one (1 − k/k_u) of it,
+    and the rock keeps `2(1 − e^(−x))²/x·(1 − k/k_u)` of the wave's energy F_i²·T/Z (the piston's
+    own when its impedance is the rod's), largest (0.8145 for k_u → ∞) at x = 1.2564."""
+
+    def __init__(self, incident: float, duration: float, impedance: float, stiffness: float,
+                 unloading_stiffness: float):
+        self.incident = incident
+        self.x = stiffness * duration / impedance
+        kept = 1.0 - stiffness / unloading_stiffness
+        self.peak_force = 2.0 * incident * (1.0 - math.exp(-self.x))
+        self.max_penetration = self.peak_force / stiffness
+        self.permanent_penetration = self.max_penetration * kept
+        self.efficiency = 2.0 * (1.0 - math.exp(-self.x)) ** 2 / self.x * kept
+
+    @classmethod
+    def of_case(cls, case) -> "LundbergRock":
+        """A case's uniform elastic piston on its uniform tool on bilinear rock: the wave of
+        `Z_p·Z·v/(Z_p + Z)` lasting 2L_p/a_p its impact sends (through a contact too stiff to
+        shape it). The efficiency is of the piston's energy only when Z_p = Z."""
+        piston, tool, rock = case.striker.rod(), case.tool, case.medium
+        z_piston, z_tool = impedance(piston), impedance(tool)
+        incident = z_piston * z_tool * case.striker.velocity / (z_piston + z_tool)
+        return cls(incident, 2.0 * piston.length / wave_speed(piston), z_tool, rock.stiffness,
+                   rock.unloading_stiffness)
 
 
 def observed_order(cells, errors) -> float:

@@ -23,7 +23,7 @@ MAX_ERRORS = 20  # bad variants named before giving up
 # A table row needs only the summary's extremes: no fields, no probes, no history beyond step 0.
 TABLE_OUTPUTS = Outputs(history_stride=2**62)
 
-# The table's columns after the parameters: (name, where in the summary).
+# The table's columns after the parameters: (name, where in the summary; -1 is a list's last item).
 COLUMNS = (
     ("co_impact_time", ("co_impact_time",)),
     ("peak_contact_force", ("peak_contact_force", "value")),
@@ -32,6 +32,9 @@ COLUMNS = (
     ("striker_rebound_velocity", ("striker_rebound_velocity",)),
     ("energy_to_medium", ("energy", "to_medium")),
     ("transfer_efficiency", ("energy", "transfer_efficiency")),
+    ("max_penetration", ("medium_penetration", "max")),
+    ("permanent_penetration", ("medium_penetration", "permanent")),
+    ("last_blow_set", ("blows", -1, "set")),  # the set per blow once it has settled
     ("contacts", ("contacts_total",)),
     ("estimated_error", ("error_estimate", "worst")),  # the worst of the row's quantities
 )
@@ -89,9 +92,11 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
             found.append((values, case))
         except CaseError as error:
             for e in error.errors:
-                # The parameter whose path the broken field starts with, else the whole variant.
+                # The parameter whose path the broken field starts with; else the only parameter
+                # (the base case is valid, so it broke another field: striker.length makes
+                # striker.mass wrong); else the whole variant.
                 culprit = next((f"parameters[{n!r}][{k}]" for n, (k, _) in zip(names, picks)
-                                if e.field == n or e.field.startswith(n + ".")),
+                                if e.field == n or e.field.startswith(n + ".") or len(names) == 1),
                                "parameters (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")")
                 errors.setdefault(culprit, FieldError(field=culprit, message=f"{e.field}: {e.message}"))
         except (IndexError, ValueError, TypeError) as error:
@@ -103,13 +108,22 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
     return found
 
 
+def _at(summary: dict, path: tuple) -> Any:
+    """The summary's value at `path`; None where it has none (no medium, no blows, or a summary
+    stored before the quantity existed, as a service's older jobs have)."""
+    value: Any = summary
+    for key in path:
+        if isinstance(value, dict):
+            value = value.get(key)
+        elif isinstance(value, list) and value:
+            value = value[key]
+        else:
+            return None
+    return value
+
+
 def table_row(summary: dict) -> dict[str, Any]:
     """The sweep table's columns from one variant's summary."""
-    row = {}
-    for column, path in COLUMNS:
-        value: Any = summary
-        for key in path:
-            value = None if value is None else value[key]
-        row[column] = value
+    row = {column: _at(summary, path) for column, path in COLUMNS}
     row["warnings"] = len(summary["warnings"])
     return row

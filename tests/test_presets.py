@@ -1,4 +1,5 @@
-"""The paper's cases as presets: every file is a valid case, runs, and matches the references."""
+"""The presets: every file is a valid case and runs; the paper's cases match the references, the
+rock drill and the pile the closed forms of their first blow."""
 
 from __future__ import annotations
 
@@ -12,7 +13,10 @@ import pytest
 
 from percussim.solver.case import CaseError, load_case
 from percussim.solver.controller import simulate_rod
+from percussim.solver.grid import wave_speed
 from percussim.solver.presets import PRESETS_ENV, load_preset, preset_json, preset_names
+from percussim.solver.reference import CushionedImpact, LundbergRock, impedance
+from percussim.solver.simulate import simulate
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "solver" / "presets"  # as shipped
 PAPER_FIGURES = [f"fig{k}" for k in range(3, 10)]
@@ -27,8 +31,9 @@ def default_folder(monkeypatch):
 
 @cache
 def summary(name: str) -> dict:
-    """Run a preset once for all the tests that look at it."""
-    return simulate_rod(load_preset(name)).summary
+    """Run a preset once, as `simulate` does (its numerics, or the default accuracy), for all the
+    tests that look at it."""
+    return simulate(load_preset(name)).summary
 
 
 @pytest.mark.parametrize("path", FILES, ids=[p.stem for p in FILES])
@@ -80,7 +85,7 @@ def test_an_invalid_preset_file_is_reported_as_an_invalid_case(tmp_path, monkeyp
         load_preset("broken")
 
 
-@pytest.mark.parametrize("name", PAPER_FIGURES)
+@pytest.mark.parametrize("name", [p.stem for p in FILES])
 def test_every_preset_runs_to_finite_results(name):
     s = summary(name)
     values = [
@@ -138,3 +143,56 @@ def test_fig9_stress_is_the_papers_order_and_peaks_in_the_cone():
     # The paper: 200–250 MPa at most, in the conical part (where the profile starts to narrow).
     assert 150e6 <= peak["value"] <= 300e6
     assert peak["x"] >= case.tool.profile.x[-2]
+
+
+def test_the_rock_drill_is_lundbergs_single_pass():
+    """The piston sends Z_p·Z·v/(Z_p + Z) into the rod for 2L_p/a; of matched impedances that wave
+    is all its energy, and Lundberg's closed forms give the peak force at the bit, the rock's share
+    of the energy and the penetration it keeps."""
+    case = load_preset("rock_drill")
+    piston, rod = case.striker.rod(), case.tool
+    wave = 2.0 * piston.length / wave_speed(piston)
+    # What the closed forms assume of the preset: matched impedances, and a run that ends once the
+    # wave has passed the bit, before its reflection is back at the struck end.
+    assert impedance(piston) == pytest.approx(impedance(rod), rel=1e-6)
+    assert rod.length / wave_speed(rod) + wave < case.numerics.duration < 2.0 * rod.length / wave_speed(rod)
+    rock_blow = LundbergRock.of_case(case)
+    s = summary("rock_drill")
+    assert s["peak_contact_force"]["value"] == pytest.approx(rock_blow.incident, rel=1e-2)
+    peak = s["max_compressive_stress"]
+    assert peak["value"] == pytest.approx(rock_blow.peak_force / rod.area, rel=1e-2)
+    assert peak["x"] == pytest.approx(rod.length)  # at the bit, where the rock's force is
+    assert s["energy"]["transfer_efficiency"] == pytest.approx(rock_blow.efficiency, rel=1e-2)
+    assert 0.6 < rock_blow.efficiency < 0.9  # a drill that works, not a rock that stops it
+    assert s["medium_penetration"]["max"] == pytest.approx(rock_blow.max_penetration, rel=1e-2)
+    assert s["medium_penetration"]["permanent"] == pytest.approx(rock_blow.permanent_penetration, rel=1e-2)
+    assert abs(s["energy"]["numerical"]) < 5e-3 * s["energy"]["initial"]
+
+
+def test_the_piles_first_peak_is_the_ram_on_its_cushion_on_a_long_pile():
+    """Before the toe's reflection is back the pile is an impedance Z to the cushion: the ram's
+    first peak force is the damped oscillator's, below the rigid ram's Z·v."""
+    case = load_preset("pile")
+    pile, cushion = case.tool, case.contact
+    assert (cushion.exponent, cushion.damping) == (0.0, 0.0)  # the closed form's linear cushion
+    ram = CushionedImpact.of_case(case)
+    assert ram.peak_time < 2.0 * pile.length / wave_speed(pile)
+    assert ram.peak_force < impedance(pile) * case.striker.velocity
+    s = summary("pile")
+    assert s["peak_contact_force"]["value"] == pytest.approx(ram.peak_force, rel=1e-2)
+    assert s["peak_contact_force"]["time"] == pytest.approx(ram.peak_time, rel=2e-2)
+    assert s["max_compressive_stress"]["value"] >= ram.peak_force / pile.area * (1 - 1e-2)
+
+
+def test_the_pile_sets_as_smiths_soil_says():
+    """Elastic–perfectly plastic at the toe: the work into the set is R_u a metre of it, and once
+    unloaded the toe springs back by the quake."""
+    soil = load_preset("pile").medium
+    s = summary("pile")
+    penetration, energy = s["medium_penetration"], s["energy"]
+    assert penetration["permanent"] > soil.quake  # the toe went through its quake and set
+    assert penetration["max"] - penetration["permanent"] == pytest.approx(soil.quake, rel=1e-3)
+    assert energy["medium_plastic"] == pytest.approx(soil.ultimate_resistance * penetration["permanent"],
+                                                     rel=1e-3)
+    assert energy["dissipated_medium"] > 0  # the toe's damping J worked
+    assert abs(energy["numerical"]) < 5e-3 * energy["initial"]

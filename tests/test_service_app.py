@@ -296,6 +296,17 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
     assert row["estimated_error"] == 4e-3 and row["transfer_efficiency"] == 0.2
 
 
+def test_openapi_offers_sweeps_of_the_new_fields_that_are_accepted(client):
+    post = client.get("/openapi.json").json()["paths"]["/v1/sweeps"]["post"]
+    examples = post["requestBody"]["content"]["application/json"]["examples"]
+    swept = {path for example in examples.values() for path in example["value"]["parameters"]}
+    assert {"striker.length", "medium.unloading_stiffness", "medium.quake", "blows.count"} <= swept
+    for name, example in examples.items():
+        answer = client.post("/v1/sweeps", json=example["value"])
+        assert answer.status_code == 202, (name, answer.text)
+        assert "permanent_penetration" in answer.json()["columns"]
+
+
 def test_a_sweep_with_a_bad_variant_is_refused_naming_the_parameter_and_queues_nothing(client, tmp_path):
     bad = merge(SWEEP, {"parameters": {"tool.area": [0.01, -1.0]}})
     answer = client.post("/v1/sweeps", json=bad)

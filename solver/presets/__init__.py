@@ -1,4 +1,5 @@
-"""The paper's cases as ready case JSON: one `<name>.json` file per preset in the presets folder.
+"""The presets as ready case JSON: the paper's cases (`fig3` … `fig9`), a rock drill and a pile,
+one `<name>.json` file per preset in the presets folder.
 
 The folder is `$PERCUSSIM_PRESETS` if set, else this package's own (the presets ship with it). A preset name is
 only ever looked up among the files found there, never turned into a path, so a name such as
