@@ -3,31 +3,11 @@ carry their state into the next, and the set per blow settles."""
 
 from __future__ import annotations
 
-import math
-
 import pytest
 
 import percussim
 
-from conftest import STEEL
-
-AREA = 1e-3
-SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
-Z = STEEL["density"] * SPEED * AREA
-PISTON, TOOL = 0.2, 1.0
-T = 2.0 * PISTON / SPEED
-ROCK = 1.2564 * Z / T  # Lundberg's optimum
-
-
-def drilling(blows: int) -> dict:
-    return {
-        "striker": {"velocity": 10.0, "length": PISTON, "area": AREA, **STEEL},
-        "tool": {"length": TOOL, "area": AREA, **STEEL},
-        "contact": {"stiffness": 1e13, "exponent": 0.0},
-        "medium": {"kind": "bilinear", "stiffness": ROCK, "unloading_stiffness": 10 * ROCK},
-        "blows": {"count": blows},
-        "numerics": {"duration": 10 * TOOL / SPEED, "scheme": "explicit", "cells": 500},
-    }
+from closed_forms import AREA, PISTON, STEEL, V, drilling
 
 
 @pytest.fixture(scope="module")
@@ -52,7 +32,7 @@ def test_the_set_per_blow_settles_and_the_rock_keeps_it(six):
 
 def test_the_run_accounts_for_every_blows_energy(six):
     energy = six["energy"]
-    launch = 0.5 * STEEL["density"] * AREA * PISTON * 10.0**2
+    launch = 0.5 * STEEL["density"] * AREA * PISTON * V**2
     assert energy["initial"] == pytest.approx(6 * launch, rel=1e-12)
     assert energy["to_medium"] == pytest.approx(sum(b["to_medium"] for b in six["blows"]), rel=1e-9)
     assert abs(energy["numerical"]) < 5e-3 * energy["initial"]

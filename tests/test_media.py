@@ -19,36 +19,8 @@ import pytest
 import percussim
 from percussim.solver.case import CaseError
 
-from conftest import STEEL
-
-V = 10.0
-AREA = 1e-3
-SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
-Z = STEEL["density"] * SPEED * AREA
-PISTON, TOOL = 0.2, 1.0
-T = 2.0 * PISTON / SPEED
-INCIDENT = Z * V / 2.0
-# past the wave's passage (TOOL/a + T), before the reflection returns from the struck end (3·TOOL/a)
-DURATION = 2.2 * TOOL / SPEED
-FINE = {"scheme": "explicit", "cells": 1000}
-UNLOADING = 10.0  # k_u/k
-
-
-def rock_case(x: float, numerics: dict, **medium) -> dict:
-    k = x * Z / T
-    return {
-        "striker": {"velocity": V, "length": PISTON, "area": AREA, **STEEL},
-        "tool": {"length": TOOL, "area": AREA, **STEEL},
-        "contact": {"stiffness": 1e13, "exponent": 0.0},
-        "medium": {"kind": "bilinear", "stiffness": k, "unloading_stiffness": UNLOADING * k,
-                   **medium},
-        "numerics": {"duration": DURATION, **numerics},
-        "outputs": {"history_stride": 1},
-    }
-
-
-def lundberg(x: float, unloading: float = UNLOADING) -> float:
-    return 2.0 * (1.0 - math.exp(-x)) ** 2 / x * (1.0 - 1.0 / unloading)
+from closed_forms import (MEDIUM_FINE as FINE, SOIL_RESISTANCE, lundberg, lundberg_optimum, rock_case,
+                          rock_penetration, smith_set, soil_case)
 
 
 def test_lundbergs_optimum():
@@ -57,6 +29,7 @@ def test_lundbergs_optimum():
     eta = [lundberg(x, math.inf) for x in xs]
     assert xs[int(np.argmax(eta))] == pytest.approx(1.2564, abs=1e-4)
     assert max(eta) == pytest.approx(0.8145, abs=1e-4)
+    assert lundberg_optimum() == pytest.approx((xs[int(np.argmax(eta))], max(eta)), abs=1e-4)
 
 
 @pytest.mark.parametrize("x", [0.3, 1.2564, 3.0])
@@ -67,11 +40,9 @@ def test_rock_takes_lundbergs_share(x, numerics):
     assert energy["transfer_efficiency"] == pytest.approx(lundberg(x), rel=1e-2)
     assert abs(energy["numerical"]) < 5e-3 * energy["initial"]
     # the deepest penetration F_max/k, and what stays of it, (1 − k/k_u) of that
-    k = x * Z / T
-    deepest = 2.0 * INCIDENT * (1.0 - math.exp(-x)) / k
+    deepest, permanent = rock_penetration(x)
     assert summary["medium_penetration"]["max"] == pytest.approx(deepest, rel=1e-2)
-    assert summary["medium_penetration"]["permanent"] == pytest.approx(
-        deepest * (1.0 - 1.0 / UNLOADING), rel=1e-2)
+    assert summary["medium_penetration"]["permanent"] == pytest.approx(permanent, rel=1e-2)
     # what rock keeps is all plastic once it is unloaded
     assert energy["medium_plastic"] == pytest.approx(energy["to_medium"], rel=1e-6)
 
@@ -86,24 +57,13 @@ def test_linear_rock_would_give_it_all_back():
     assert summary["medium_penetration"]["permanent"] == 0.0
 
 
-def soil_case(numerics: dict, resistance: float, quake: float, damping_factor: float = 0.0) -> dict:
-    case = rock_case(1.0, numerics)
-    case["medium"] = {"kind": "smith", "ultimate_resistance": resistance, "quake": quake,
-                      "damping_factor": damping_factor}
-    return case
-
-
 @pytest.mark.parametrize("numerics", [FINE, {"tolerance": 0.01}], ids=["fine", "tolerance"])
 def test_smith_soil_sets_as_the_closed_form_says(numerics):
-    resistance = 1.2 * INCIDENT  # under 2F_i: the toe flows
-    k = 5.0 * Z / T
-    quake = resistance / k
-    summary = percussim.simulate(soil_case(numerics, resistance, quake)).summary
-    t_q = -(Z / k) * math.log(1.0 - resistance / (2.0 * INCIDENT))
-    expected = (2.0 * INCIDENT - resistance) * (T - t_q) / Z
+    summary = percussim.simulate(soil_case(numerics)).summary  # R_u under 2F_i: the toe flows
+    _, expected = smith_set()
     assert summary["medium_penetration"]["permanent"] == pytest.approx(expected, rel=1e-2)
     energy = summary["energy"]
-    assert energy["medium_plastic"] == pytest.approx(resistance * expected, rel=1e-2)
+    assert energy["medium_plastic"] == pytest.approx(SOIL_RESISTANCE * expected, rel=1e-2)
     assert abs(energy["numerical"]) < 5e-3 * energy["initial"]
 
 
@@ -111,9 +71,7 @@ def test_smith_soil_sets_as_the_closed_form_says(numerics):
 def test_the_soils_loop_encloses_the_energy_it_absorbed(damping_factor):
     """∮F du over the force–penetration loop is the net work on the soil: what it reports as
     absorbed (plastic, dissipated by its damping and still stored)."""
-    resistance = 1.2 * INCIDENT
-    result = percussim.simulate(soil_case(FINE, resistance, resistance / (5.0 * Z / T),
-                                          damping_factor))
+    result = percussim.simulate(soil_case(FINE, damping_factor=damping_factor))
     force = result.history["medium/force"]
     penetration = result.history["medium/penetration"]
     loop = float(np.sum(0.5 * (force[1:] + force[:-1]) * np.diff(penetration)))

@@ -13,35 +13,14 @@ A lumped striker of the same mass meets none of these: its force rises and decay
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 import pytest
 
 import percussim
 from percussim.solver.case import CaseError
 
-from conftest import STEEL
-
-V = 10.0
-AREA = 1e-3
-SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
-Z = STEEL["density"] * SPEED * AREA
-PISTON = 0.2  # m
-T = 2.0 * PISTON / SPEED  # the piston's wave there and back
-FINE = {"scheme": "explicit", "cells": 2000}
-DURATION = 1.5e-4  # past the pulse (T = 77 µs), before the tool's far end sends anything back (5T)
-
-
-def piston_case(ratio: float, numerics: dict | None = None, **changes) -> dict:
-    return {
-        "striker": {"velocity": V, "length": PISTON, "area": ratio * AREA, **STEEL},
-        "tool": {"length": 1.0, "area": AREA, **STEEL},
-        "contact": {"stiffness": 1e13, "exponent": 0.0},
-        "numerics": {"duration": DURATION, **(numerics or {})},
-        "outputs": {"history_stride": 1},
-        **changes,
-    }
+from closed_forms import (AREA, PISTON, STEEL, PISTON_FINE as FINE, STEPPED_DURATION, T, V, Z,
+                          first_force, passed_share, piston_case, reflection, stepped_piston_case)
 
 
 def force_at(result, fraction: float) -> float:
@@ -73,24 +52,23 @@ def test_a_lower_impedance_piston_passes_4r_over_1_plus_r_squared(accuracy):
     r = 0.5
     result = percussim.simulate(piston_case(r, accuracy))
     summary = result.summary
-    assert summary["peak_contact_force"]["value"] == pytest.approx(r * Z * Z * V / (r * Z + Z), rel=2e-3)
-    assert force_at(result, 0.5) == pytest.approx(r * Z * Z * V / (r * Z + Z), rel=2e-3)
+    assert summary["peak_contact_force"]["value"] == pytest.approx(first_force(r), rel=2e-3)
+    assert force_at(result, 0.5) == pytest.approx(first_force(r), rel=2e-3)
     energy = summary["energy"]
     passed = (energy["tool_kinetic"] + energy["tool_strain"]) / energy["initial"]
-    assert passed == pytest.approx(4 * r / (1 + r) ** 2, rel=1e-2)
+    assert passed == pytest.approx(passed_share(r), rel=1e-2)
     # it leaves at the velocity its momentum says: v − impulse/m, the impulse F·T
     assert summary["striker_rebound_velocity"] == pytest.approx(
-        V - (r * Z * Z * V / (r * Z + Z)) * T / (STEEL["density"] * r * AREA * PISTON), rel=1e-2)
+        V - first_force(r) * T / (STEEL["density"] * r * AREA * PISTON), rel=1e-2)
     assert summary["co_impact_time"] == pytest.approx(T, rel=1e-2)
 
 
 def test_a_higher_impedance_piston_gives_the_stepped_pulse(accuracy):
     r = 2.0
-    result = percussim.simulate(piston_case(r, {**accuracy, "duration": 3.2 * T}))
-    first = r * Z * Z * V / (r * Z + Z)
-    reflection = (r - 1.0) / (r + 1.0)
+    result = percussim.simulate(piston_case(r, {**accuracy, "duration": STEPPED_DURATION}))
     for step in range(3):
-        assert force_at(result, step + 0.5) == pytest.approx(first * reflection**step, rel=1e-2)
+        assert force_at(result, step + 0.5) == pytest.approx(first_force(r) * reflection(r)**step,
+                                                             rel=1e-2)
     assert abs(result.summary["energy"]["numerical"]) < 5e-3 * result.summary["energy"]["initial"]
 
 
@@ -106,13 +84,8 @@ def test_a_lumped_striker_of_the_same_mass_is_not_the_piston():
 def test_a_profiled_piston_on_a_whole_and_a_fractional_number_of_cells_agree():
     """A stepped piston (the rod model's profile) whose length is not a whole number of cells
     converges to the run whose is: the part beyond the last node is a delay at the free end."""
-    profile = {"x": [0.0, 0.1, 0.1 + 1e-9, PISTON], "area": [AREA, AREA, 2 * AREA, 2 * AREA]}
-    base = piston_case(1.0, {"scheme": "explicit", "cells": 2000})
-    base["striker"] = {"velocity": V, "length": PISTON, "profile": profile, **STEEL}
-    whole = percussim.simulate(base).summary
-    odd = piston_case(1.0, {"scheme": "explicit", "cells": 2003})
-    odd["striker"] = base["striker"]
-    fractional = percussim.simulate(odd).summary
+    whole = percussim.simulate(stepped_piston_case(2000)).summary
+    fractional = percussim.simulate(stepped_piston_case(2003)).summary
     for quantity in ("peak_contact_force", "max_compressive_stress"):
         assert fractional[quantity]["value"] == pytest.approx(whole[quantity]["value"], rel=2e-3)
     assert fractional["energy"]["tool_kinetic"] + fractional["energy"]["tool_strain"] == pytest.approx(

@@ -1,0 +1,148 @@
+"""One-dimensional impacts with closed forms: the cases and the formulas that the tests
+(test_striker_rod.py, test_media.py, test_blows.py) and the validation report
+(bench/validation.py) hold the solver to. docs/model.md derives each formula.
+
+A steel piston of length L_s at v strikes a steel tool of length L through a stiff linear contact.
+The piston's impedance is r times the tool's Z = ρ·a·S (its area r·S); T = 2·L_s/a is its wave's
+round trip. The force at the struck end is `F_1 = Z_s·Z·v/(Z_s + Z) = r·Z·v/(1 + r)` while that
+wave runs, then `R = (r − 1)/(r + 1)` times the step before, every T (r < 1: it separates, having
+passed `4r/(1 + r)²` of its energy, and leaves at `R·v`). With r = 1 the tool carries a rectangular
+wave `F_i = Z·v/2` lasting T to its working end, where bilinear rock takes Lundberg's share and
+Smith's soil sets as `smith_set` says.
+
+Plain Python and the standard library: no test framework, no solver.
+"""
+
+from __future__ import annotations
+
+import math
+
+STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
+V = 10.0  # m/s, the piston at impact
+AREA = 1e-3  # m², the tool's (and a piston of r = 1)
+SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
+Z = STEEL["density"] * SPEED * AREA  # the tool's impedance, N·s/m
+PISTON, TOOL = 0.2, 1.0  # m
+T = 2.0 * PISTON / SPEED  # the piston's wave there and back
+INCIDENT = Z * V / 2.0  # F_i: the wave an equal piston sends into the tool
+
+# The piston alone: past its pulse (T = 77 µs), before the tool's far end sends anything back (5T)
+PISTON_DURATION = 1.5e-4
+PISTON_FINE = {"scheme": "explicit", "cells": 2000}
+STEPPED_DURATION = 3.2 * T  # a higher-impedance piston's first three steps, before 2L/a
+# On a medium: past the wave's passage (L/a + T). It is also the instant (2L/a + L_s/a) the wave the
+# free struck end reflects meets, at x = L_s, the peak of the medium's reflection
+MEDIUM_DURATION = 2.2 * TOOL / SPEED
+MEDIUM_FINE = {"scheme": "explicit", "cells": 1000}
+UNLOADING = 10.0  # rock's k_u/k
+OPTIMUM = 1.2564  # x = k·T/Z where Lundberg's η is largest
+# Smith soil that flows under the wave (R_u < 2F_i), elastic at 5·Z/T below R_u
+SOIL_RESISTANCE = 1.2 * INCIDENT
+SOIL_STIFFNESS = 5.0 * Z / T
+# Blow after blow: each blow of 10·L/a (the tool's waves die down between blows)
+BLOW_DURATION = 10 * TOOL / SPEED
+BLOW_NUMERICS = {"scheme": "explicit", "cells": 500}
+
+
+def piston_case(ratio: float, numerics: dict | None = None, **changes) -> dict:
+    """A piston of `ratio` times the tool's impedance on the tool, no medium, recorded every step."""
+    return {
+        "striker": {"velocity": V, "length": PISTON, "area": ratio * AREA, **STEEL},
+        "tool": {"length": TOOL, "area": AREA, **STEEL},
+        "contact": {"stiffness": 1e13, "exponent": 0.0},
+        "numerics": {"duration": PISTON_DURATION, **(numerics or {})},
+        "outputs": {"history_stride": 1},
+        **changes,
+    }
+
+
+def stepped_piston_case(cells: int) -> dict:
+    """An equal piston whose back half has twice the area, on `cells` of the explicit scheme: with
+    2000 its length is a whole number of its cells, with 2003 not (a delay at its free end)."""
+    profile = {"x": [0.0, PISTON / 2, PISTON / 2 + 1e-9, PISTON], "area": [AREA, AREA, 2 * AREA, 2 * AREA]}
+    return piston_case(1.0, {"scheme": "explicit", "cells": cells}, striker={
+        "velocity": V, "length": PISTON, "profile": profile, **STEEL})
+
+
+def rock_case(x: float, numerics: dict, **medium) -> dict:
+    """The equal piston's wave on bilinear rock of `x` = k·T/Z, unloading at `UNLOADING`·k."""
+    k = rock_stiffness(x)
+    return piston_case(1.0, {"duration": MEDIUM_DURATION, **numerics}, medium={
+        "kind": "bilinear", "stiffness": k, "unloading_stiffness": UNLOADING * k, **medium})
+
+
+def soil_case(numerics: dict, resistance: float = SOIL_RESISTANCE,
+              quake: float = SOIL_RESISTANCE / SOIL_STIFFNESS, damping_factor: float = 0.0) -> dict:
+    """The equal piston's wave on Smith soil (R_u, q, J)."""
+    case = rock_case(1.0, numerics)
+    case["medium"] = {"kind": "smith", "ultimate_resistance": resistance, "quake": quake,
+                      "damping_factor": damping_factor}
+    return case
+
+
+def drilling(blows: int, numerics: dict | None = None) -> dict:
+    """`blows` blows of the equal piston on rock at Lundberg's optimum (`BLOW_NUMERICS` unless
+    `numerics` says otherwise), no recordings."""
+    case = rock_case(OPTIMUM, {"duration": BLOW_DURATION, **(numerics or BLOW_NUMERICS)})
+    case.pop("outputs")
+    return {**case, "blows": {"count": blows}}
+
+
+# --- the piston: one-dimensional impact ----------------------------------------------------------
+
+def first_force(ratio: float) -> float:
+    """F_1 = Z_s·Z·v/(Z_s + Z): the two impedances in series while the piston's wave runs."""
+    return ratio * Z * Z * V / (ratio * Z + Z)
+
+
+def reflection(ratio: float) -> float:
+    """R = (Z_s − Z)/(Z_s + Z): what each return of the piston's wave leaves of the force."""
+    return (ratio - 1.0) / (ratio + 1.0)
+
+
+def passed_share(ratio: float) -> float:
+    """The share of its energy a piston of lower impedance passes before it separates."""
+    return 4.0 * ratio / (1.0 + ratio) ** 2
+
+
+def piston_force(ratio: float, t: float) -> float:
+    """The contact force at t (before the tool's far end sends anything back, t < 2L/a): F_1 on
+    [0, T), then R times the step before on each T; 0 once a lower-impedance piston has left."""
+    step = math.floor(t / T)
+    if ratio <= 1.0 and step >= 1:
+        return 0.0
+    return first_force(ratio) * reflection(ratio) ** step
+
+
+# --- media that yield at the working end ---------------------------------------------------------
+
+def rock_stiffness(x: float) -> float:
+    """k with k·T/Z = x."""
+    return x * Z / T
+
+
+def lundberg(x: float, unloading: float = UNLOADING) -> float:
+    """Lundberg's η = 2(1 − e^(−x))²/x·(1 − k/k_u): the share of the wave's energy rock keeps."""
+    return 2.0 * (1.0 - math.exp(-x)) ** 2 / x * (1.0 - 1.0 / unloading)
+
+
+def lundberg_optimum() -> tuple[float, float]:
+    """(x, η) where η is largest for k_u → ∞: dη/dx = 0 is e^x = 1 + 2x, where η = 8x/(1 + 2x)²."""
+    x = 1.0
+    for _ in range(50):  # Newton on e^x − 1 − 2x, convex, from the right of its root
+        x -= (math.exp(x) - 1.0 - 2.0 * x) / (math.exp(x) - 2.0)
+    return x, 8.0 * x / (1.0 + 2.0 * x) ** 2
+
+
+def rock_penetration(x: float, unloading: float = UNLOADING) -> tuple[float, float]:
+    """(deepest, permanent): F_max/k with F_max = 2F_i(1 − e^(−x)), and (1 − k/k_u) of it."""
+    deepest = 2.0 * INCIDENT * (1.0 - math.exp(-x)) / rock_stiffness(x)
+    return deepest, deepest * (1.0 - 1.0 / unloading)
+
+
+def smith_set(resistance: float = SOIL_RESISTANCE,
+              stiffness: float = SOIL_STIFFNESS) -> tuple[float, float]:
+    """(t_q, set) of undamped Smith soil under the rectangular wave F_i lasting T: elastic until
+    `t_q = −(Z/k)·ln(1 − R_u/(2F_i))`, then flowing at `(2F_i − R_u)/Z` until T."""
+    t_q = -(Z / stiffness) * math.log(1.0 - resistance / (2.0 * INCIDENT))
+    return t_q, (2.0 * INCIDENT - resistance) * (T - t_q) / Z
