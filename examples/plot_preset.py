@@ -1,5 +1,6 @@
 """Worked example of the solver and its plots in Python: run a preset locally with stress fields
-and probes kept, write its HDF5 result and draw every plot of it.
+and probes kept, write its HDF5 result and draw every plot it can make (those it cannot, such as
+the blows table of a case without blows, are listed with the reason).
 
     .venv/bin/python examples/plot_preset.py [--preset fig9] [--result out/fig9.h5] [--out out/fig9-plots]
 

@@ -346,7 +346,8 @@ def parser() -> argparse.ArgumentParser:
     plot.add_argument("--out", metavar="DIR", help="folder for the plots (default: RESULT-plots next to the file)")
     plot.add_argument("--format", nargs="+", default=["png", "svg"], metavar="FORMAT", help="png, svg or both")
     plot.add_argument("--only", nargs="+", metavar="NAME",
-                      help="these plots only: force, displacements, probes, stress_along, spacetime, energy")
+                      help="these plots only: force, displacements, probes, stress_along, spacetime, energy, "
+                           "force_penetration, blows")
     plot.add_argument("--times", type=_times, metavar="T1,T2,...",
                       help="times (s) of the stress_along curves (default: over the first contact)")
     plot.set_defaults(handler=_plots)

@@ -41,15 +41,17 @@ FIELD_CHUNK_BYTES = 1 << 18
 HELD_BYTES = 1 << 15  # an unchunked dataset's rows are written in blocks of about this size
 
 _UNITS = {"time": "s", "displacement": "m", "velocity": "m/s", "force": "N", "overlap": "m",
-          "energy": "J", "x": "m", "stress": "Pa"}
+          "penetration": "m", "energy": "J", "x": "m", "stress": "Pa"}
 
 
 def units(path: str) -> str:
-    """SI units of a result dataset, from its path."""
+    """SI units of a result dataset, from its path: every `energy/` term's, else its name's or its
+    name's last word's (`struck_end_displacement`, `permanent_penetration`). An unknown name is a
+    KeyError: no dataset is written without its units."""
     if path.startswith("energy/"):
         return "J"
     name = path.rsplit("/", 1)[-1]
-    return "m" if name.endswith("_displacement") else _UNITS[name]
+    return _UNITS[name] if name in _UNITS else _UNITS[name.rsplit("_", 1)[-1]]
 
 
 def _chunk_rows(shape: tuple[int, ...], dtype: np.dtype) -> int:

@@ -1,10 +1,10 @@
 """Plots of one result file: forces, displacements, probe stresses, stress along the tool, its
-space–time map and the energy budget.
+space–time map, the energy budget, the medium's force against the penetration and the blows table.
 
-Each plot is one drawing function in `_TABLE`, with what it needs from the result. Figures are
-`matplotlib.figure.Figure` on the Agg canvas, never pyplot, whose global figure registry is no
-place for a server's threads. Large datasets are read with strides, so that a plot reads a
-bounded number of values however much the run kept.
+Each plot is one drawing function in `_TABLE`, with what it needs from the result (`_NEEDS`).
+Figures are `matplotlib.figure.Figure` on the Agg canvas, never pyplot, whose global figure
+registry is no place for a server's threads. Large datasets are read with strides, so that a
+plot reads a bounded number of values however much the run kept.
 """
 
 from __future__ import annotations
@@ -151,7 +151,9 @@ def _displacements(fig: Figure, src: _Source, times) -> None:
     """Displacements of the striker y(t), the struck end u_0(t) and the working end u_N(t)."""
     ax = fig.subplots()
     t = src.time()
-    for path, label, style in (("striker/displacement", "striker", "-"),
+    # an elastic striker's recorded displacement is its impact face's
+    striker = "striker's impact face" if src.case["striker"].get("length") else "striker"
+    for path, label, style in (("striker/displacement", striker, "-"),
                                ("tool/struck_end_displacement", "struck end of the tool", "--"),
                                ("tool/working_end_displacement", "working end of the tool", "-.")):
         ax.plot(t, src.history(path) * 1e3, ls=style, lw=1.3, label=label)
@@ -256,12 +258,14 @@ def _spacetime(fig: Figure, src: _Source, times) -> None:
     ax.set_ylabel(ALONG_THE_TOOL)
 
 
-ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked
+ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked (those the result has)
     "striker_kinetic": "striker kinetic",
+    "striker_strain": "striker strain",  # an elastic striker's
     "tool_kinetic": "tool kinetic",
     "tool_strain": "tool strain",
     "contact_potential": "contact potential",
     "medium_potential": "medium potential",
+    "medium_plastic": "medium plastic (permanent penetration)",  # a medium that yields
     "dissipated_contact": "dissipated in the contact",
     "dissipated_medium": "dissipated in the medium",
 }
@@ -272,14 +276,15 @@ def _energy(fig: Figure, src: _Source, times) -> None:
     ½·m1·W1² + the external work; what is left is the scheme's own dissipation."""
     ax = fig.subplots()
     t = src.time(MAX_FILL_POINTS)
-    striker = src.case["striker"]
-    supplied = (0.5 * striker["mass"] * striker["velocity"] ** 2
+    # The summary's, so that an elastic striker's mass ρ∫S dx is not computed again here.
+    supplied = (src.summary["energy"]["initial"]
                 + src.history("energy/external_work", MAX_FILL_POINTS))
-    terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in ENERGY_TERMS]
+    labels = {name: label for name, label in ENERGY_TERMS.items() if f"energy/{name}" in src.h5}
+    terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in labels]
     numerical = supplied - np.sum(terms, axis=0)
     lost = numerical[-1] / supplied[-1] if supplied[-1] > 0 else 0.0
     bands = ax.stackplot(t, *terms, numerical,
-                         labels=[*ENERGY_TERMS.values(), "lost by the scheme (numerical)"],
+                         labels=[*labels.values(), "lost by the scheme (numerical)"],
                          colors=[f"C{k}" for k in range(len(terms))] + ["0.75"], alpha=0.85, lw=0)
     bands[-1].set_hatch("////")  # what the scheme lost stands apart from the physics
     bands[-1].set_edgecolor("firebrick")
@@ -293,20 +298,72 @@ def _energy(fig: Figure, src: _Source, times) -> None:
     fig.legend(loc="outside right upper", fontsize=9, frameon=False)
 
 
+def _force_penetration(fig: Figure, src: _Source, times) -> None:
+    """The medium's force against the working end's penetration u_N: a loop whose area, once the
+    medium is unloaded, is the net work on it; the permanent penetration marked."""
+    ax = fig.subplots()
+    # A medium that yields records its penetration; a linear one's is the working end's u_N.
+    path = "medium/penetration" if "medium/penetration" in src.h5 else "tool/working_end_displacement"
+    ax.plot(src.history(path) * 1e3, src.history("medium/force") / 1e3, color="C1", lw=1.3,
+            label="medium force")
+    penetration = src.summary["medium_penetration"]
+    permanent = penetration["permanent"] * 1e3
+    ax.axvline(permanent, color="C3", lw=0.9, ls="--")
+    ax.plot(permanent, 0.0, "v", color="C3", ms=8, clip_on=False,
+            label=f"permanent penetration {permanent:.4g} mm")
+    ax.axhline(0, color="0.5", lw=0.6)
+    # kN·mm = J: the loop's area reads in joules on these axes.
+    ax.annotate(f"net work on the medium {src.summary['energy']['to_medium']:.4g} J\n"
+                f"(the loop's area once the medium is unloaded)\n"
+                f"deepest penetration {penetration['max'] * 1e3:.4g} mm",
+                xy=(0.02, 0.97), xycoords="axes fraction", va="top", fontsize=9)
+    _decorate(ax, "penetration of the working end u_N (mm)", "medium force (kN), compression > 0")
+    ax.margins(x=0.02)
+    ax.legend(loc="best", fontsize=9)
+
+
+BLOW_COLUMNS = {  # the summary's blows table: column -> (panel title, unit, scale from SI)
+    "peak_contact_force": ("peak contact force", "kN", 1e-3),
+    "max_compressive_stress": ("max compressive stress", "MPa", 1e-6),
+    "to_medium": ("energy to the medium", "J", 1.0),
+    "transfer_efficiency": ("transfer efficiency", "%", 100.0),
+    "permanent_penetration": ("permanent penetration", "mm", 1e3),
+    "set": ("set (added by the blow)", "mm", 1e3),
+}
+
+
+def _blows(fig: Figure, src: _Source, times) -> None:
+    """The summary's blows table, a panel a column, against the blow number."""
+    from matplotlib.ticker import MaxNLocator
+
+    table = src.summary["blows"]
+    number = np.arange(1, len(table) + 1)
+    for ax, (column, (title, unit, scale)) in zip(fig.subplots(2, 3, sharex=True).flat,
+                                                  BLOW_COLUMNS.items()):
+        ax.plot(number, [row[column] * scale for row in table], "o-", color="C0", lw=1.2, ms=4,
+                label=title)
+        ax.set_title(title, fontsize=10)
+        _decorate(ax, "blow", unit)
+        ax.margins(x=0.05)
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+
+
 @dataclass(frozen=True)
 class _Plot:
     title: str
-    needs: str | None  # "probes", "fields" or nothing beyond the histories
+    needs: tuple[str, ...]  # what beyond the histories: keys of _NEEDS
     draw: Callable[[Figure, _Source, Sequence[float] | None], None]
 
 
 _TABLE = {
-    "force": _Plot("Contact force", None, _force),
-    "displacements": _Plot("Displacements", None, _displacements),
-    "probes": _Plot("Stress at the probes", "probes", _probes),
-    "stress_along": _Plot("Stress along the tool", "fields", _stress_along),
-    "spacetime": _Plot("Stress in the tool over x and t", "fields", _spacetime),
-    "energy": _Plot("Energy budget", None, _energy),
+    "force": _Plot("Contact force", (), _force),
+    "displacements": _Plot("Displacements", (), _displacements),
+    "probes": _Plot("Stress at the probes", ("probes",), _probes),
+    "stress_along": _Plot("Stress along the tool", ("fields",), _stress_along),
+    "spacetime": _Plot("Stress in the tool over x and t", ("fields",), _spacetime),
+    "energy": _Plot("Energy budget", ("one blow",), _energy),
+    "force_penetration": _Plot("Medium force against penetration", ("medium",), _force_penetration),
+    "blows": _Plot("Blow by blow", ("blows",), _blows),
 }
 PLOTS = {name: plot.title for name, plot in _TABLE.items()}
 
@@ -317,18 +374,58 @@ def _plot(name: str) -> _Plot:
     return _TABLE[name]
 
 
+def _no_fields(h5: h5py.File, case: dict) -> str | None:
+    if "fields/stress" in h5:
+        return None
+    if h5.attrs.get("numerics.model") == "lumped":
+        return ("this result is of the lumped model, which has no stress wave in the tool: "
+                "run the case with numerics.model = \"rod\" and outputs.fields = true")
+    return "this result has no stress fields: run the case with outputs.fields = true"
+
+
+def _no_probes(h5: h5py.File, case: dict) -> str | None:
+    if len(h5["probes/x"]):
+        return None
+    return ("this result has no probes: run the case with outputs.probes, the stations x (m) "
+            "along the tool, e.g. [0.0, 0.25]")
+
+
+def _no_medium(h5: h5py.File, case: dict) -> str | None:
+    if case.get("medium"):
+        return None
+    return ("this case has no medium at the working end: give it a medium (medium.stiffness, or "
+            "medium.kind \"bilinear\" or \"smith\" with its fields)")
+
+
+def _no_blows(h5: h5py.File, case: dict) -> str | None:
+    if case.get("blows"):
+        return None
+    return ("this case has no blows table: run it blow after blow with blows.count, "
+            "e.g. \"blows\": {\"count\": 5}")
+
+
+def _several_blows(h5: h5py.File, case: dict) -> str | None:
+    count = (case.get("blows") or {}).get("count", 1)
+    if count == 1:
+        return None
+    # The history has no column for what each relaunch brings and takes away.
+    return (f"this result has {count} blows, and its history does not record the energy each "
+            "blow's striker brings and takes away when it is launched again: the budget over time "
+            "is drawn for one blow (blows.count = 1); the summary's energy has the whole run's")
+
+
+# What a plot may need beyond the histories: each check says why a result lacks it, or None.
+_NEEDS: dict[str, Callable[[h5py.File, dict], str | None]] = {
+    "fields": _no_fields, "probes": _no_probes, "medium": _no_medium, "blows": _no_blows,
+    "one blow": _several_blows,
+}
+
+
 def problem(h5: h5py.File, name: str) -> str | None:
     """Why this result (an open file) cannot make plot `name`, saying what to change; None if it can."""
     needs = _plot(name).needs
-    if needs == "fields" and "fields/stress" not in h5:
-        if h5.attrs.get("numerics.model") == "lumped":
-            return ("this result is of the lumped model, which has no stress wave in the tool: "
-                    "run the case with numerics.model = \"rod\" and outputs.fields = true")
-        return "this result has no stress fields: run the case with outputs.fields = true"
-    if needs == "probes" and len(h5["probes/x"]) == 0:
-        return ("this result has no probes: run the case with outputs.probes, the stations x (m) "
-                "along the tool, e.g. [0.0, 0.25]")
-    return None
+    case = json.loads(h5.attrs["case"]) if needs else {}
+    return next(filter(None, (_NEEDS[need](h5, case) for need in needs)), None)
 
 
 def problems(path: str | Path) -> dict[str, str | None]:

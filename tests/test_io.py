@@ -1,7 +1,10 @@
 """HDF5 results: the contract's layout, a lossless round trip, atomic writes, streamed runs."""
 
+import json
 import os
+import re
 import stat
+from pathlib import Path
 
 import h5py
 import numpy as np
@@ -15,7 +18,9 @@ from percussim.solver.controller import simulate_rod
 from percussim.solver.errors import Cancelled
 from percussim.solver.io import read_result, remove_partial, write_result
 from percussim.solver.simulate import simulate
+from closed_forms import drilling
 
+HDF5_DOC = Path(__file__).resolve().parents[1] / "docs" / "hdf5.md"
 CASE = merge(BASE_CASE, {"numerics": {"duration": 5e-4},
                          "outputs": {"probes": [0.0, 0.6, 1.2], "fields": True, "field_stride": 25}})
 CONTRACT_DATASETS = [
@@ -158,3 +163,56 @@ def test_a_result_file_gets_the_permissions_of_the_users_umask(tmp_path):
     finally:
         os.umask(old)
     assert stat.S_IMODE(path.stat().st_mode) == 0o644
+
+
+# An elastic piston on bilinear rock, two blows: every dataset the newer models add.
+BLOWS_CASE = drilling(2, {"scheme": "explicit", "cells": 100})
+ADDED_UNITS = {"medium/penetration": "m", "medium/permanent_penetration": "m",
+               "energy/medium_plastic": "J", "energy/striker_strain": "J"}
+
+
+def documented_units() -> dict[str, str]:
+    """Each dataset of docs/hdf5.md's table (a row may name several) and its units column."""
+    units = {}
+    for line in HDF5_DOC.read_text().splitlines():
+        cells = [cell.strip() for cell in line.strip().strip("|").split("|")]
+        if line.startswith("| `/") and len(cells) == 4:
+            for path in re.findall(r"`/([^`]+)`", cells[0]):
+                units[path] = cells[2]
+    return units
+
+
+def test_a_yielding_medium_an_elastic_striker_and_blows_are_written_with_their_units(tmp_path):
+    case = parse_case(BLOWS_CASE)
+    held = simulate(case)
+    write_result(held, tmp_path / "held.h5")
+    # the service streams its results: the same file
+    simulate(case, result_path=tmp_path / "streamed.h5")
+    _same_files(tmp_path / "streamed.h5", tmp_path / "held.h5")
+    with h5py.File(tmp_path / "held.h5") as f:
+        for path, unit in ADDED_UNITS.items():
+            assert f[path].attrs["units"] == unit, path
+        # the penetration is the working end's u_N, and what stays of it ends as the summary's
+        np.testing.assert_array_equal(f["medium/penetration"][()], f["tool/working_end_displacement"][()])
+        summary = json.loads(f["summary"][()])
+        assert f["medium/permanent_penetration"][-1] == summary["medium_penetration"]["permanent"] > 0
+        assert f["energy/medium_plastic"][-1] > 0 and f["energy/striker_strain"][0] == 0.0
+        # the blows table is the summary's, stored whole
+        assert len(summary["blows"]) == 2 and summary["blows"] == held.summary["blows"]
+        assert summary["blows"][1]["permanent_penetration"] == summary["medium_penetration"]["permanent"]
+    back = read_result(tmp_path / "held.h5")
+    assert set(ADDED_UNITS) <= back.history.keys() == held.history.keys()
+    for name, data in held.history.items():
+        np.testing.assert_array_equal(back.history[name], data, err_msg=name)
+
+
+def test_every_dataset_written_is_documented_with_its_units(tmp_path):
+    documented = documented_units()
+    assert documented["fields/stress"] == "Pa" and documented["energy/tool_strain"] == "J"
+    for name, case in (("paper", CASE), ("blows", BLOWS_CASE)):
+        with h5py.File(write_result(simulate(parse_case(case)), tmp_path / f"{name}.h5")) as f:
+            written = {}
+            f.visititems(lambda path, d: written.__setitem__(path, d.attrs.get("units", ""))
+                         if isinstance(d, h5py.Dataset) else None)
+        for path, unit in written.items():
+            assert documented.get(path) == unit, (name, path, unit)
