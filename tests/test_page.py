@@ -18,6 +18,7 @@ from playwright.sync_api import Page, expect, sync_playwright
 from conftest import merge
 from live_stack import Stack
 from percussim.solver.presets import preset_json
+from closed_forms import drilling
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -228,3 +229,41 @@ def test_stress_along_the_tool_is_redrawn_at_the_times_asked(page, stack):
     figure.locator("input").fill("1e9")
     figure.locator("button").click()
     expect(figure.locator(".times-error")).to_contain_text("outside the run's fields")
+
+
+def test_a_run_of_blows_shows_its_table_penetration_and_plots(page, stack):
+    """An elastic piston drilling rock, three blows: the blows table row by row, the penetration
+    among the pulse's figures, an energy audit that closes with the terms these models add, and
+    the blows and force–penetration plots (the energy budget over time says why it is not drawn)."""
+    case = {**drilling(3, {"scheme": "explicit", "cells": 100}), "name": "drilling"}
+    page.fill("#case-json", json.dumps(case, indent=2))
+    page.click("#submit")
+    rows = page.locator("table.blows tbody tr")
+    expect(rows).to_have_count(3)
+    job_id = _shown_job(page)
+    summary = stack.client.get(f"/v1/jobs/{job_id}/summary").json()
+    for row, blow in zip(rows.all(), summary["blows"]):
+        assert [t.strip() for t in row.locator("th, td").all_inner_texts()][1:] == [
+            shown(blow["peak_contact_force"] / 1e3), shown(blow["max_compressive_stress"] / 1e6),
+            shown(blow["to_medium"]), shown(100 * blow["transfer_efficiency"]),
+            shown(blow["permanent_penetration"] * 1e3), shown(blow["set"] * 1e3)]
+    assert rows.nth(2).get_attribute("data-blow") == "3"
+
+    def value(quantity: str) -> str:
+        return page.locator(f'[data-quantity="{quantity}"] .value').inner_text()
+
+    assert value("medium_penetration.permanent") == shown(summary["medium_penetration"]["permanent"] * 1e3)
+    assert value("medium_penetration.max") == shown(summary["medium_penetration"]["max"] * 1e3)
+    assert value("energy.transfer_efficiency") == shown(100 * summary["energy"]["transfer_efficiency"])
+    energy = summary["energy"]
+    for term in ("medium_plastic", "striker_withdrawn"):
+        assert energy[term] > 0
+        assert page.locator(f"[data-energy={term}] .value").inner_text() == shown(energy[term])
+    # every term the input ends as is listed: what is left over is none
+    expect(page.locator("table.energy tr.total").last.locator("td").first).to_have_text("0")
+
+    for name in ("blows", "force_penetration"):
+        image = page.locator(f"figure[data-plot={name}] img")
+        expect(image).to_be_visible()
+        assert image.evaluate("img => img.complete && img.naturalWidth > 0"), name
+    expect(page.locator("figure[data-plot=energy] .frame.unavailable")).to_contain_text("3 blows")

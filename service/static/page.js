@@ -318,6 +318,7 @@ async function downloadResult() {
 // The pulse summary in engineers' units.
 
 const us = (t) => fmt(t * 1e6);
+const mm = (x) => fmt(x * 1e3);
 
 function table(className, head, rows) {
   return h("table", { class: className },
@@ -353,6 +354,7 @@ function pulseCard(s) {
                                    : ["—", "MPa"]);
   const contacts = s.contacts || [];
   const e = s.energy;
+  const penetration = s.medium_penetration; // null without a medium
   return card("Pulse",
     table("pulse", ["", "value", "unit", "error (est.)", "at x (mm)", "at t (µs)"], [
       pulseRow(s, "Co-impact time", "co_impact_time", us(s.co_impact_time), "µs"),
@@ -363,6 +365,9 @@ function pulseCard(s) {
                "", contacts.length ? us(contacts[0].end) : ""),
       pulseRow(s, "Energy to the medium", "energy.to_medium", fmt(e.to_medium), "J"),
       pulseRow(s, "Transfer efficiency", "energy.transfer_efficiency", fmt(100 * e.transfer_efficiency), "%"),
+      penetration && pulseRow(s, "Deepest penetration", "medium_penetration.max", mm(penetration.max), "mm"),
+      penetration && pulseRow(s, "Permanent penetration", "medium_penetration.permanent",
+                              mm(penetration.permanent), "mm"),
       pulseRow(s, "Contacts", "contacts_total", String(s.contacts_total ?? contacts.length), ""),
     ]),
     contacts.length > 1 && h("details", {},
@@ -372,14 +377,19 @@ function pulseCard(s) {
           h("td", { class: "num" }, us(c.end)), h("td", { class: "num" }, us(c.end - c.start)))))));
 }
 
+// The terms the input ends as; those marked `rare` belong to some models only (an elastic
+// striker, a medium that yields, blows) and are listed when they are not 0.
 const ENERGY_TERMS = [
   ["striker_kinetic", "Striker, kinetic"],
+  ["striker_strain", "Striker, strain", "rare"],
   ["tool_kinetic", "Tool, kinetic"],
   ["tool_strain", "Tool, strain"],
   ["contact_potential", "Contact, potential"],
   ["medium_potential", "Medium, potential"],
+  ["medium_plastic", "Medium, plastic", "rare"],
   ["dissipated_contact", "Dissipated in the contact"],
   ["dissipated_medium", "Dissipated in the medium"],
+  ["striker_withdrawn", "Withdrawn with the striker", "rare"],
   ["numerical", "Lost by the scheme"],
 ];
 
@@ -388,7 +398,7 @@ function energyCard(e) {
   const share = (value) => (input ? ((100 * value) / input).toFixed(1) : "—");
   const row = (label, key, value, className = null) => h("tr", { "data-energy": key, class: className },
     h("th", {}, label), h("td", { class: "num value" }, fmt(value)), h("td", { class: "num" }, share(value)));
-  const residual = input - ENERGY_TERMS.reduce((sum, [key]) => sum + e[key], 0);
+  const residual = input - ENERGY_TERMS.reduce((sum, [key]) => sum + (e[key] ?? 0), 0);
   const tiny = Math.abs(residual) < 1e-9 * Math.max(Math.abs(input), 1);
   return card("Energy audit",
     table("energy", ["", "J", "% of input"], [
@@ -397,12 +407,24 @@ function energyCard(e) {
       row("Input", "input", input, "total"),
       row("To the medium", "to_medium", e.to_medium, "highlight"),
       h("tr", { class: "group" }, h("th", { colspan: 3 }, "At the end of the run")),
-      ENERGY_TERMS.map(([key, label]) => row(label, key, e[key])),
+      ENERGY_TERMS.filter(([key, , rare]) => !rare || e[key]).map(([key, label]) => row(label, key, e[key])),
       h("tr", { class: "total" }, h("th", {}, "Balance (input − terms)"),
         h("td", { class: "num" }, tiny ? "0" : fmt(residual)), h("td", { class: "num" }, tiny ? "0" : share(residual))),
       h("tr", {}, h("th", {}, "Largest energy created"), h("td", {}),
         h("td", { class: "num" }, fmt(100 * e.max_excess_fraction, 3))),
     ]));
+}
+
+// The summary's blows table, a row a blow.
+function blowsCard(blows) {
+  const cell = (value) => h("td", { class: "num" }, value);
+  return card(`Blows (${blows.length})`,
+    table("blows", ["blow", "peak contact force (kN)", "max compressive stress (MPa)", "to the medium (J)",
+                    "transfer efficiency (%)", "permanent penetration (mm)", "set (mm)"],
+      blows.map((b, i) => h("tr", { "data-blow": i + 1 },
+        h("th", {}, String(i + 1)), cell(fmt(b.peak_contact_force / 1e3)), cell(fmt(b.max_compressive_stress / 1e6)),
+        cell(fmt(b.to_medium)), cell(fmt(100 * b.transfer_efficiency)), cell(mm(b.permanent_penetration)),
+        cell(mm(b.set))))));
 }
 
 function modelCard(s) {
@@ -433,13 +455,15 @@ async function showSummary(view) {
   }
   if (view !== shown) return;
   const warnings = s.warnings || [];
-  $("summary").replaceChildren(
+  $("summary").replaceChildren(...[
     warnings.length
       ? h("div", { class: "banner warning" }, h("p", { class: "title" },
           `${warnings.length} warning${warnings.length === 1 ? "" : "s"}`), h("ul", {}, warnings.map((w) => h("li", {}, w))))
       : h("p", { class: "muted small" }, "No warnings."),
     pulseCard(s),
-    h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)));
+    s.blows && s.blows.length ? blowsCard(s.blows) : null, // null: a case without blows
+    h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)),
+  ].filter(Boolean));
 }
 
 // ---------------------------------------------------------------------------------------------
