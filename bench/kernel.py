@@ -74,8 +74,8 @@ from scipy.optimize import brentq
 
 from percussim.solver import kernel as K
 from percussim.solver.case import Case, load_case
-from percussim.solver.controller import (end_conditions, force_law, rod_constants, scheme_weights,
-                                         simulate_rod, striker_on, tool_on)
+from percussim.solver.controller import (anvil_on, end_conditions, force_law, rod_constants,
+                                         scheme_weights, simulate_rod, striker_on, tool_on)
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
 from percussim.solver.layout import HISTORY_COLUMNS
 from percussim.solver.summary import MAX_CONTACTS
@@ -165,8 +165,9 @@ def numba_run(s: Setup) -> dict[str, float]:
         field_u=no_fields, field_stress=no_fields, field_stride=0)
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
     striker = striker_on(case, s.num, s.tool, s.rod)
+    anvil = anvil_on(case, s.grid, contact)
     status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, striker,
-                             medium, force_law(case), state, observed, recorders)
+                             anvil, medium, force_law(case), state, observed, recorders)
     assert status == K.STATUS_OK
     return reported(state, observed)
 

@@ -49,6 +49,15 @@ YIELDING_PATHS = {
 }
 
 
+# An anvil adds these (its force: on the tool's struck end).
+ANVIL_PATHS = {
+    "anvil/displacement": L.H_ANVIL_DISP,
+    "anvil/velocity": L.H_ANVIL_VEL,
+    "anvil/force": L.H_ANVIL_FORCE,
+    "energy/anvil_kinetic": L.H_ANVIL_KINETIC,
+}
+
+
 def history_paths(case: Case) -> dict[str, int]:
     """The history columns a case keeps, by HDF5 path: only what its model has."""
     paths = dict(HISTORY_PATHS)
@@ -56,6 +65,8 @@ def history_paths(case: Case) -> dict[str, int]:
         paths.update(YIELDING_PATHS)
     if case.striker.elastic:
         paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
+    if case.anvil is not None:
+        paths.update(ANVIL_PATHS)
     return paths
 
 
@@ -120,6 +131,19 @@ def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K
         mass=striker_mass(striker), back_delay=back_delay)
 
 
+def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
+    """The anvil as the kernel takes it, with its contact on the tool's struck end (the case's
+    `contact`, the striker's, fills an absent anvil's place)."""
+    anvil = case.anvil
+    if anvil is None:
+        return K.Anvil(present=False, mass=1.0, velocity=0.0, contact=contact)
+    c = anvil.contact
+    return K.Anvil(present=True, mass=anvil.mass, velocity=anvil.velocity, contact=K.Contact(
+        striker_mass=anvil.mass, striker_velocity=anvil.velocity, stiffness=c.stiffness,
+        exponent=c.exponent, tension_stiffness=c.tension_stiffness, damping=c.damping,
+        impedance=contact.impedance))
+
+
 def tool_on(grid: Grid) -> K.Tool:
     """The tool on its grid, as the kernel takes it."""
     return K.Tool(lower=grid.lower, upper=grid.upper, node_area=grid.node_area,
@@ -162,7 +186,8 @@ def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_a
     at = np.full(L.ENERGY_SLOTS, (last - 0.5) * tau)
     if ends_at_layer:
         at[[L.E_EXTERNAL_WORK, L.E_DISSIPATED_CONTACT, L.E_DISSIPATED_MEDIUM, L.E_STRIKER_KINETIC,
-            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL, L.E_MEDIUM_PLASTIC]] = last * tau
+            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL, L.E_MEDIUM_PLASTIC,
+            L.E_ANVIL_KINETIC]] = last * tau
         if elastic_striker:
             at[L.E_STRIKER_KINETIC] = (last - 0.5) * tau
     if last < 2:
@@ -190,6 +215,7 @@ def simulate_rod(
     tool, rod = tool_on(grid), rod_constants(case, num, grid)
     contact, medium = end_conditions(case, grid)
     striker = striker_on(case, num, tool, rod)
+    anvil = anvil_on(case, grid, contact)
     rows = K.factor_tool_rows(tool, rod, weights, medium)
     force = force_law(case)
 
@@ -200,7 +226,8 @@ def simulate_rod(
     observed = K.new_observed(MAX_CONTACTS)
     blows = case.blows.count if case.blows else 1
     blow, blow_steps = 0, num.steps // blows
-    log = BlowLog(launch_energy=0.5 * contact.striker_mass * contact.striker_velocity**2)
+    log = BlowLog(launch_energy=0.5 * contact.striker_mass * contact.striker_velocity**2
+                  + (0.5 * anvil.mass * anvil.velocity**2 if anvil.present else 0.0))
     log.start(state.energy[0])
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
     lag = 1 if weights.centered and not weights.impedance_ends else 0
@@ -245,7 +272,7 @@ def simulate_rod(
             field_u=np.empty((frames, n + 1)), field_stress=np.empty((frames, n + 1)),
             field_stride=field_stride)
         status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, striker,
-                                            medium, force, state, observed, recorders)
+                                            anvil, medium, force, state, observed, recorders)
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
         history = recorders.history
@@ -264,7 +291,7 @@ def simulate_rod(
         first = last + 1
         if last == boundary and blow < blows - 1:
             ended = state.energy[0].copy()
-            K.start_blow(last, state, observed, contact, striker, tau)
+            K.start_blow(last, state, observed, contact, striker, anvil, tau)
             log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
             observed = K.new_observed(MAX_CONTACTS)
             log.start(state.energy[0])

@@ -224,8 +224,6 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
         ends = "none"
     elif weights.name == "explicit" and weights.end_masses and courant >= IMPEDANCE_COURANT:
         ends = "impedance"
-    if case.anvil is not None:
-        raise CaseError([FieldError(field="anvil", message="an anvil is not solved yet: leave it out")])
     if case.beyond_paper and ends != "impedance":
         field = case.beyond_paper[0]
         raise CaseError([FieldError(

@@ -42,12 +42,15 @@ them and leaves the tool's rows alone:
 - the struck end (the striker m1 and the contact c1, α, c0, b1): `solve_struck_end`, the striker
   row (11) and the struck-end row (9) solved with the contact law; they see the tool only through
   its link `u_1 = P_1·u_0 + Q_1`, which the sweep gives;
-- ends that integrate their own equations: `struck_end_step` and `working_end_step`.
-A medium linear in u_N (any c2, b2) is its three functions. A piecewise-linear one (a bilinear
-rock, Smith's soil) has a diagonal for each branch of its law: its rows would be factored again
-when it changes branch. An elastic striker replaces `solve_struck_end` and `struck_end_step` by its
-own rows, coupled to the tool through the same link. The ends' energy terms (the contact's Φ, the
-medium's `c2·u_N²/2`, what the dampers dissipate) are the energy audit's: a new law brings its own.
+- ends that integrate their own equations: `struck_end_step` and `working_end_step`. They see
+  the tool only through the waves arriving at its ends, so they take what the paper's rows do not:
+  media that yield (`yielding_end_step`), an elastic striker on its own grid (`free_back_end` for
+  its back end), and an anvil between the striker and the tool: each implicit stage of the struck
+  end is then two contacts' balance (`stage_forces`, `anvil_balance`), the bodies' motion around
+  them linear (`body_rates`).
+A medium linear in u_N (any c2, b2) is its three functions. The ends' energy terms (the contacts'
+Φ, the medium's stored and plastic work, the anvil's kinetic energy, what the dampers dissipate)
+are the energy audit's: a new law brings its own.
 
 All arrays are float64. Layers n−1, n, n+1 of the tool live in rows `(n−1)%3, n%3, (n+1)%3` of
 `u` (3 × (N+1)) and of the striker's `y` (3), so the layers carry no state between chunks but the
@@ -70,10 +73,11 @@ from numba import njit, types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
-from .layout import (ENERGY_SLOTS, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
+from .layout import (ENERGY_SLOTS, E_ANVIL_KINETIC, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
                      E_EXTERNAL_WORK, E_LAUNCHED, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
                      E_STRIKER_STRAIN, E_TOOL_KINETIC, E_WITHDRAWN,
-                     E_TOOL_STRAIN, H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
+                     E_TOOL_STRAIN, H_ANVIL_DISP, H_ANVIL_FORCE, H_ANVIL_KINETIC, H_ANVIL_VEL,
+                     H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
                      H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
                      H_MEDIUM_FORCE, H_MEDIUM_PLASTIC, H_MEDIUM_POTENTIAL, H_OVERLAP,
                      H_PERMANENT_PENETRATION, H_STRIKER_DISP, H_STRIKER_STRAIN,
@@ -111,7 +115,9 @@ S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE
 S_BACK_RATE = 23  # 23, 24: mean, slope of step m−1; 25, 26: of step m−2
 S_IMPULSE = 27
 S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at layer m − ½
-END_SLOTS = 29
+# An anvil: its displacement and velocity, and its force on the tool's end, at layer m − 1
+S_ANVIL_DISP, S_ANVIL_VELOCITY, S_ANVIL_FORCE = 29, 30, 31
+END_SLOTS = 32
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
@@ -151,6 +157,10 @@ Striker = namedtuple("Striker", "elastic tool rod impedance back_impedance mass 
 face, at Courant number 1 with the tool's time step), the impedances ρ·a·S of its face and back
 cells, its mass, and `back_delay`: the time a wave takes there and back over the part of the striker beyond
 its last node, less than 2τ (its length is rarely a whole number of cells)."""
+Anvil = namedtuple("Anvil", "present mass velocity contact")
+"""A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
+impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end
+impedance); the case's `Contact` is then the striker's with the anvil."""
 State = namedtuple("State", "u y ends energy striker")
 """What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
@@ -174,8 +184,10 @@ Boundary = namedtuple("Boundary", "end_weight spring_weight damper_factor back")
 """How the end rows and the boundary terms weight the layers (`boundary_weights`)."""
 StepConstants = namedtuple("StepConstants", "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
                                             "lag strain_sigma e_over_h half_e_over_h "
-                                            "kinetic_factor initial_energy segments explicit")
-"""What every step derives from the bundles (`step_constants`); `segments` is `segment_layout`'s."""
+                                            "kinetic_factor initial_energy anvil_energy segments "
+                                            "explicit")
+"""What every step derives from the bundles (`step_constants`): `initial_energy` the striker's at
+impact, `anvil_energy` the anvil's; `segments` is `segment_layout`'s."""
 Recorded = namedtuple("Recorded", "row time velocity contact_force medium_force struck_end_stress "
                                   "working_end_stress")
 """A layer as it is recorded: its row of `u`, its time, the striker's velocity, the end forces the
@@ -504,6 +516,10 @@ STIFF_RISE_STEPS = 4.0
 MAX_SUBSTEPS = 100_000
 # An overlap within this fraction of the ends' displacements is rounding: it changes no contact
 GRAZING = 1e-12
+# An anvil's oscillation between its contacts: substeps keep its phase within this a substep (about
+# 30 a period), at most this many a step
+ANVIL_PHASE = 0.2
+ANVIL_SUBSTEPS = 64
 
 
 @njit(cache=True, inline="always")
@@ -541,57 +557,142 @@ def solve_spring_balance(target, compliance, guess, contact):
 
 
 @njit(cache=True, inline="always")
-def struck_end_force(delta, w, v_in, contact):
-    """The contact force from the overlap, the striker's velocity and the incoming wave: the
-    damper sees `δ' = w − u_0'`, `u_0' = F/Z + 2·v_in`, so `F(1 + b1/Z) = Φ'(δ) + b1·(w − 2·v_in)`."""
-    spring = contact_spring(delta, contact)[0]
-    b1 = contact.damping
-    return (spring + b1 * (w - 2.0 * v_in)) / (1.0 + b1 / contact.impedance)
+def link_force(delta, approach, mobility, contact):
+    """A contact's force from its overlap δ, the speed `approach` its faces would close at were it
+    off, and its `mobility`, how they give way to it (1/Z at a rod's end, 0 at a mass):
+    `F = Φ'(δ) + b·δ'`, `δ' = approach − mobility·F`."""
+    b = contact.damping
+    return (contact_spring(delta, contact)[0] + b * approach) / (1.0 + b * mobility)
 
 
 @njit(cache=True, inline="always")
-def struck_end_stage(base, g, r, v_in, guess, contact):
-    """One implicit stage `X = B + g·f(X)` of the striker and the struck end, X = (y, w, u_0),
-    B = `base`: `y' = w`, `m1·w' = R − F`, `u_0' = F/Z + 2·v_in`. Everything is linear in F but
-    the spring Φ'(δ), so the stage is one scalar equation in δ = y − u_0. Returns
-    `(y, w, u_0, F, δ)`."""
-    by, bw, bu = base
-    m1, z, b1 = contact.striker_mass, contact.impedance, contact.damping
-    compliance = g * g / m1 + g / z  # how δ gives way to F within the stage
-    denominator = 1.0 + b1 / z + b1 * g / m1
-    pushed = b1 * (bw + g * r / m1 - 2.0 * v_in)
-    free = by - bu - 2.0 * g * v_in + g * bw + g * g * r / m1  # δ were F = 0
-    delta = solve_spring_balance(free - compliance * pushed / denominator, compliance / denominator,
+def struck_forces(x, v_in, v_face, contact, striker, anvil):
+    """`(F1, F2)`: the contact's force and the force on the tool's struck end (F1 without an
+    anvil) in the state `x` = (y, w, y_a, w_a, u_0) under the waves arriving now, at the struck
+    end (`v_in`) and at an elastic striker's face (`v_face`): a rod's end moves at twice the wave
+    arriving at it less F/Z."""
+    y, w, y_a, w_a, u0 = x
+    near, give = w, 0.0
+    if striker.elastic:
+        near, give = 2.0 * v_face, 1.0 / striker.impedance
+    if anvil.present:
+        end = anvil.contact
+        return (link_force(y - y_a, near - w_a, give, contact),
+                link_force(y_a - u0, w_a - 2.0 * v_in, 1.0 / end.impedance, end))
+    force = link_force(y - u0, near - 2.0 * v_in, give + 1.0 / contact.impedance, contact)
+    return force, force
+
+
+@njit(cache=True, inline="always")
+def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil):
+    """The rates of the state `x` = (y, w, y_a, w_a, u_0) under the contact force F1, the force
+    F2 on the tool's end and R, with the velocities a stage `X = x + g·X'` has (g = 0: at x):
+    `m1·w' = R − F1`, or an elastic striker's face `y' = 2·v_face − F1/Z_s`; the anvil's
+    `m_a·w_a' = F1 − F2`; `u_0' = F2/Z + 2·v_in`."""
+    _, w, _, w_a, _ = x
+    if striker.elastic:
+        w_rate = 0.0
+        y_rate = 2.0 * v_face - force / striker.impedance
+    else:
+        w_rate = (r - force) / contact.striker_mass
+        y_rate = w + g * w_rate
+    ya_rate = wa_rate = 0.0
+    impedance = contact.impedance
+    if anvil.present:
+        wa_rate = (force - end_force) / anvil.mass
+        ya_rate = w_a + g * wa_rate
+        impedance = anvil.contact.impedance
+    return y_rate, w_rate, ya_rate, wa_rate, end_force / impedance + 2.0 * v_in
+
+
+@njit(cache=True, inline="always")
+def moved(x, span, rates, striker):
+    """`x + span·rates`; an elastic striker's w is its face's velocity, the rate of y."""
+    w = rates[0] if striker.elastic else x[1] + span * rates[1]
+    return (x[0] + span * rates[0], w, x[2] + span * rates[2], x[3] + span * rates[3],
+            x[4] + span * rates[4])
+
+
+@njit(cache=True, inline="always")
+def overlap_rates(rates, anvil):
+    """δ1' and δ2' from the state's rates (δ1 = y − y_a, δ2 = y_a − u_0; δ1 = y − u_0 and no δ2
+    without an anvil)."""
+    if anvil.present:
+        return rates[0] - rates[2], rates[2] - rates[4]
+    return rates[0] - rates[4], 0.0
+
+
+@njit(cache=True, inline="always")
+def spring_stage(free, base, compliance, g, guess, contact):
+    """`(F, δ)` of one contact within a stage: `δ = free − compliance·F`,
+    `F = Φ'(δ) + b·(δ − base)/g` (its damper sees the stage's δ' = (δ − base)/g)."""
+    give = compliance * contact.damping / g
+    delta = solve_spring_balance((free + give * base) / (1.0 + give), compliance / (1.0 + give),
                                  guess, contact)
-    force = (contact_spring(delta, contact)[0] + pushed) / denominator
-    w = bw + g * (r - force) / m1
-    return by + g * w, w, bu + g * (force / z + 2.0 * v_in), force, delta
+    return contact_spring(delta, contact)[0] + contact.damping * (delta - base) / g, delta
+
+
+@njit(cache=True)
+def anvil_balance(free, base, gives, g, guess, contact, end):
+    """`(F1, F2, δ1, δ2)` of the two contacts of a stage with an anvil: `δ = free − C·F`,
+    `C = [[a + b, −b], [−b, b + t]]` (`gives` = (a, b, t): how the striker's face, the anvil and
+    the tool's end give way to a force within the stage), `F_i = Φ_i'(δ_i) + b_i·(δ_i − base_i)/g`.
+
+    δ minimises the convex `½δᵀKδ + Φ1(δ1) + Φ2(δ2) − δᵀr`, `K = C⁻¹ + diag(b_i/g)`: δ1 for a
+    given δ2 is a one-contact balance (`solve_spring_balance`), and the gradient left in δ2 is an
+    increasing function whose slope is at least det K/K11, so one evaluation brackets its root."""
+    a, b, t = gives
+    det_c = a * b + a * t + b * t
+    d1, d2 = contact.damping / g, end.damping / g
+    k11 = (b + t) / det_c + d1
+    k12 = b / det_c
+    k22 = (a + b) / det_c + d2
+    r1 = ((b + t) * free[0] + b * free[1]) / det_c + d1 * base[0]
+    r2 = (b * free[0] + (a + b) * free[1]) / det_c + d2 * base[1]
+    least_slope = ((1.0 + d1 * (a + b) + d2 * (b + t)) / det_c + d1 * d2) / k11
+    delta1, delta2 = guess
+    lo = hi = scale = 0.0
+    for k in range(100):
+        delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)
+        stiffness1 = contact_spring(delta1, contact)[1]
+        spring2, stiffness2 = contact_spring(delta2, end)
+        h = k12 * delta1 + k22 * delta2 + spring2 - r2
+        if k == 0:
+            other = delta2 - h / least_slope
+            lo, hi = min(delta2, other), max(delta2, other)
+            scale = 1e-15 * (abs(lo) + abs(hi))
+        if h == 0.0:
+            break
+        slope = least_slope + stiffness2 + k12 * k12 * stiffness1 / (k11 * (k11 + stiffness1))
+        delta2, lo, hi, done = bracketed_newton_step(delta2, h, slope, lo, hi, scale)
+        if done:
+            delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)
+            break
+    return (contact_spring(delta1, contact)[0] + d1 * (delta1 - base[0]),
+            contact_spring(delta2, end)[0] + d2 * (delta2 - base[1]), delta1, delta2)
 
 
 @njit(cache=True, inline="always")
-def rod_striker_stage(base, g, v_in, v_face, guess, contact, striker):
-    """`struck_end_stage` for an elastic striker: its face moves as `y' = 2·v_face − F/Z_s` under
-    the wave `v_face` arriving at it from inside the striker, so that δ gives way to F through both
-    impedances. Returns `(y, y', u_0, F, δ)`."""
-    by, bu = base
-    z, z_s, b1 = contact.impedance, striker.impedance, contact.damping
-    compliance = g / z_s + g / z
-    denominator = 1.0 + b1 / z_s + b1 / z
-    pushed = 2.0 * b1 * (v_face - v_in)
-    free = by - bu + 2.0 * g * (v_face - v_in)  # δ were F = 0
-    delta = solve_spring_balance(free - compliance * pushed / denominator, compliance / denominator,
-                                 guess, contact)
-    force = rod_face_force(delta, v_face, v_in, contact, striker)
-    face_velocity = 2.0 * v_face - force / z_s
-    return by + g * face_velocity, face_velocity, bu + g * (force / z + 2.0 * v_in), force, delta
-
-
-@njit(cache=True, inline="always")
-def rod_face_force(delta, v_face, v_in, contact, striker):
-    """`struck_end_force` for an elastic striker: `F·(1 + b1/Z_s + b1/Z) = Φ'(δ) + 2·b1·(v_face − v_in)`."""
-    b1 = contact.damping
-    spring = contact_spring(delta, contact)[0]
-    return (spring + 2.0 * b1 * (v_face - v_in)) / (1.0 + b1 / striker.impedance + b1 / contact.impedance)
+def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
+    """One implicit stage `X = x + g·X'` of the striker, the anvil and the struck end
+    (`body_rates`): linear but for the contacts' springs Φ'(δ), so one equation in δ = y − u_0, or
+    two in δ1 = y − y_a, δ2 = y_a − u_0 with an anvil (`anvil_balance`). `guess`: (δ1, δ2).
+    Returns `(F1, F2, δ1, δ2)`."""
+    # where each body would be were the forces off, and how it gives way to them
+    if striker.elastic:
+        y_free, give = x[0] + 2.0 * g * v_face, g / striker.impedance
+    else:
+        m1 = contact.striker_mass
+        y_free, give = x[0] + g * (x[1] + g * r / m1), g * g / m1
+    u_free = x[4] + 2.0 * g * v_in
+    if not anvil.present:
+        force, delta = spring_stage(y_free - u_free, x[0] - x[4], give + g / contact.impedance, g,
+                                    guess[0], contact)
+        return force, force, delta, 0.0
+    ya_free = x[2] + g * x[3]
+    return anvil_balance((y_free - ya_free, ya_free - u_free), (x[0] - x[2], x[2] - x[4]),
+                         (give, g * g / anvil.mass, g / anvil.contact.impedance), g, guess,
+                         contact, anvil.contact)
 
 
 @njit(cache=True, inline="always")
@@ -662,113 +763,143 @@ def limited_slope(before, now, after, tau):
     return (left if abs(left) < abs(right) else right) / tau
 
 
+@njit(cache=True, inline="always")
+def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
+    """Substeps over a stretch of `span` for the struck end's links: each contact relaxing against
+    what gives way to it, at its stiffness at the overlap the stretch may reach, and an anvil's
+    oscillation between its two contacts (capped at `ANVIL_SUBSTEPS`: an anvil too light to
+    follow is relaxed to its quasi-static state, as a stiff link is)."""
+    y, w, y_a, w_a, u0 = x
+    b1 = contact.damping
+    end = anvil.contact if anvil.present else contact
+    z = end.impedance
+    end_rate = end_force / z + 2.0 * v_in
+    if not anvil.present:
+        reach = abs(y - u0) + span * abs(w - end_rate)
+        stiffness = max(contact_spring(reach, contact)[1], contact.tension_stiffness)
+        if striker.elastic:
+            z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
+            return substeps(stiffness / (z_both + b1), span, SDIRK_MONOTONE)
+        limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / contact.striker_mass * tau)
+        return substeps(stiffness / (z + b1), span, limit)
+    k1 = max(contact_spring(abs(y - y_a) + span * abs(w - w_a), contact)[1],
+             contact.tension_stiffness)
+    k2 = max(contact_spring(abs(y_a - u0) + span * abs(w_a - end_rate), end)[1],
+             end.tension_stiffness)
+    b2 = end.damping
+    count = substeps(k2 / (z + b2), span,
+                     min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b2) / anvil.mass * tau))
+    omega2 = (k1 + k2) / anvil.mass
+    if striker.elastic:
+        count = max(count, substeps(k1 / (striker.impedance + b1), span, SDIRK_MONOTONE))
+    else:
+        omega2 += k1 / contact.striker_mass
+    return max(count, min(ANVIL_SUBSTEPS, substeps(math.sqrt(omega2), span, ANVIL_PHASE)))
+
+
 @njit(cache=True)
-def struck_end_step(t0, tau, state, waves, contact, striker, force, events):
-    """Advance the striker and the struck end over [t0, t0 + τ] under the incoming waves' rates
-    `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
+def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, events):
+    """Advance the striker, the anvil and the struck end over [t0, t0 + τ] under the incoming
+    waves' rates `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
     `v(t) = mean + slope·(t − t0 − τ/2)`; split where R jumps or kinks.
 
-    `state` = (y, w, u_0, F, I, in contact) at t0 on entry, at t0 + τ on return: w the striker's
-    velocity (its face's when elastic), I the contact's impulse. Returns the work of R and what the damper b1
-    dissipated over the step, the number of changes of sign of δ, each written to `events` (time,
+    `state` = (y, w, u_0, F1, I, in contact, y_a, w_a, F2) at t0 on entry, at t0 + τ on return:
+    w the striker's velocity (its face's when elastic), F1 the contact's force, I its impulse,
+    y_a, w_a the anvil's displacement and velocity, F2 the force on the tool's end (F1 without an
+    anvil). Returns the work of R and what the contacts' dampers dissipated over the step, the
+    number of changes of sign of δ1 (the contact's overlap), each written to `events` (time,
     striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
     striker's velocity is its mean, its momentum over its mass), and `(largest force, its time,
-    least force, its time)` at the substeps' ends (a stiff contact's substeps see a peak the
-    layers miss).
+    least force, its time)` of F1 and of F2 at the substeps' ends (a stiff contact's substeps see
+    a peak the layers miss).
     """
-    m1, z, b1 = contact.striker_mass, contact.impedance, contact.damping
     v_mean, v_slope, face_mean, face_slope = waves
-    elastic = striker.elastic
     gamma = SDIRK_GAMMA
+    b1, b2 = contact.damping, anvil.contact.damping if anvil.present else 0.0
     t_a = t0
     t_end = t0 + tau
     work = 0.0
     dissipated = 0.0
     count = 0
-    y, w, u0, impulse = state[0], state[1], state[2], state[4]
+    x = (state[0], state[1], state[6], state[7], state[2])
+    impulse = state[4]
     in_contact = state[5] != 0.0
     v_start = v_mean - 0.5 * tau * v_slope
     face_start = face_mean - 0.5 * tau * face_slope
-    # under the waves arriving now: F can jump at t0
-    if elastic:
-        f = rod_face_force(y - u0, face_start, v_start, contact, striker)
-        w = 2.0 * face_start - f / striker.impedance
-    else:
-        f = struck_end_force(y - u0, w, v_start, contact)
+    # under the waves arriving now: the forces can jump at t0
+    f, f_end = struck_forces(x, v_start, face_start, contact, striker, anvil)
+    if striker.elastic:
+        x = (x[0], 2.0 * face_start - f / striker.impedance, x[2], x[3], x[4])
     f_max, t_max, f_min, t_min = f, t0, f, t0
+    e_max, te_max, e_min, te_min = f_end, t0, f_end, t0
+    overlaps = (x[0] - (x[2] if anvil.present else x[4]), x[2] - x[4])
     t_stop = t0
     sub = tau
     while t_a < t_end:
         if t_a >= t_stop:
-            # the next stretch without a break of R, in substeps for the contact's relaxation
-            # against the tool (its stiffness at the overlap the stretch may reach)
+            # the next stretch without a break of R
             t_next = min(t_end, next_break(t_a, force))
-            reach = abs(y - u0) + (t_next - t_a) * abs(w - f / z - 2.0 * v_mean)
-            stiffness = max(contact_spring(reach, contact)[1], contact.tension_stiffness)
-            if elastic:
-                limit = SDIRK_MONOTONE
-                z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
-                rate = stiffness / (z_both + b1)
-            else:
-                limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / m1 * tau)
-                rate = stiffness / (z + b1)
-            count_sub = substeps(rate, t_next - t_a, limit)
-            sub = (t_next - t_a) / count_sub
+            sub = (t_next - t_a) / struck_substeps(x, f_end, t_next - t_a, v_mean, contact,
+                                                   striker, anvil, tau)
             t_stop = t_next
         t_b = t_stop if t_a + 1.5 * sub >= t_stop else t_a + sub
         span = t_b - t_a
         g = gamma * span
-        step = (1.0 - gamma) * span
         # stage 1 at t_a + γ·span, stage 2 at t_b: the new state (stiffly accurate)
         t1 = t_a + g
         r1 = force_on_substep(t1, t_a, t_b, force)
         r2 = force_on_substep(t_b, t_a, t_b, force)
         v1 = v_start + v_slope * (t1 - t0)
         v2 = v_start + v_slope * (t_b - t0)
-        if elastic:
-            y1, w1, u1, f1, d1 = rod_striker_stage(
-                (y, u0), g, v1, face_start + face_slope * (t1 - t0), y - u0, contact, striker)
-            ku = f1 / z + 2.0 * v1
-            y2, w2, u2, f2, d2 = rod_striker_stage(
-                (y + step * w1, u0 + step * ku), g, v2, face_start + face_slope * (t_b - t0), d1,
-                contact, striker)
-        else:
-            y1, w1, u1, f1, d1 = struck_end_stage((y, w, u0), g, r1, v1, y - u0, contact)
-            kw, ku = (r1 - f1) / m1, f1 / z + 2.0 * v1
-            y2, w2, u2, f2, d2 = struck_end_stage(
-                (y + step * w1, w + step * kw, u0 + step * ku), g, r2, v2, d1, contact)
-        rate1 = w1 - ku
-        rate2 = w2 - (f2 / z + 2.0 * v2)
-        work += span * ((1.0 - gamma) * r1 * w1 + gamma * r2 * w2)
-        dissipated += span * b1 * ((1.0 - gamma) * rate1 * rate1 + gamma * rate2 * rate2)
+        face1 = face_start + face_slope * (t1 - t0)
+        face2 = face_start + face_slope * (t_b - t0)
+        f1, e1, d1, a1 = stage_forces(x, g, r1, v1, face1, overlaps, contact, striker, anvil)
+        k1 = body_rates(x, g, f1, e1, r1, v1, face1, contact, striker, anvil)
+        base = moved(x, (1.0 - gamma) * span, k1, striker)
+        f2, e2, d2, a2 = stage_forces(base, g, r2, v2, face2, (d1, a1), contact, striker, anvil)
+        k2 = body_rates(base, g, f2, e2, r2, v2, face2, contact, striker, anvil)
+        x2 = moved(base, g, k2, striker)
+        rate1, end_rate1 = overlap_rates(k1, anvil)
+        rate2, end_rate2 = overlap_rates(k2, anvil)
+        work += span * ((1.0 - gamma) * r1 * (x[1] + g * k1[1]) + gamma * r2 * x2[1])
+        dissipated += span * ((1.0 - gamma) * (b1 * rate1 * rate1 + b2 * end_rate1 * end_rate1)
+                              + gamma * (b1 * rate2 * rate2 + b2 * end_rate2 * end_rate2))
         impulse_b = impulse + span * ((1.0 - gamma) * f1 + gamma * f2)
-        # a change of sign of δ beyond rounding (faces that part at the same speed graze, δ ≈ 0,
+        # a change of sign of δ1 beyond rounding (faces that part at the same speed graze, δ ≈ 0,
         # for as long as nothing else moves them): where, on the cubic through the ends' values
         # and rates
-        delta_a = y - u0
-        noise = GRAZING * (abs(y) + abs(u0))
-        edge = -noise if in_contact else noise
+        edge = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
+        if in_contact:
+            edge = -edge
         if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
-            rate_a = w - (f / z + 2.0 * (v_start + v_slope * (t_a - t0)))
-            s = hermite_root(delta_a - edge, d2 - edge, rate_a, rate2, span)
+            k_a = body_rates(x, 0.0, f, f_end, r_a, v_start + v_slope * (t_a - t0),
+                             face_start + face_slope * (t_a - t0), contact, striker, anvil)
+            s = hermite_root(overlaps[0] - edge, d2 - edge, overlap_rates(k_a, anvil)[0], rate2,
+                             span)
             in_contact = not in_contact
             events[count, 0] = t_a + s * span
-            if elastic:
+            if striker.elastic:
                 events[count, 1] = mean_velocity(impulse + s * (impulse_b - impulse), contact,
                                                  striker)
             else:
-                events[count, 1] = hermite(w, w2, (r_a - f) / m1, (r2 - f2) / m1, span, s)
+                events[count, 1] = hermite(x[1], x2[1], k_a[1], k2[1], span, s)
             events[count, 2] = 1.0 if in_contact else -1.0
             count += 1
-        y, w, u0, f, impulse = y2, w2, u2, f2, impulse_b
+        x, f, f_end, impulse, overlaps = x2, f2, e2, impulse_b, (d2, a2)
         t_a = t_b
         if f > f_max:
             f_max, t_max = f, t_a
         if f < f_min:
             f_min, t_min = f, t_a
-    state[0], state[1], state[2], state[3], state[4] = y, w, u0, f, impulse
-    return work, dissipated, count, (f_max, t_max, f_min, t_min)
+        if f_end > e_max:
+            e_max, te_max = f_end, t_a
+        if f_end < e_min:
+            e_min, te_min = f_end, t_a
+    state[0], state[1], state[2], state[3], state[4] = x[0], x[1], x[4], f, impulse
+    state[6], state[7], state[8] = x[2], x[3], f_end
+    return (work, dissipated, count, (f_max, t_max, f_min, t_min),
+            (e_max, te_max, e_min, te_min))
 
 
 @njit(cache=True, inline="always")
@@ -1135,7 +1266,7 @@ def uncounted(typingctx, bundle):
 
 
 @njit(cache=True, inline="always")
-def step_constants(tool, rod, weights, contact):
+def step_constants(tool, rod, weights, contact, anvil):
     """What every step derives from the bundles (`StepConstants`)."""
     n = len(tool.node_area) - 1
     h, tau, density = rod.cell_length, rod.time_step, rod.density
@@ -1144,6 +1275,8 @@ def step_constants(tool, rod, weights, contact):
     e_over_h = rod.youngs_modulus / h
     lag = 1 if weights.centered and not weights.impedance_ends else 0  # recorded: layer m − lag
     strain_sigma = weights.new if weights.centered else 0.25  # 0.25: strain energy at the midpoint
+    anvil_energy = 0.5 * anvil.mass * anvil.velocity * anvil.velocity if anvil.present else 0.0
+    explicit = weights.new == 0.0 and weights.old == 0.0
     return StepConstants(
         n=n,
         weight_cur=1.0 - weights.new - weights.old,
@@ -1158,8 +1291,9 @@ def step_constants(tool, rod, weights, contact):
         half_e_over_h=0.5 * e_over_h,
         kinetic_factor=0.5 * density * h * inv_tau2,
         initial_energy=0.5 * striker_mass * striker_velocity * striker_velocity,
+        anvil_energy=anvil_energy,
         segments=segment_layout(n),
-        explicit=weights.new == 0.0 and weights.old == 0.0,
+        explicit=explicit,
     )
 
 
@@ -1187,34 +1321,43 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
 
 
 @njit(cache=True)
-def start_blow(m, state, observed, contact, striker, tau):
+def start_blow(m, state, observed, contact, striker, anvil, tau):
     """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
-    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at the struck end
-    at W1 (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there."""
-    u, _, ends, energy, _ = state
+    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
+    strikes (the struck end, or the anvil, which stays where it is and starts again at its own
+    velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there."""
+    u, y, ends, energy, _ = state
     row, row_before = m % 3, (m - 1) % 3
     t = m * tau
+    struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
+    potential = contact_law(y[row] - struck, contact)[1]
     energy[0, E_WITHDRAWN] += (energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
-                               + energy[0, E_CONTACT_POTENTIAL])
+                               + potential + energy[0, E_ANVIL_KINETIC])
     if ends[S_IN_CONTACT] != 0.0:
         track_contact(ends, observed, t, mean_velocity(ends[S_IMPULSE], contact, striker)
                       if striker.elastic else ends[S_STRIKER_VELOCITY], False, tau)
-    launch_striker(state, row, row_before, u[row, 0], contact, striker, tau)
+    launch_striker(state, row, row_before, struck, contact, striker, tau)
     launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
     # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
     beyond = ends[S_BACK_ENERGY] if striker.elastic else 0.0
-    energy[0, E_LAUNCHED] += launched
+    anvil_energy = 0.0
+    if anvil.present:
+        ends[S_ANVIL_VELOCITY] = anvil.velocity
+        anvil_energy = 0.5 * anvil.mass * anvil.velocity * anvil.velocity
+    energy[0, E_LAUNCHED] += launched + anvil_energy
     energy[0, E_STRIKER_KINETIC] = launched - beyond
     energy[0, E_STRIKER_STRAIN] = beyond
-    energy[0, E_CONTACT_POTENTIAL] = 0.0
+    energy[0, E_ANVIL_KINETIC] = anvil_energy
+    energy[0, E_CONTACT_POTENTIAL] -= potential  # the anvil's with the tool stays
     ends[S_IN_CONTACT] = 1.0
     ends[S_CONTACT_START] = t
 
 
 @njit(cache=True, inline="always")
-def start_impact(state, layer, t, tool, rod, weights, contact, striker, step):
+def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step):
     """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
-    from the first instant); and layer −1 (row 2) one step before. Returns layer 0 as recorded."""
+    from the first instant), an anvil at 0 between them moving at its own velocity; and layer −1
+    (row 2) one step before. Returns layer 0 as recorded."""
     u, y, ends, energy, striker_u = state
     striker_velocity = contact.striker_velocity
     for i in range(step.n + 1):
@@ -1226,16 +1369,19 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, step):
     # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
     ends[S_POTENTIAL_BEFORE] = 0.0
     ends[S_POTENTIAL_BEFORE_THAT] = 0.0
+    ends[S_ANVIL_DISP] = 0.0
+    ends[S_ANVIL_VELOCITY] = anvil.velocity
+    energy[0, E_ANVIL_KINETIC] = step.anvil_energy
     if weights.impedance_ends:
-        if striker.elastic:
-            contact_force = rod_face_force(0.0, 0.5 * striker_velocity, 0.0, contact, striker)
-        else:
-            contact_force = struck_end_force(0.0, striker_velocity, 0.0, contact)
+        contact_force, end_force = struck_forces(
+            (0.0, striker_velocity, 0.0, anvil.velocity, 0.0), 0.0, 0.5 * striker_velocity,
+            contact, striker, anvil)
         energy[0, E_STRIKER_KINETIC] = step.initial_energy
     else:
-        contact_force = contact.damping * striker_velocity
+        contact_force = end_force = contact.damping * striker_velocity
+    ends[S_ANVIL_FORCE] = end_force
     return Recorded(row=layer.new, time=t, velocity=striker_velocity, contact_force=contact_force,
-                    medium_force=0.0, struck_end_stress=-contact_force / tool.struck_end_area,
+                    medium_force=0.0, struck_end_stress=-end_force / tool.struck_end_area,
                     working_end_stress=0.0)
 
 
@@ -1394,15 +1540,16 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
 
 
 @njit(cache=True, inline="always")
-def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, medium, force, scratch,
-                   step):
+def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force,
+                   scratch, step):
     """The ends that integrate their own equations, over the step to `t`: the waves arriving at
-    them, then the striker and the struck end (`struck_end_step`), an elastic striker's back end
-    (`free_back_end`) and the working end (`working_end_step`), with the contacts and the end
-    forces' extremes their substeps see. Returns whether the new ends are finite (they are written
-    to the new layer only then), the striker's velocity, the contact and medium forces, and `(work
-    of R, dissipated by b1, by b2)` over the step. `scratch`: room for the struck end's and the
-    working end's states and the events."""
+    them, then the striker, the anvil and the struck end (`struck_end_step`), an elastic striker's
+    back end (`free_back_end`) and the working end (`working_end_step`), with the contacts and the
+    end forces' extremes their substeps see. Returns whether the new ends are finite (they are
+    written to the new layer only then), the striker's velocity, the contact force, the force on
+    the tool's struck end (the anvil's, or the contact's), the medium's, and `(work of R,
+    dissipated by the contacts, by the medium)` over the step. `scratch`: room for the struck
+    end's and the working end's states and the events."""
     u, y, ends, _, striker_u = state
     new, cur, _, _ = layer
     n, tau = step.n, rod.time_step
@@ -1418,19 +1565,23 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
     end_state[3] = ends[S_FORCE_BEFORE]
     end_state[4] = ends[S_IMPULSE]
     end_state[5] = ends[S_IN_CONTACT]
-    work, dissipated, crossings, struck_range = struck_end_step(
-        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, force,
-        events)
+    end_state[6] = ends[S_ANVIL_DISP]
+    end_state[7] = ends[S_ANVIL_VELOCITY]
+    end_state[8] = ends[S_ANVIL_FORCE]
+    work, dissipated, crossings, contact_range, end_range = struck_end_step(
+        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil,
+        force, events)
     far_state[0] = u[cur, n]
     far_state[1] = ends[S_MEDIUM_FORCE]
     for k in range(MEDIUM_STATE):
         far_state[2 + k] = ends[S_MEDIUM + k]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
-    track_ends_between_layers(observed.extremes, struck_range, working_range, t, tool, rod, step)
+    track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool,
+                              rod, step)
     flows = (work, dissipated, dissipated_far)
     if not (abs(end_state[0]) < 1e300 and abs(end_state[2]) < 1e300
-            and abs(far_state[0]) < 1e300):
-        return False, 0.0, 0.0, 0.0, flows
+            and abs(end_state[6]) < 1e300 and abs(far_state[0]) < 1e300):
+        return False, 0.0, 0.0, 0.0, 0.0, flows
     y[new] = end_state[0]
     u[new, 0] = end_state[2]
     u[new, n] = far_state[0]
@@ -1438,6 +1589,9 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
         ends[S_MEDIUM + k] = far_state[2 + k]
     ends[S_STRIKER_VELOCITY] = end_state[1]
     ends[S_IMPULSE] = end_state[4]
+    ends[S_ANVIL_DISP] = end_state[6]
+    ends[S_ANVIL_VELOCITY] = end_state[7]
+    ends[S_ANVIL_FORCE] = end_state[8]
     velocity = end_state[1]
     if striker.elastic:
         striker_u[new, 0] = y[new]
@@ -1445,7 +1599,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, mediu
         velocity = mean_velocity(end_state[4], contact, striker)
     for k in range(crossings):
         track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
-    return True, velocity, end_state[3], far_state[1], flows
+    return True, velocity, end_state[3], end_state[8], far_state[1], flows
 
 
 @njit(cache=True, inline="always")
@@ -1552,7 +1706,8 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
 
 
 @njit(cache=True, inline="always")
-def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medium, tool, step):
+def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool,
+                           step):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
     at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
     tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
@@ -1561,8 +1716,14 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     new, cur, _, _ = layer
     n = step.n
     work, dissipated, dissipated_far = flows
-    delta = y[new] - u[new, 0]
-    potential = contact_law(delta, contact)[1]
+    if anvil.present:
+        anvil_at = ends[S_ANVIL_DISP]
+        velocity_a = ends[S_ANVIL_VELOCITY]
+        potential = (contact_law(y[new] - anvil_at, contact)[1]
+                     + contact_law(anvil_at - u[new, 0], anvil.contact)[1])
+        energy[0, E_ANVIL_KINETIC] = 0.5 * anvil.mass * velocity_a * velocity_a
+    else:
+        potential = contact_law(y[new] - u[new, 0], contact)[1]
     stored, plastic = medium_energy(u[new, n], (ends[S_MEDIUM], ends[S_MEDIUM + 1],
                                                 ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
@@ -1576,7 +1737,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     energy[0, E_MEDIUM_POTENTIAL] = stored
     energy[0, E_MEDIUM_PLASTIC] = plastic
     balance = (energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
-               + energy[0, E_WITHDRAWN] - energy[0, E_LAUNCHED])
+               - step.anvil_energy + energy[0, E_WITHDRAWN] - energy[0, E_LAUNCHED])
     if striker.elastic:
         s_tool, s_rod = striker.tool, striker.rod
         e_over_h = s_rod.youngs_modulus / s_rod.cell_length
@@ -1589,7 +1750,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, medi
     else:
         energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
         balance += 0.5 * (energy[0, E_STRIKER_KINETIC] + energy[1, E_STRIKER_KINETIC])
-    for slot in (E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL, E_MEDIUM_PLASTIC,
+    for slot in (E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL, E_MEDIUM_PLASTIC, E_ANVIL_KINETIC,
                  E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM):
         balance += 0.5 * (energy[0, slot] + energy[1, slot])
     balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
@@ -1607,19 +1768,22 @@ def track_energy_excess(extremes, balance):
 
 
 @njit(cache=True, inline="always")
-def track_ends_between_layers(extremes, struck_range, working_range, t, tool, rod, step):
-    """The end forces' extremes within the step, as the ends' substeps saw them: `struck_range`
-    (largest contact force, its time, least, its time) and `working_range` (the medium force's,
-    with their offsets from the step's start)."""
-    f_max, t_max, f_min, t_min = struck_range
+def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod,
+                              step):
+    """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
+    (largest contact force, its time, least, its time), `end_range` (the force on the tool's
+    struck end's) and `working_range` (the medium force's, with their offsets from the step's
+    start)."""
+    f_max, t_max = contact_range[0], contact_range[1]
+    e_max, te_max, e_min, te_min = end_range
     g_max, tg_max, g_min, tg_min = working_range
     n, h, tau = step.n, rod.cell_length, rod.time_step
     end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
     if f_max > extremes[X_PEAK_FORCE]:
         extremes[X_PEAK_FORCE] = f_max
         extremes[X_PEAK_FORCE_TIME] = t_max
-    track_end_extreme(extremes, X_MAX_COMPRESSION, f_max / end_area_0, 0.0, t_max)
-    track_end_extreme(extremes, X_MAX_TENSION, -f_min / end_area_0, 0.0, t_min)
+    track_end_extreme(extremes, X_MAX_COMPRESSION, e_max / end_area_0, 0.0, te_max)
+    track_end_extreme(extremes, X_MAX_TENSION, -e_min / end_area_0, 0.0, te_min)
     track_end_extreme(extremes, X_MAX_COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
     track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
 
@@ -1652,9 +1816,11 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
 
 
 @njit(cache=True, inline="always")
-def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step):
+def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_vertex):
     """The peak contact force and the end stresses' extremes between layers, from the recorded
-    layer's end forces and those of the three layers before it (carried in `ends`)."""
+    layer's end forces and those of the three layers before it (carried in `ends`); at the struck
+    end only when the contact force is the force on it (`struck_vertex`: not with an anvil,
+    whose substeps' extremes are all there is)."""
     contact_force, medium_force = recorded.contact_force, recorded.medium_force
     t_rec, n, h, tau = recorded.time, step.n, rod.cell_length, rod.time_step
     end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
@@ -1665,7 +1831,7 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step):
     # three, so that their error is the scheme's, not the sampling's.
     f1, f2, f3 = ends[S_FORCE_BEFORE], ends[S_FORCE_BEFORE_THAT], ends[S_FORCE_EARLIER]
     g1, g2, g3 = ends[S_MEDIUM_FORCE], ends[S_MEDIUM_FORCE_BEFORE], ends[S_MEDIUM_FORCE_EARLIER]
-    if m_rec >= 3:
+    if m_rec >= 3 and struck_vertex:
         top, offset = vertex(f3, f2, f1, contact_force)
         when = t_rec - tau + offset * tau
         if top > extremes[X_PEAK_FORCE]:
@@ -1675,6 +1841,7 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step):
         top, offset = vertex(-f3, -f2, -f1, -contact_force)
         track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0,
                           t_rec - tau + offset * tau)
+    if m_rec >= 3:
         top, offset = vertex(g3, g2, g1, medium_force)
         track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h,
                           t_rec - tau + offset * tau)
@@ -1690,7 +1857,7 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step):
 
 
 @njit(cache=True, inline="always")
-def record_history(recorders, column, state, recorded, m_rec, force, step):
+def record_history(recorders, column, state, recorded, m_rec, force, anvil, step):
     """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
     them; none yet for layer 0, whose energy is all the striker's)."""
     history = recorders.history
@@ -1702,7 +1869,8 @@ def record_history(recorders, column, state, recorded, m_rec, force, step):
     history[H_STRUCK_END, column] = u[rec, 0]
     history[H_WORKING_END, column] = u[rec, step.n]
     history[H_CONTACT_FORCE, column] = recorded.contact_force
-    history[H_OVERLAP, column] = y[rec] - u[rec, 0]
+    struck = state.ends[S_ANVIL_DISP] if anvil.present else u[rec, 0]  # what the striker meets
+    history[H_OVERLAP, column] = y[rec] - struck
     history[H_MEDIUM_FORCE, column] = recorded.medium_force
     history[H_EXTERNAL_FORCE, column] = external_force(t_rec, force)
     history[H_EXTERNAL_WORK, column] = energy[0, E_EXTERNAL_WORK]
@@ -1710,6 +1878,10 @@ def record_history(recorders, column, state, recorded, m_rec, force, step):
     history[H_DISSIPATED_MEDIUM, column] = energy[0, E_DISSIPATED_MEDIUM]
     history[H_PERMANENT_PENETRATION, column] = state.ends[S_MEDIUM_SET]
     history[H_STRIKER_STRAIN, column] = energy[0, E_STRIKER_STRAIN]
+    history[H_ANVIL_DISP, column] = state.ends[S_ANVIL_DISP]
+    history[H_ANVIL_VEL, column] = state.ends[S_ANVIL_VELOCITY]
+    history[H_ANVIL_FORCE, column] = state.ends[S_ANVIL_FORCE]
+    history[H_ANVIL_KINETIC, column] = energy[0, E_ANVIL_KINETIC]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
         for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL,
@@ -1749,7 +1921,7 @@ def record_fields(recorders, row, u, recorded, step):
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
 @njit(cache=True, fastmath={"contract"})
-def advance(first, last, tool, rows, rod, weights, contact, striker, medium, force, state,
+def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state,
             observed, recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
@@ -1778,13 +1950,13 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
     """
     tool, rows, striker, state, observed, recorders = uncounted(
         (tool, rows, striker, state, observed, recorders))
-    step = step_constants(tool, rod, weights, contact)
+    step = step_constants(tool, rod, weights, contact, anvil)
     u, y, ends, energy, striker_u = state
     extremes = observed.extremes
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(6), np.empty(6), np.empty((4, 3)))
+    scratch = (np.empty(9), np.empty(6), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 
@@ -1794,7 +1966,8 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
         new, cur, old, ref = layer
         t = m * tau
         if m == 0:
-            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, step)
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil,
+                                    step)
             interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
         else:
             for slot in range(ENERGY_SLOTS):
@@ -1808,15 +1981,15 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
 
             if weights.impedance_ends:
-                finite, velocity, contact_force, medium_force, flows = integrate_ends(
-                    state, observed, layer, t, tool, rod, contact, striker, medium, force,
+                finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
+                    state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force,
                     uncounted(scratch), step)
                 if not finite:
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 rec, t_rec = new, t
                 balance, interior = audit_impedance_energy(
-                    state, layer, flows, velocity, contact, striker, medium, tool, step)
+                    state, layer, flows, velocity, contact, striker, anvil, medium, tool, step)
             else:
                 overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0],
                                     ref=y[ref] - u[ref, 0])
@@ -1824,6 +1997,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
                 q_1, carries = sweep(u, layer, rows, step)
                 y_new, u0_new, contact_force = solve_struck_end(
                     state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step)
+                end_force = contact_force
                 if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
@@ -1852,7 +2026,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
                 return STATUS_NON_FINITE, n_hist, n_field
             recorded = Recorded(row=rec, time=t_rec, velocity=velocity, contact_force=contact_force,
                                 medium_force=medium_force,
-                                struck_end_stress=-contact_force / tool.struck_end_area,
+                                struck_end_stress=-end_force / tool.struck_end_area,
                                 working_end_stress=-medium_force / tool.working_end_area)
 
         if m < step.lag:
@@ -1860,9 +2034,9 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, medium, for
         m_rec = m - step.lag
         track_stress_extremes(extremes, u, recorded, interior, rod, step)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
-        track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step)
+        track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
         if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
-            record_history(recorders, n_hist, state, recorded, m_rec, force, step)
+            record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
             record_probes(recorders, n_hist, u, recorded, step)
             n_hist += 1
         if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:

@@ -13,7 +13,8 @@ H_EXTERNAL_WORK, H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM = 9, 10, 11
 H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL = (
     12, 13, 14, 15, 16)
 H_MEDIUM_PLASTIC, H_PERMANENT_PENETRATION, H_STRIKER_STRAIN = 17, 18, 19
-HISTORY_COLUMNS = 20
+H_ANVIL_DISP, H_ANVIL_VEL, H_ANVIL_FORCE, H_ANVIL_KINETIC = 20, 21, 22, 23  # its force on the tool
+HISTORY_COLUMNS = 24
 
 # Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
@@ -34,9 +35,11 @@ E_STRIKER_KINETIC, E_TOOL_KINETIC, E_TOOL_STRAIN, E_CONTACT_POTENTIAL, E_MEDIUM_
     3, 4, 5, 6, 7)
 E_MEDIUM_PLASTIC = 8  # the medium's work into permanent penetration
 E_STRIKER_STRAIN = 9  # an elastic striker's
-# Blow after blow: the strikers launched after the first, and what each had left when withdrawn
+# Blow after blow: the strikers (and anvils) launched after the first, and what each had left
+# when withdrawn
 E_LAUNCHED, E_WITHDRAWN = 10, 11
-ENERGY_SLOTS = 12
+E_ANVIL_KINETIC = 12
+ENERGY_SLOTS = 13
 
 
 def new_extremes() -> np.ndarray:

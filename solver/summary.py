@@ -42,19 +42,20 @@ class PeakStress(_Part):
 
 
 class Energy(_Part):
-    initial: float = Field(description="the striker's kinetic energy at impact (every blow's), J")
+    initial: float = Field(description="the striker's (and an anvil's) kinetic energy at impact (every blow's), J")
     external_work: float = Field(description="work of the external force, J")
     to_medium: float = Field(description="net work on the medium: stored, dissipated and plastic, J")
     transfer_efficiency: float = Field(description="to_medium over the energy supplied, 1")
-    dissipated_contact: float = Field(description="by the contact's damper b1, J")
+    dissipated_contact: float = Field(description="by the contact's damper b1 (and the anvil's contact's), J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
     numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
     striker_withdrawn: float = Field(description="what the striker still had when each blow ended and the next began, J")
     striker_kinetic: float = Field(description="J, at the end of the run")
     striker_strain: float = Field(description="an elastic striker's, J, at the end of the run")
+    anvil_kinetic: float = Field(description="J, at the end of the run")
     tool_kinetic: float = Field(description="J, at the end of the run")
     tool_strain: float = Field(description="J, at the end of the run")
-    contact_potential: float = Field(description="Φ(δ), J, at the end of the run")
+    contact_potential: float = Field(description="Φ(δ) (and the anvil's contact's), J, at the end of the run")
     medium_potential: float = Field(description="what the medium would give back unloading, J, at the end of the run")
     medium_plastic: float = Field(description="the medium's work into permanent penetration, J")
     max_excess_fraction: float = Field(description="largest energy created over the energy supplied, 1 (0 for a stable scheme)")
@@ -159,10 +160,13 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
-    initial = 0.5 * striker_mass(case.striker) * case.striker.velocity**2 + energy[L.E_LAUNCHED]
+    anvil = case.anvil
+    initial = (0.5 * striker_mass(case.striker) * case.striker.velocity**2 + energy[L.E_LAUNCHED]
+               + (0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0))
     at_end = {
         "striker_kinetic": energy[L.E_STRIKER_KINETIC],
         "striker_strain": energy[L.E_STRIKER_STRAIN],
+        "anvil_kinetic": energy[L.E_ANVIL_KINETIC],
         "tool_kinetic": energy[L.E_TOOL_KINETIC],
         "tool_strain": energy[L.E_TOOL_STRAIN],
         "contact_potential": energy[L.E_CONTACT_POTENTIAL],
