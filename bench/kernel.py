@@ -162,7 +162,8 @@ def numba_run(s: Setup) -> dict[str, float]:
     recorders = K.Recorders(
         history=np.empty((HISTORY_COLUMNS, 0)), history_stride=0,
         probe_node=np.empty(0, np.int64), probe_weight=np.empty(0), probes=np.empty((0, 0)),
-        field_u=no_fields, field_stress=no_fields, field_stride=0)
+        field_u=no_fields, field_stress=no_fields, field_stride=0, striker_u=no_fields,
+        striker_stress=no_fields)
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
     striker = striker_on(case, s.num, s.tool, s.rod)
     anvil = anvil_on(case, s.grid, contact)

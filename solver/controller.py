@@ -244,12 +244,18 @@ def simulate_rod(
     recorder.create("probes/x", probe_x.shape)
     recorder.append("probes/x", probe_x)
     recorder.create("probes/stress", (total_rows, len(probe_x)))
+    # the fields along the tool, and along an elastic striker (`fields/striker_…`)
+    striker_nodes = state.striker.shape[1] if striker.elastic else 0
+    along = {"": grid.x}
+    if striker.elastic:
+        along["striker_"] = np.arange(striker_nodes) * striker.rod.cell_length
     if out.fields:
-        recorder.create("fields/x", grid.x.shape)
-        recorder.append("fields/x", grid.x)
         recorder.create("fields/time", (total_frames,))
-        recorder.create("fields/displacement", (total_frames, n + 1))
-        recorder.create("fields/stress", (total_frames, n + 1))
+        for prefix, x in along.items():
+            recorder.create(f"fields/{prefix}x", x.shape)
+            recorder.append(f"fields/{prefix}x", x)
+            recorder.create(f"fields/{prefix}displacement", (total_frames, len(x)))
+            recorder.create(f"fields/{prefix}stress", (total_frames, len(x)))
     # Gathered during the run, so that the summary never needs the whole history (given only
     # these rows, it keeps them all).
     summary_rows = force_history_rows(total_rows)
@@ -270,7 +276,8 @@ def simulate_rod(
             probe_node=probe_node, probe_weight=probe_weight,
             probes=np.empty((kept_rows, len(probe_node))),
             field_u=np.empty((frames, n + 1)), field_stress=np.empty((frames, n + 1)),
-            field_stride=field_stride)
+            field_stride=field_stride, striker_u=np.empty((frames, striker_nodes)),
+            striker_stress=np.empty((frames, striker_nodes)))
         status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, striker,
                                             anvil, medium, force, state, observed, recorders)
         if status == K.STATUS_NON_FINITE:
@@ -286,8 +293,12 @@ def simulate_rod(
             lo, hi = recorded
             recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride,
                                                      hi + 1, field_stride) * tau)
-            recorder.append("fields/displacement", recorders.field_u[:n_field])
-            recorder.append("fields/stress", recorders.field_stress[:n_field])
+            layers = {"": (recorders.field_u, recorders.field_stress),
+                      "striker_": (recorders.striker_u, recorders.striker_stress)}
+            for prefix in along:
+                displacement, stress = layers[prefix]
+                recorder.append(f"fields/{prefix}displacement", displacement[:n_field])
+                recorder.append(f"fields/{prefix}stress", stress[:n_field])
         first = last + 1
         if last == boundary and blow < blows - 1:
             ended = state.energy[0].copy()

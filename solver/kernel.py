@@ -169,11 +169,11 @@ Observed = namedtuple("Observed", "extremes contacts")
 """What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
 intervals (start, end; one row each, those beyond its rows counted only)."""
 Recorders = namedtuple("Recorders", "history history_stride probe_node probe_weight probes "
-                                    "field_u field_stress field_stride")
+                                    "field_u field_stress field_stride striker_u striker_stress")
 """Where a call records its layers: every `history_stride`-th to `history` (a column each) and
 `probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
-with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each);
-strides ≤ 0 keep nothing."""
+with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each)
+and an elastic striker's to `striker_u`/`striker_stress`; strides ≤ 0 keep nothing."""
 
 # Within a step
 Layers = namedtuple("Layers", "new cur old ref")
@@ -1909,11 +1909,24 @@ def record_probes(recorders, row, u, recorded, step):
 
 
 @njit(cache=True, inline="always")
-def record_fields(recorders, row, u, recorded, step):
-    """The displacement and the stress along the tool into `row` of the fields."""
+def record_fields(recorders, row, state, recorded, striker, step):
+    """The displacement and the stress along the tool into `row` of the fields, and along an
+    elastic striker: its x runs from its face away from the tool, so its stress is `−E·∂u/∂x`
+    (tension +; the contact force at its face, one-sided at its last node)."""
+    u, rec = state.u, recorded.row
     for i in range(step.n + 1):
-        recorders.field_u[row, i] = u[recorded.row, i]
+        recorders.field_u[row, i] = u[rec, i]
         recorders.field_stress[row, i] = node_stress(u, recorded, i, step)
+    if striker.elastic:
+        s_u, stress = state.striker, recorders.striker_stress
+        n_s = s_u.shape[1] - 1
+        e_over_h = striker.rod.youngs_modulus / striker.rod.cell_length
+        for i in range(n_s + 1):
+            recorders.striker_u[row, i] = s_u[rec, i]
+        stress[row, 0] = -recorded.contact_force / striker.tool.struck_end_area
+        for i in range(1, n_s):
+            stress[row, i] = -0.5 * e_over_h * (s_u[rec, i + 1] - s_u[rec, i - 1])
+        stress[row, n_s] = -e_over_h * (s_u[rec, n_s] - s_u[rec, n_s - 1])
 
 
 # `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
@@ -2040,6 +2053,6 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
             record_probes(recorders, n_hist, u, recorded, step)
             n_hist += 1
         if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
-            record_fields(recorders, n_field, u, recorded, step)
+            record_fields(recorders, n_field, state, recorded, striker, step)
             n_field += 1
     return STATUS_OK, n_hist, n_field

@@ -15,16 +15,21 @@ from .grid import ResolvedNumerics
 ProgressCallback = Callable[[float], None]
 CancelCheck = Callable[[], bool]
 FIELD_NAMES = ("x", "time", "displacement", "stress")  # stored as fields/<name>
+STRIKER_FIELD_NAMES = ("striker_x", "striker_displacement", "striker_stress")  # an elastic one's
 
 
 @dataclass
 class Fields:
-    """Displacement and stress along the tool at the sampled times."""
+    """Displacement and stress along the tool at the sampled times, and along an elastic striker
+    (its x from its impact face; None for a lumped one)."""
 
     x: np.ndarray
     time: np.ndarray
     displacement: np.ndarray  # (samples, N + 1)
     stress: np.ndarray  # (samples, N + 1)
+    striker_x: np.ndarray | None = None
+    striker_displacement: np.ndarray | None = None  # (samples, N_s + 1)
+    striker_stress: np.ndarray | None = None  # (samples, N_s + 1)
 
 
 @dataclass
@@ -51,7 +56,8 @@ class Result:
                     summary: dict) -> Result:
         """The result from its arrays under their HDF5 names; all but probes and fields are history."""
         history = dict(arrays)
-        fields = (Fields(*(history.pop(f"fields/{k}") for k in FIELD_NAMES))
+        fields = (Fields(*(history.pop(f"fields/{k}") for k in FIELD_NAMES),
+                         *(history.pop(f"fields/{k}", None) for k in STRIKER_FIELD_NAMES))
                   if "fields/x" in history else None)
         probe_x, probe_stress = history.pop("probes/x"), history.pop("probes/stress")
         return cls(case=case, numerics=numerics, history=history, probe_x=probe_x,
@@ -61,7 +67,9 @@ class Result:
         """The arrays under their HDF5 names (the inverse of `from_arrays`)."""
         arrays = {**self.history, "probes/x": self.probe_x, "probes/stress": self.probe_stress}
         if self.fields is not None:
-            arrays.update({f"fields/{k}": getattr(self.fields, k) for k in FIELD_NAMES})
+            arrays.update({f"fields/{k}": getattr(self.fields, k)
+                           for k in FIELD_NAMES + STRIKER_FIELD_NAMES
+                           if getattr(self.fields, k) is not None})
         return arrays
 
 

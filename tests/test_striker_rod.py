@@ -13,13 +13,14 @@ A lumped striker of the same mass meets none of these: its force rises and decay
 
 from __future__ import annotations
 
+import h5py
 import numpy as np
 import pytest
 
 import percussim
 from percussim.solver.case import CaseError
 
-from closed_forms import (AREA, PISTON, STEEL, PISTON_FINE as FINE, STEPPED_DURATION, T, V, Z,
+from closed_forms import (AREA, PISTON, SPEED, STEEL, PISTON_FINE as FINE, STEPPED_DURATION, T, V, Z,
                           first_force, passed_share, piston_case, reflection, stepped_piston_case)
 
 
@@ -79,6 +80,32 @@ def test_a_lumped_striker_of_the_same_mass_is_not_the_piston():
     lumped["striker"] = {"mass": mass, "velocity": V}
     result = percussim.simulate(lumped)
     assert abs(force_at(result, 0.6) - Z * V / 2.0) > 0.05 * Z * V / 2.0
+
+
+def test_the_fields_along_the_piston_carry_its_wave(tmp_path):
+    """Equal impedances, at a quarter of the round trip: the wave the impact sent into the piston
+    has run half its length, compressing it at −Z·v/(2·S) behind its front and leaving the rest
+    unstrained and still at v; the piston's fields go to the result file with their units."""
+    case = piston_case(1.0, {"scheme": "explicit", "cells": 400})
+    case["outputs"] = {"fields": True, "field_stride": 1}
+    result = percussim.simulate(case)
+    f = result.fields
+    frame = int(np.argmin(np.abs(f.time - T / 4)))
+    t = f.time[frame]
+    front = SPEED * t
+    behind, ahead = f.striker_x < 0.8 * front, f.striker_x > 1.2 * front
+    assert f.striker_stress[frame, behind] == pytest.approx(-Z * V / 2 / AREA, rel=1e-2)
+    assert np.abs(f.striker_stress[frame, ahead]).max() < 1e-2 * Z * V / 2 / AREA
+    assert f.striker_displacement[frame, ahead] == pytest.approx(V * t, rel=1e-3)
+    assert f.striker_x[-1] <= PISTON < f.striker_x[-1] + 2 * (f.striker_x[1] - f.striker_x[0])
+
+    path = percussim.write_result(result, tmp_path / "piston.h5")
+    with h5py.File(path) as h5:
+        assert h5["fields/striker_stress"].attrs["units"] == "Pa"
+        assert h5["fields/striker_displacement"].attrs["units"] == "m"
+        assert h5["fields/striker_x"].attrs["units"] == "m"
+    back = percussim.read_result(path).fields
+    np.testing.assert_array_equal(back.striker_stress, f.striker_stress)
 
 
 def test_a_profiled_piston_on_a_whole_and_a_fractional_number_of_cells_agree():
