@@ -54,12 +54,22 @@ compilation, the contenders of a case timed in alternation so that a busy machin
 Printed: ns per node-step of each (for solve_ivp per node and right-hand-side evaluation), the
 agreement of C and solve_banded with Numba, and the ratios Numba/C (goal ≤ 1.3), solve_banded/Numba
 (goal ≥ 50) and solve_ivp/Numba at equal accuracy (goal ≥ 100).
+
+5. **End conditions** (`--ends` runs only this): the kernel's ns per node-step at the ends that
+   integrate their own equations (the explicit scheme at Courant number 1, on 100 and 2000 cells)
+   for each law they take: a lumped striker on a linear medium (the paper's ends), on bilinear
+   rock and on Smith soil, an elastic striker on a linear medium and on rock, and an anvil between
+   a lumped striker and the tool. A rock-drill case (a 0.2-m piston at 10 m/s, a 1-m rod, rock at
+   x = k·T/Z = 1.26 that unloads 10× as stiff, `ROCK_DRILL`), the whole `percussim.simulate` call
+   at `numerics.tolerance` 0.01 and at the default accuracy, is timed beside the paper's presets
+   at the default accuracy.
 """
 
 from __future__ import annotations
 
 import argparse
 import ctypes
+import json
 import math
 import subprocess
 import tempfile
@@ -73,7 +83,7 @@ from scipy.linalg import solve_banded
 from scipy.optimize import brentq
 
 from percussim.solver import kernel as K
-from percussim.solver.case import Case, load_case
+from percussim.solver.case import Case, load_case, parse_case
 from percussim.solver.controller import (anvil_on, end_conditions, force_law, rod_constants,
                                          scheme_weights, simulate_rod, striker_on, tool_on)
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
@@ -157,7 +167,9 @@ def reported(state: K.State, observed: K.Observed) -> dict[str, float]:
 def numba_run(s: Setup) -> dict[str, float]:
     case = s.case
     assert case.force is None
-    state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
+    striker = striker_on(case, s.num, s.tool, s.rod)
+    striker_cells = len(striker.tool.node_area) - 1 if striker.elastic else 0
+    state, observed = K.new_state(s.n, striker_cells), K.new_observed(MAX_CONTACTS)
     no_fields = np.empty((0, s.n + 1))
     recorders = K.Recorders(
         history=np.empty((HISTORY_COLUMNS, 0)), history_stride=0,
@@ -165,7 +177,6 @@ def numba_run(s: Setup) -> dict[str, float]:
         field_u=no_fields, field_stress=no_fields, field_stride=0, striker_u=no_fields,
         striker_stress=no_fields)
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
-    striker = striker_on(case, s.num, s.tool, s.rod)
     anvil = anvil_on(case, s.grid, contact)
     status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, striker,
                              anvil, medium, force_law(case), state, observed, recorders)
@@ -552,10 +563,80 @@ def reference_run(case: Case) -> tuple[tuple[float, float], float]:
     return (values[0], values[1]), uncertainty
 
 
+STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
+_SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
+_Z = STEEL["density"] * _SPEED * 1e-3  # the rod's impedance (N·s/m), 1e-3 m² of steel
+_ROCK_K = 1.2564 * _Z / (2 * 0.2 / _SPEED)  # Lundberg's optimum x = k·T/Z for the piston
+ROCK_DRILL = {
+    "striker": {"velocity": 10.0, "length": 0.2, "area": 1e-3, **STEEL},
+    "tool": {"length": 1.0, "area": 1e-3, **STEEL},
+    "contact": {"stiffness": 1e11, "exponent": 0.0},
+    "medium": {"kind": "bilinear", "stiffness": _ROCK_K, "unloading_stiffness": 10 * _ROCK_K},
+    "numerics": {"duration": 1e-3},
+}
+END_CONDITIONS = {
+    "lumped striker, linear medium": {"striker": {"mass": 1.6, "velocity": 10.0},
+                                      "medium": {"stiffness": _ROCK_K}},
+    "lumped striker, bilinear rock": {"striker": {"mass": 1.6, "velocity": 10.0}},
+    "lumped striker, Smith soil": {"striker": {"mass": 1.6, "velocity": 10.0},
+                                   "medium": {"kind": "smith", "ultimate_resistance": 1e5,
+                                              "quake": 2.5e-3, "damping_factor": 0.5}},
+    "elastic striker, linear medium": {"medium": {"stiffness": _ROCK_K}},
+    "elastic striker, bilinear rock": {},
+    "anvil, lumped striker, linear": {"striker": {"mass": 1.6, "velocity": 10.0},
+                                      "medium": {"stiffness": _ROCK_K},
+                                      "anvil": {"mass": 0.5, "contact": {"stiffness": 5e9,
+                                                                         "exponent": 0.0}}},
+}
+
+
+def end_condition_costs(repeat: int) -> None:
+    """Section 5: ns per node-step for each end condition, and the rock drill's whole call."""
+    import percussim
+
+    print("\nEnd conditions at the ends that integrate their own equations (explicit, Courant 1):")
+    print(f"  {'':34s} {'100 cells':>12s} {'2000 cells':>12s}")
+    for label, changes in END_CONDITIONS.items():
+        case = parse_case({**ROCK_DRILL, **changes})
+        costs = []
+        for cells in (100, 2000):
+            s = prepare(label, label, case, scheme="explicit", cells=cells)
+            numba_run(s)  # compile
+            cpu = least_cpu({"Numba": lambda: numba_run(s)}, repeat, budget=1.0)["Numba"]
+            costs.append(ns(cpu, s))
+        print(f"  {label:34s} {costs[0]:>12s} {costs[1]:>12s}")
+
+    print("\nWhole calls (percussim.simulate, least CPU time over repeats):")
+    calls = {
+        "rock drill, tolerance 0.01": {**ROCK_DRILL, "numerics": {"duration": 1e-3,
+                                                                  "tolerance": 0.01}},
+        "rock drill, default accuracy": ROCK_DRILL,
+        **{f"preset {name}, default accuracy": _default_accuracy(name)
+           for name in ("fig3", "fig4", "fig5", "fig6")},
+    }
+    for label, case in calls.items():
+        summary = percussim.simulate(case).summary
+        cpu = least_cpu({"call": lambda: percussim.simulate(case)}, repeat, budget=2.0)["call"]
+        runs = summary["runs"]
+        print(f"  {label:34s} {cpu * 1e3:9.1f} ms  ({len(runs)} runs, finest {runs[-1]['cells']} "
+              f"cells, error estimate {summary['error_estimate']['worst']:.2g})")
+
+
+def _default_accuracy(name: str) -> dict:
+    """A preset with its numerics left to the default accuracy (its duration kept)."""
+    case = json.loads((ROOT / "solver" / "presets" / f"{name}.json").read_text())
+    case["numerics"] = {"duration": case["numerics"]["duration"]}
+    return case
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--repeat", type=int, default=7)
+    parser.add_argument("--ends", action="store_true", help="only section 5, the end conditions")
     args = parser.parse_args()
+    if args.ends:
+        end_condition_costs(args.repeat)
+        return
 
     fig3 = load_case(ROOT / "solver" / "presets" / "fig3.json")
     setups = [
@@ -643,6 +724,7 @@ def main() -> None:
         for short, value in values:
             met = value <= goal if at_most else value >= goal
             print(f"    {short:34s} {value:8.2f}  {'met' if met else 'NOT met'}")
+    end_condition_costs(args.repeat)
 
 
 if __name__ == "__main__":
