@@ -1037,7 +1037,8 @@ def yielding_stage(base, g, v_in, state, medium):
         return u, rate, f_s + b2 * rate, f_s
     k, r_u, j = medium.stiffness, medium.ultimate_resistance, medium.damping_factor
     if 1.0 + 2.0 * j * v_in <= 0.0:
-        return free, 2.0 * v_in, 0.0, 0.0
+        # the toe leaves faster than 1/J: the damper takes all the spring gives back (F = 0)
+        return free, 2.0 * v_in, 0.0, static_resistance(free, state, medium)
     plastic_rate = (2.0 * v_in - r_u / z) / (1.0 + j * r_u / z)
     u = base + g * plastic_rate
     if u >= set_ + r_u / k:

@@ -6,7 +6,8 @@ from dataclasses import dataclass
 
 from . import layout as L
 from .case import Case, CaseError, FieldError
-from .grid import ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, tolerance_of
+from .grid import (ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, striker_cells,
+                   tolerance_of)
 
 
 @dataclass(frozen=True)
@@ -28,7 +29,10 @@ def output_values(case: Case, numerics: ResolvedNumerics) -> float:
     rows = numerics.steps // out.history_stride + 1
     values = rows * (L.HISTORY_COLUMNS + len(out.probes))
     if out.fields and numerics.model == "rod":
-        values += (numerics.steps // out.field_stride + 1) * 2 * (numerics.cells + 1)
+        nodes = numerics.cells + 1
+        if case.striker.elastic:
+            nodes += striker_cells(case.striker, numerics.time_step) + 1
+        values += (numerics.steps // out.field_stride + 1) * 2 * nodes
     return float(values)
 
 
@@ -39,19 +43,22 @@ def check_limits(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits
         errors.append(FieldError(field="numerics.cells",
                                  message=f"{numerics.cells} cells exceed the limit of {limits.max_cells} "
                                          "(PERCUSSIM_MAX_CELLS raises it)"))
+    blows = case.blows.count if case.blows else 1
+    per_blow = f" × {blows} blows" if blows > 1 else ""
+    fewer_blows = ", or give fewer blows.count" if blows > 1 else ""
     if numerics.steps > limits.max_steps:
         errors.append(FieldError(
             field="numerics.time_step",
-            message=f"{numerics.steps} time steps (duration / time_step) exceed the limit of "
-                    f"{limits.max_steps} (PERCUSSIM_MAX_STEPS raises it): raise numerics.time_step "
-                    "or shorten numerics.duration"))
+            message=f"{numerics.steps} time steps (duration / time_step{per_blow}) exceed the limit "
+                    f"of {limits.max_steps} (PERCUSSIM_MAX_STEPS raises it): raise "
+                    f"numerics.time_step or shorten numerics.duration{fewer_blows}"))
     work = float(numerics.cells) * numerics.steps
     if numerics.model == "rod" and work > limits.max_node_steps:
         errors.append(FieldError(
             field="numerics",
             message=f"{work:.3g} node-steps (cells × steps) exceed the limit of "
                     f"{limits.max_node_steps:.3g} (PERCUSSIM_MAX_NODE_STEPS raises it): use fewer "
-                    "cells or a larger time_step"))
+                    f"cells or a larger time_step{fewer_blows}"))
     values = output_values(case, numerics)
     if values > limits.max_output_values:
         errors.append(FieldError(

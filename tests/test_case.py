@@ -81,3 +81,18 @@ def test_a_case_whose_time_step_cannot_be_chosen_is_refused():
     with pytest.raises(CaseError) as caught:
         resolve_numerics(case)
     assert caught.value.errors[0].field == "numerics.time_step"
+
+
+def test_blows_count_toward_the_limits_and_the_refusal_says_so():
+    """1000 blows of 1 ms: every blow's steps count, and fewer blows is offered as a way out."""
+    case = parse_case(merge(BASE_CASE, {
+        "numerics": {"scheme": "explicit", "time_step": None, "gamma": None},
+        "blows": {"count": 1000}}))
+    numerics = resolve_numerics(case)
+    one_blow = resolve_numerics(parse_case(merge(BASE_CASE, {
+        "numerics": {"scheme": "explicit", "time_step": None, "gamma": None}})))
+    assert numerics.steps == 1000 * one_blow.steps
+    with pytest.raises(CaseError) as caught:
+        check_limits(case, numerics, Limits(max_steps=numerics.steps - 1))
+    [error] = caught.value.errors
+    assert "× 1000 blows" in error.message and "fewer blows.count" in error.message
