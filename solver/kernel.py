@@ -865,12 +865,13 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         dissipated += span * ((1.0 - gamma) * (b1 * rate1 * rate1 + b2 * end_rate1 * end_rate1)
                               + gamma * (b1 * rate2 * rate2 + b2 * end_rate2 * end_rate2))
         impulse_b = impulse + span * ((1.0 - gamma) * f1 + gamma * f2)
-        # a change of sign of δ1 beyond rounding (faces that part at the same speed graze, δ ≈ 0,
-        # for as long as nothing else moves them): where, on the cubic through the ends' values
-        # and rates
+        # a change of sign of δ1 beyond rounding: where, on the cubic through the ends' values
+        # and rates. Faces that come to rest together (equal impedances) graze, δ ≈ 0 within
+        # rounding, with no force: the contact ends as δ falls to the rounding's size, and a new
+        # one starts only at twice that, so that rounding neither prolongs it nor starts others.
         edge = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
-        if in_contact:
-            edge = -edge
+        if not in_contact:
+            edge *= 2.0
         if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
             k_a = body_rates(x, 0.0, f, f_end, r_a, v_start + v_slope * (t_a - t0),
