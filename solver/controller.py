@@ -58,6 +58,10 @@ ANVIL_PATHS = {
 }
 
 
+# Blow after blow adds what the strikers launched after the first brought, and what each took away.
+BLOW_PATHS = {"energy/launched": L.H_LAUNCHED, "energy/striker_withdrawn": L.H_WITHDRAWN}
+
+
 def history_paths(case: Case) -> dict[str, int]:
     """The history columns a case keeps, by HDF5 path: only what its model has."""
     paths = dict(HISTORY_PATHS)
@@ -67,6 +71,8 @@ def history_paths(case: Case) -> dict[str, int]:
         paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
     if case.anvil is not None:
         paths.update(ANVIL_PATHS)
+    if case.blows is not None and case.blows.count > 1:
+        paths.update(BLOW_PATHS)
     return paths
 
 
@@ -302,7 +308,7 @@ def simulate_rod(
         first = last + 1
         if last == boundary and blow < blows - 1:
             ended = state.energy[0].copy()
-            K.start_blow(last, state, observed, contact, striker, anvil, tau)
+            K.start_blow(last, state, observed, contact, striker, anvil, medium, tau)
             log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
             observed = K.new_observed(MAX_CONTACTS)
             log.start(state.energy[0])

@@ -78,7 +78,7 @@ from .layout import (ENERGY_SLOTS, E_ANVIL_KINETIC, E_CONTACT_POTENTIAL, E_DISSI
                      E_STRIKER_STRAIN, E_TOOL_KINETIC, E_WITHDRAWN,
                      E_TOOL_STRAIN, H_ANVIL_DISP, H_ANVIL_FORCE, H_ANVIL_KINETIC, H_ANVIL_VEL,
                      H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
-                     H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
+                     H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_LAUNCHED, H_WITHDRAWN, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
                      H_MEDIUM_FORCE, H_MEDIUM_PLASTIC, H_MEDIUM_POTENTIAL, H_OVERLAP,
                      H_PERMANENT_PENETRATION, H_STRIKER_DISP, H_STRIKER_STRAIN,
                      H_STRIKER_KINETIC, H_STRIKER_VEL, H_STRUCK_END, H_TIME, H_TOOL_KINETIC,
@@ -953,9 +953,10 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
 # work of the loadings before. The state is held fixed over a substep and updated after it. Each
 # branch of the law is linear (or, for Smith's damping, quadratic) in u, so each implicit stage is
 # solved exactly on the one branch where it lands: F_s is non-decreasing in u, which makes that
-# branch unique. Rock that the end leaves is crushed to its set: the next loading starts there, so
-# that blow after blow drills on. The energies are those of the state: rock stores F_s²/(2k_u)
-# and has spent ½k·(u_max − u_0)²·(1 − k/k_u) on each loading; soil stores F_s²/(2k) and has spent
+# branch unique. Within a blow rock remembers its deepest penetration: a later wave reloads it at
+# k_u up to there and crushes it at k beyond. Each blow meets fresh rock (`fresh_rock`), so that
+# blow after blow drills on. The energies are those of the state: rock stores F_s²/(2k_u) and has
+# spent ½k·(u_max − u_0)²·(1 − k/k_u) on each loading; soil stores F_s²/(2k) and has spent
 # R_u·u_p. Only the dampers' dissipation is integrated, so the energy audit checks the stages
 # against the law.
 
@@ -995,15 +996,26 @@ def yielded(u, state, medium):
     set_, deepest, surface, spent = state
     k = medium.stiffness
     if medium.kind == MEDIUM_BILINEAR:
-        if u <= set_ and deepest > surface:  # off the rock: this loading's crushing is done
-            depth = deepest - surface
-            spent += 0.5 * k * depth * depth * (1.0 - k / medium.unloading_stiffness)
-            return set_, set_, set_, spent
         deepest = max(deepest, u)
         return deepest - k * (deepest - surface) / medium.unloading_stiffness, deepest, surface, spent
     if k * (u - set_) > medium.ultimate_resistance:
         set_ = u - medium.ultimate_resistance / k
     return set_, deepest, surface, spent
+
+
+@njit(cache=True)
+def fresh_rock(u, state, medium):
+    """Rock's state as a new blow meets it at u: a loading starts from where the end is, at k
+    (`deepest` = u, the `surface` its line passes through at the present F_s), so that F_s, the
+    set and the energies are continuous in u; `spent` takes the plastic work the old loading's
+    line counted beyond the new one's. An end off the rock starts the loading on its set."""
+    set_, deepest, surface, spent = state
+    k, k_u = medium.stiffness, medium.unloading_stiffness
+    f = static_resistance(u, state, medium)
+    new_deepest, new_surface = (u, u - f / k) if f > 0.0 else (set_, set_)
+    share = 0.5 * k * (1.0 - k / k_u)
+    spent += share * ((deepest - surface) ** 2 - (new_deepest - new_surface) ** 2)
+    return set_, new_deepest, new_surface, spent
 
 
 @njit(cache=True, inline="always")
@@ -1323,12 +1335,19 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
 
 
 @njit(cache=True)
-def start_blow(m, state, observed, contact, striker, anvil, tau):
+def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
     had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
     strikes (the struck end, or the anvil, which stays where it is and starts again at its own
-    velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there."""
+    velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there.
+    Rock meets the blow fresh (`fresh_rock`)."""
     u, y, ends, energy, _ = state
+    if medium.kind == MEDIUM_BILINEAR:
+        rock = fresh_rock(u[m % 3, u.shape[1] - 1], (ends[S_MEDIUM], ends[S_MEDIUM + 1],
+                                                     ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]),
+                          medium)
+        for k in range(MEDIUM_STATE):
+            ends[S_MEDIUM + k] = rock[k]
     row, row_before = m % 3, (m - 1) % 3
     t = m * tau
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
@@ -1884,6 +1903,8 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     history[H_ANVIL_VEL, column] = state.ends[S_ANVIL_VELOCITY]
     history[H_ANVIL_FORCE, column] = state.ends[S_ANVIL_FORCE]
     history[H_ANVIL_KINETIC, column] = energy[0, E_ANVIL_KINETIC]
+    history[H_LAUNCHED, column] = energy[0, E_LAUNCHED]
+    history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
         for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL,

@@ -266,6 +266,8 @@ ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked (thos
     "contact_potential": "contact potential",
     "medium_potential": "medium potential",
     "medium_plastic": "medium plastic (permanent penetration)",  # a medium that yields
+    "anvil_kinetic": "anvil kinetic",
+    "striker_withdrawn": "withdrawn with the striker between blows",
     "dissipated_contact": "dissipated in the contact",
     "dissipated_medium": "dissipated in the medium",
 }
@@ -276,9 +278,13 @@ def _energy(fig: Figure, src: _Source, times) -> None:
     ½·m1·W1² + the external work; what is left is the scheme's own dissipation."""
     ax = fig.subplots()
     t = src.time(MAX_FILL_POINTS)
-    # The summary's, so that an elastic striker's mass ρ∫S dx is not computed again here.
+    # The summary's, so that an elastic striker's mass ρ∫S dx is not computed again here; blow
+    # after blow, the strikers launched after the first bring theirs as they are launched.
     supplied = (src.summary["energy"]["initial"]
                 + src.history("energy/external_work", MAX_FILL_POINTS))
+    if "energy/launched" in src.h5:
+        launched = src.history("energy/launched", MAX_FILL_POINTS)
+        supplied += launched - src.history("energy/launched")[-1]
     labels = {name: label for name, label in ENERGY_TERMS.items() if f"energy/{name}" in src.h5}
     terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in labels]
     numerical = supplied - np.sum(terms, axis=0)
@@ -361,7 +367,7 @@ _TABLE = {
     "probes": _Plot("Stress at the probes", ("probes",), _probes),
     "stress_along": _Plot("Stress along the tool", ("fields",), _stress_along),
     "spacetime": _Plot("Stress in the tool over x and t", ("fields",), _spacetime),
-    "energy": _Plot("Energy budget", ("one blow",), _energy),
+    "energy": _Plot("Energy budget", (), _energy),
     "force_penetration": _Plot("Medium force against penetration", ("medium",), _force_penetration),
     "blows": _Plot("Blow by blow", ("blows",), _blows),
 }
@@ -404,20 +410,9 @@ def _no_blows(h5: h5py.File, case: dict) -> str | None:
             "e.g. \"blows\": {\"count\": 5}")
 
 
-def _several_blows(h5: h5py.File, case: dict) -> str | None:
-    count = (case.get("blows") or {}).get("count", 1)
-    if count == 1:
-        return None
-    # The history has no column for what each relaunch brings and takes away.
-    return (f"this result has {count} blows, and its history does not record the energy each "
-            "blow's striker brings and takes away when it is launched again: the budget over time "
-            "is drawn for one blow (blows.count = 1); the summary's energy has the whole run's")
-
-
 # What a plot may need beyond the histories: each check says why a result lacks it, or None.
 _NEEDS: dict[str, Callable[[h5py.File, dict], str | None]] = {
     "fields": _no_fields, "probes": _no_probes, "medium": _no_medium, "blows": _no_blows,
-    "one blow": _several_blows,
 }
 
 

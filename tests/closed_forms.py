@@ -30,9 +30,10 @@ INCIDENT = Z * V / 2.0  # F_i: the wave an equal piston sends into the tool
 PISTON_DURATION = 1.5e-4
 PISTON_FINE = {"scheme": "explicit", "cells": 2000}
 STEPPED_DURATION = 3.2 * T  # a higher-impedance piston's first three steps, before 2L/a
-# On a medium: past the wave's passage (L/a + T). It is also the instant (2L/a + L_s/a) the wave the
-# free struck end reflects meets, at x = L_s, the peak of the medium's reflection
-MEDIUM_DURATION = 2.2 * TOOL / SPEED
+# On a medium: past the wave's passage (L/a + T = 1.4·L/a), and short of the instant (2L/a + L_s/a)
+# the wave the free struck end reflects meets, at x = L_s, the peak of the medium's reflection: a
+# stress peak at the run's end would be in one grid's run and not in the next one's
+MEDIUM_DURATION = 2.1 * TOOL / SPEED
 MEDIUM_FINE = {"scheme": "explicit", "cells": 1000}
 UNLOADING = 10.0  # rock's k_u/k
 OPTIMUM = 1.2564  # x = k·T/Z where Lundberg's η is largest

@@ -209,7 +209,10 @@ def test_a_yielding_medium_an_elastic_striker_and_blows_are_written_with_their_u
 def test_every_dataset_written_is_documented_with_its_units(tmp_path):
     documented = documented_units()
     assert documented["fields/stress"] == "Pa" and documented["energy/tool_strain"] == "J"
-    for name, case in (("paper", CASE), ("blows", BLOWS_CASE)):
+    # an elastic striker with its fields, an anvil and blows: every dataset the newer models add
+    anvil = merge(BLOWS_CASE, {"anvil": {"mass": 0.5, "contact": {"stiffness": 1e10, "exponent": 0.0}},
+                               "outputs": {"fields": True, "field_stride": 50}})
+    for name, case in (("paper", CASE), ("blows", BLOWS_CASE), ("anvil", anvil)):
         with h5py.File(write_result(simulate(parse_case(case)), tmp_path / f"{name}.h5")) as f:
             written = {}
             f.visititems(lambda path, d: written.__setitem__(path, d.attrs.get("units", ""))

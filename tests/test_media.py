@@ -43,8 +43,9 @@ def test_rock_takes_lundbergs_share(x, numerics):
     deepest, permanent = rock_penetration(x)
     assert summary["medium_penetration"]["max"] == pytest.approx(deepest, rel=1e-2)
     assert summary["medium_penetration"]["permanent"] == pytest.approx(permanent, rel=1e-2)
-    # what rock keeps is all plastic once it is unloaded
-    assert energy["medium_plastic"] == pytest.approx(energy["to_medium"], rel=1e-6)
+    # what rock keeps is all plastic once it is unloaded (exponentially, at k_u/Z: at x = 0.3 it
+    # still holds 0.5% of its peak force at the run's end, 2e-5 of its energy)
+    assert energy["medium_plastic"] == pytest.approx(energy["to_medium"], rel=1e-4)
 
 
 def test_linear_rock_would_give_it_all_back():
