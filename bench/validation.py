@@ -731,6 +731,100 @@ def _blows_figure(runs: list[Run], single: float) -> Figure:
     return fig
 
 
+ANVIL_FINE = {"scheme": "explicit", "cells": 800}
+
+
+def anvil_report(figures: dict[str, Figure]) -> list[str]:
+    """The anvil against the case without one, two-body impact and the linear three-body system
+    (tests/test_anvil.py)."""
+    checks, runs = [], []
+    stiff = {"stiffness": 1e13, "exponent": 0.0}
+    without = CF.anvil_case(1e-6, ANVIL_FINE, anvil_contact=stiff)
+    del without["anvil"]
+    alone = _solve("no anvil", f"fine ({ANVIL_FINE['cells']} cells)", without)
+    vanishing = _both("1-mg anvil", lambda n: CF.anvil_case(1e-6, n, anvil_contact=stiff), ANVIL_FINE)
+    runs += vanishing
+    for quantity, found in (("peak contact force (kN)", lambda r: r.summary["peak_contact_force"]["value"]),
+                            ("max compressive stress (MPa)",
+                             lambda r: r.summary["max_compressive_stress"]["value"]),
+                            ("energy to the medium (J)", lambda r: r.summary["energy"]["to_medium"])):
+        scale = 1e-3 if "kN" in quantity else 1e-6 if "MPa" in quantity else 1.0
+        checks.append(Check("1-mg anvil, against none", quantity, found(alone),
+                            found(vanishing[0]), found(vanishing[1]), 1e-2, scale))
+    k = 1e10
+    for m1, ma in ((2.0, 1.0), (1.0, 3.0)):
+        pair = _both(f"two bodies {m1:g}:{ma:g} kg", lambda n, a=m1, b=ma: CF.anvil_case(
+            b, n, striker_mass=a, anvil_contact={"stiffness": 1e6, "exponent": 0.0},
+            contact={"stiffness": k, "exponent": 0.0}), ANVIL_FINE)
+        runs += pair
+        v1, va, time = CF.two_body_impact(m1, ma, k)
+        name = f"striker {m1:g} kg on anvil {ma:g} kg"
+        checks += [
+            Check(name, "contact time π·sqrt(μ/k) (µs)", time, *(r.summary["co_impact_time"] for r in pair),
+                  5e-3, 1e6),
+            Check(name, "striker after, share of v: (m1 − m_a)/(m1 + m_a)", v1 / CF.V,
+                  *(r.summary["striker_rebound_velocity"] / CF.V for r in pair), 2e-3),
+            Check(name, "anvil after, share of v: 2·m1/(m1 + m_a)", va / CF.V,
+                  *(_anvil_velocity(r) / CF.V for r in pair), 2e-3)]
+    m1, ma, k = 2.0, 1.0, 2e9
+    pulse = _both("three bodies", lambda n: CF.anvil_case(
+        ma, {**n, "duration": 4e-4}, striker_mass=m1, anvil_contact={"stiffness": k, "exponent": 0.0},
+        contact={"stiffness": k, "exponent": 0.0}, tool={"length": 5.0, "area": CF.AREA, **CF.STEEL}),
+        ANVIL_FINE)
+    runs += pulse
+    deviations = [_three_body_deviation(r, m1, ma, k) for r in pulse]
+    for i, what in enumerate(("contact force F1", "force on the tool F2")):
+        checks.append(Check("2 kg on 1 kg, k1 = k2 = 2e9 N/m", f"{what}: largest deviation, share of its peak",
+                            0.0, deviations[0][i], deviations[1][i], 1e-2))
+    single = dict(pulse[0].result.case.model_dump(exclude_none=True))
+    del single["anvil"]
+    figures["anvil"] = _anvil_figure(pulse[0], _solve("no anvil", "fine", single), m1, ma, k)
+    return [
+        "A lumped striker at 10 m/s on an anvil resting on a 1-m steel tool (10 cm²) through its own "
+        "contact. A 1-mg anvil on a contact 5000 times as stiff as the striker's passes the contact "
+        "force on: the case without one. Two-body impact: a contact of 1e10 N/m between striker and "
+        "anvil, the anvil on a contact 1e4 times as soft (the tool takes next to nothing while they "
+        "part). The three-body system: linear contacts on a 5-m tool, the forces against the matrix "
+        "exponential of `m1·y'' = −k1·(y − y_a)`, `m_a·y_a'' = k1·(y − y_a) − k2·(y_a − u_0)`, "
+        "`Z·u_0' = k2·(y_a − u_0)` until a contact opens.", "",
+        *checks_table(checks), "", *runs_table(runs), "",
+        "![the pulse an anvil prolongs](validation/anvil.png)"]
+
+
+def _anvil_velocity(run: Run) -> float:
+    h = run.result.history
+    return float(np.interp(run.summary["co_impact_time"], h["time"], h["anvil/velocity"]))
+
+
+def _three_body_deviation(run: Run, m1: float, ma: float, k: float) -> tuple[float, float]:
+    h = run.result.history
+    t = h["time"]
+    inside = (t < run.summary["co_impact_time"]) & (h["anvil/force"] > 0.0)
+    f1, f2 = CF.linear_three_bodies(m1, ma, k, k, t[inside])
+    return (float(np.abs(h["contact/force"][inside] - f1).max() / f1.max()),
+            float(np.abs(h["anvil/force"][inside] - f2).max() / f2.max()))
+
+
+def _anvil_figure(run: Run, alone: Run, m1: float, ma: float, k: float) -> Figure:
+    fig = Figure(figsize=(7, 4.2), layout="constrained")
+    ax = fig.subplots()
+    h = run.result.history
+    t = h["time"]
+    ax.plot(t * 1e6, h["anvil/force"] / 1e3, color="C0", lw=1.6, label="force on the tool, with the anvil")
+    ax.plot(t * 1e6, h["contact/force"] / 1e3, color="C1", lw=1.0, label="striker–anvil contact force")
+    closed = t[t < run.summary["co_impact_time"]]
+    f1, f2 = CF.linear_three_bodies(m1, ma, k, k, closed)
+    ax.plot(closed * 1e6, f2 / 1e3, "k--", lw=0.9, label="linear three-body system")
+    ax.plot(alone.result.history["time"] * 1e6, alone.result.history["contact/force"] / 1e3, color="0.5",
+            lw=1.0, label=f"the {m1:g}-kg striker alone")
+    ends = [times[force > 0.01 * force.max()][-1] for times, force in (
+        (t, h["anvil/force"]), (alone.result.history["time"], alone.result.history["contact/force"]))]
+    ax.set(xlabel="time (µs)", ylabel="force (kN)", xlim=(0, 1.1e6 * max(ends)),
+           title=f"A {ma:g}-kg anvil prolongs the pulse of a {m1:g}-kg striker")
+    ax.legend(fontsize=8)
+    return fig
+
+
 def report(figures: dict[str, Figure]) -> str:
     """The markdown; the figures it refers to are added to `figures` by name."""
     start = perf_counter()
@@ -747,6 +841,7 @@ def report(figures: dict[str, Figure]) -> str:
         ("Bilinear rock: Lundberg's efficiency", rock_report(figures)),
         ("Smith soil: the set and the loop", soil_report(figures)),
         ("Blow after blow", blows_report(figures)),
+        ("The anvil: two-body impact and the pulse it prolongs", anvil_report(figures)),
     ]
     out = ["# Validation", "",
            "Produced by `bench/validation.py --write docs/validation.md`, tables and figures; rerun it to "
@@ -754,7 +849,7 @@ def report(figures: dict[str, Figure]) -> str:
            "code (`solver/reference.py`): `tests/test_reference.py`, `tests/test_schemes.py`, "
            "`tests/test_convergence.py`, `tests/test_lumped.py`, `tests/test_energy.py`; the models beyond "
            "the paper, with the cases and closed forms of `tests/closed_forms.py`: "
-           "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`. An energy "
+           "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`. An energy "
            "residual is `energy.numerical` over the energy supplied.", ""]
     for title, lines in sections:
         out += [f"## {title}", "", *lines, ""]

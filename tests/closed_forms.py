@@ -10,12 +10,20 @@ passed `4r/(1 + r)²` of its energy, and leaves at `R·v`). With r = 1 the tool 
 wave `F_i = Z·v/2` lasting T to its working end, where bilinear rock takes Lundberg's share and
 Smith's soil sets as `smith_set` says.
 
-Plain Python and the standard library: no test framework, no solver.
+An anvil (a lumped body between a lumped striker and the tool, `anvil_case`): the two bodies of a
+short stiff contact part as two-body impact says (`two_body_impact`); with linear contacts on a tool
+whose far end sends nothing back, striker, anvil and struck end are a linear system whose matrix
+exponential gives the forces (`linear_three_bodies`).
+
+Plain Python, NumPy and SciPy: no test framework, no solver.
 """
 
 from __future__ import annotations
 
 import math
+
+import numpy as np
+from scipy.linalg import expm
 
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
 V = 10.0  # m/s, the piston at impact
@@ -147,3 +155,50 @@ def smith_set(resistance: float = SOIL_RESISTANCE,
     `t_q = −(Z/k)·ln(1 − R_u/(2F_i))`, then flowing at `(2F_i − R_u)/Z` until T."""
     t_q = -(Z / stiffness) * math.log(1.0 - resistance / (2.0 * INCIDENT))
     return t_q, (2.0 * INCIDENT - resistance) * (T - t_q) / Z
+
+
+# --- the anvil --------------------------------------------------------------------------------
+
+ANVIL_DURATION = 1e-3
+
+
+def anvil_case(mass: float, numerics: dict, *, anvil_contact: dict, striker_mass: float = 2.0,
+               contact: dict | None = None, **changes) -> dict:
+    """A lumped striker at V on an anvil of `mass` resting on the tool (a linear medium behind
+    it), each history row recorded."""
+    return {
+        "striker": {"mass": striker_mass, "velocity": V},
+        "anvil": {"mass": mass, "contact": anvil_contact},
+        "tool": {"length": TOOL, "area": AREA, **STEEL},
+        "contact": contact or {"stiffness": 2e9, "exponent": 0.0},
+        "medium": {"stiffness": 5e7},
+        "numerics": {"duration": ANVIL_DURATION, **numerics},
+        "outputs": {"history_stride": 1},
+        **changes,
+    }
+
+
+def two_body_impact(striker_mass: float, anvil_mass: float, stiffness: float
+                    ) -> tuple[float, float, float]:
+    """(v1', v_a', contact time) of a striker at V on a free anvil at rest through a linear
+    contact: `(m1 − m_a)/(m1 + m_a)·V`, `2·m1/(m1 + m_a)·V`, `π·sqrt(μ/k)`."""
+    total = striker_mass + anvil_mass
+    reduced = striker_mass * anvil_mass / total
+    return ((striker_mass - anvil_mass) / total * V, 2.0 * striker_mass / total * V,
+            math.pi * math.sqrt(reduced / stiffness))
+
+
+def linear_three_bodies(m1: float, ma: float, k1: float, k2: float, times: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """(F1, F2) from rest at impact of `m1·y'' = −k1·(y − y_a)`, `m_a·y_a'' = k1·(y − y_a) −
+    k2·(y_a − u_0)`, `Z·u_0' = k2·(y_a − u_0)` (the tool's end as a dashpot of its impedance),
+    valid while both contacts are closed and nothing returns from the tool's far end."""
+    a = np.zeros((5, 5))  # state (y, w, y_a, w_a, u_0)
+    a[0, 1] = 1.0
+    a[1, 0], a[1, 2] = -k1 / m1, k1 / m1
+    a[2, 3] = 1.0
+    a[3, 0], a[3, 2], a[3, 4] = k1 / ma, -(k1 + k2) / ma, k2 / ma
+    a[4, 2], a[4, 4] = k2 / Z, -k2 / Z
+    x0 = np.array([0.0, V, 0.0, 0.0, 0.0])
+    states = np.array([expm(a * t) @ x0 for t in times])
+    return k1 * (states[:, 0] - states[:, 2]), k2 * (states[:, 2] - states[:, 4])

@@ -39,7 +39,7 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     figures = {}
     text = _validation_module().report(figures)
     assert set(figures) == {"reference", "wave", "rigid_limit", "piston", "lundberg", "smith_loop",
-                            "blows"}
+                            "blows", "anvil"}
     for name, fig in figures.items():
         fig.savefig(tmp_path / f"{name}.png")
         assert (tmp_path / f"{name}.png").read_bytes().startswith(b"\x89PNG")
@@ -58,12 +58,14 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     # numerics and at the tolerance, and every run's energy residual within 0.5%.
     checks = _rows(text, "| case | quantity | closed form |")
     assert {row[0] for row in checks} >= {"r = 0.5", "r = 1", "r = 2", "x = 0.3", "x = 0.6", "x = 1.2564",
-                                          "x = 2", "x = 3", "J = 0", "J = 0.5"}
+                                          "x = 2", "x = 3", "J = 0", "J = 0.5",
+                                          "1-mg anvil, against none", "striker 2 kg on anvil 1 kg",
+                                          "striker 1 kg on anvil 3 kg"}
     for case, quantity, _, _, fine, _, tolerance, held in checks:
         if held != "—":
             assert abs(float(fine)) <= float(held) and abs(float(tolerance)) <= float(held), (case, quantity)
     for quantity, _, _, difference, held in _rows(text, "| quantity | whole | fractional |"):
         assert abs(float(difference)) <= float(held), quantity
     runs = _rows(text, "| case | numerics | cells | run time (s) | energy residual |")
-    assert len(runs) == 25
+    assert len(runs) == 33
     assert all(abs(float(row[4])) < 5e-3 for row in runs), runs
