@@ -547,7 +547,7 @@ def rock_report(figures: dict[str, Figure]) -> list[str]:
                 ("permanent (1 − k/k_u)·F_max/k (µm)", permanent,
                  lambda s: s["medium_penetration"]["permanent"], 1e-2, 1e6),
                 ("medium_plastic / to_medium", 1.0,
-                 lambda s: s["energy"]["medium_plastic"] / s["energy"]["to_medium"], 1e-6, 1)):
+                 lambda s: s["energy"]["medium_plastic"] / s["energy"]["to_medium"], 1e-4, 1)):
             checks.append(Check(f"x = {x:g}", quantity, closed, found(fine.summary), found(tol.summary),
                                 held, scale))
     x_best, eta_best = CF.lundberg_optimum()
