@@ -378,10 +378,11 @@ function pulseCard(s) {
 }
 
 // The terms the input ends as; those marked `rare` belong to some models only (an elastic
-// striker, a medium that yields, blows) and are listed when they are not 0.
+// striker, an anvil, a medium that yields, blows) and are listed when they are not 0.
 const ENERGY_TERMS = [
   ["striker_kinetic", "Striker, kinetic"],
   ["striker_strain", "Striker, strain", "rare"],
+  ["anvil_kinetic", "Anvil, kinetic", "rare"],
   ["tool_kinetic", "Tool, kinetic"],
   ["tool_strain", "Tool, strain"],
   ["contact_potential", "Contact, potential"],
