@@ -39,6 +39,8 @@ def test_every_combination_is_a_variant_in_order():
     (PILE, "medium.quake", [1e-3, 5e-3]),
     (PILE, "medium.damping_factor", [0.16, 0.49]),
     (PILE, "blows.count", [1, 3]),  # the preset has no blows: the field is made
+    (merge(PILE, {"anvil": {"mass": 500.0, "contact": {"stiffness": 5e9, "exponent": 0.0}}}),
+     "anvil.mass", [200.0, 800.0]),
 ])
 def test_the_piston_the_media_and_blows_can_be_swept(base, path, values):
     found = variants(Sweep(case=base, parameters={path: values}))
@@ -110,6 +112,16 @@ def test_the_piston_length_takes_the_efficiency_through_lundbergs_optimum():
     assert 0 < best < len(rows) - 1
     assert efficiency[:best + 1] == sorted(efficiency[:best + 1])
     assert efficiency[best:] == sorted(efficiency[best:], reverse=True)
+
+
+def test_a_heavier_helmet_lowers_the_pile_heads_stress():
+    """The pile's ram on a helmet (an anvil) of 200 and 2000 kg: a sweep solves both, and the
+    heavier one, slower to pass the blow on, stresses the pile less."""
+    helmet = merge(PILE, {"anvil": {"mass": 200.0, "contact": {"stiffness": 2e10, "exponent": 0.0}}})
+    light, heavy = run_sweep({"case": helmet, "parameters": {"anvil.mass": [200.0, 2000.0]}},
+                             processes=1)
+    assert "error" not in light and "error" not in heavy
+    assert heavy["max_compressive_stress"] < 0.95 * light["max_compressive_stress"]
 
 
 def test_blow_after_blow_the_pile_goes_down_by_each_blows_set():
