@@ -262,8 +262,8 @@ def test_a_run_of_blows_shows_its_table_penetration_and_plots(page, stack):
     # every term the input ends as is listed: what is left over is none
     expect(page.locator("table.energy tr.total").last.locator("td").first).to_have_text("0")
 
-    for name in ("blows", "force_penetration"):
+    # the energy budget too: the history records what each relaunch brings and takes away
+    for name in ("blows", "force_penetration", "energy"):
         image = page.locator(f"figure[data-plot={name}] img")
         expect(image).to_be_visible()
         assert image.evaluate("img => img.complete && img.naturalWidth > 0"), name
-    expect(page.locator("figure[data-plot=energy] .frame.unavailable")).to_contain_text("3 blows")
