@@ -17,7 +17,8 @@ from .errors import Cancelled, NumericalFailure
 from .grid import (Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass,
                    wave_speed)
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
-from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows
+from .summary import (FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows,
+                      launch_energy)
 
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
 
@@ -232,8 +233,7 @@ def simulate_rod(
     observed = K.new_observed(MAX_CONTACTS)
     blows = case.blows.count if case.blows else 1
     blow, blow_steps = 0, num.steps // blows
-    log = BlowLog(launch_energy=0.5 * contact.striker_mass * contact.striker_velocity**2
-                  + (0.5 * anvil.mass * anvil.velocity**2 if anvil.present else 0.0))
+    log = BlowLog(launch_energy=launch_energy(case))
     log.start(state.energy[0])
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
     lag = 1 if weights.centered and not weights.impedance_ends else 0

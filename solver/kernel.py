@@ -809,9 +809,9 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     anvil). Returns the work of R and what the contacts' dampers dissipated over the step, the
     number of changes of sign of δ1 (the contact's overlap), each written to `events` (time,
     striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
-    striker's velocity is its mean, its momentum over its mass), and `(largest force, its time,
-    least force, its time)` of F1 and of F2 at the substeps' ends (a stiff contact's substeps see
-    a peak the layers miss).
+    striker's velocity is its mean, its momentum over its mass), `(largest F1, its time)` and
+    `(largest F2, its time, least F2, its time)` at the substeps' ends (a stiff contact's substeps
+    see a peak the layers miss).
     """
     v_mean, v_slope, face_mean, face_slope = waves
     gamma = SDIRK_GAMMA
@@ -830,7 +830,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     f, f_end = struck_forces(x, v_start, face_start, contact, striker, anvil)
     if striker.elastic:
         x = (x[0], 2.0 * face_start - f / striker.impedance, x[2], x[3], x[4])
-    f_max, t_max, f_min, t_min = f, t0, f, t0
+    f_max, t_max = f, t0
     e_max, te_max, e_min, te_min = f_end, t0, f_end, t0
     overlaps = (x[0] - (x[2] if anvil.present else x[4]), x[2] - x[4])
     t_stop = t0
@@ -891,16 +891,13 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         t_a = t_b
         if f > f_max:
             f_max, t_max = f, t_a
-        if f < f_min:
-            f_min, t_min = f, t_a
         if f_end > e_max:
             e_max, te_max = f_end, t_a
         if f_end < e_min:
             e_min, te_min = f_end, t_a
     state[0], state[1], state[2], state[3], state[4] = x[0], x[1], x[4], f, impulse
     state[6], state[7], state[8] = x[2], x[3], f_end
-    return (work, dissipated, count, (f_max, t_max, f_min, t_min),
-            (e_max, te_max, e_min, te_min))
+    return work, dissipated, count, (f_max, t_max), (e_max, te_max, e_min, te_min)
 
 
 @njit(cache=True, inline="always")
@@ -959,6 +956,12 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
 # spent ½k·(u_max − u_0)²·(1 − k/k_u) on each loading; soil stores F_s²/(2k) and has spent
 # R_u·u_p. Only the dampers' dissipation is integrated, so the energy audit checks the stages
 # against the law.
+
+
+@njit(cache=True, inline="always")
+def medium_state(ends):
+    """The medium's state `(set, deepest, surface, spent)` from its end slots."""
+    return ends[S_MEDIUM], ends[S_MEDIUM + 1], ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]
 
 
 @njit(cache=True, inline="always")
@@ -1343,9 +1346,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     Rock meets the blow fresh (`fresh_rock`)."""
     u, y, ends, energy, _ = state
     if medium.kind == MEDIUM_BILINEAR:
-        rock = fresh_rock(u[m % 3, u.shape[1] - 1], (ends[S_MEDIUM], ends[S_MEDIUM + 1],
-                                                     ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]),
-                          medium)
+        rock = fresh_rock(u[m % 3, u.shape[1] - 1], medium_state(ends), medium)
         for k in range(MEDIUM_STATE):
             ends[S_MEDIUM + k] = rock[k]
     row, row_before = m % 3, (m - 1) % 3
@@ -1745,8 +1746,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
         energy[0, E_ANVIL_KINETIC] = 0.5 * anvil.mass * velocity_a * velocity_a
     else:
         potential = contact_law(y[new] - u[new, 0], contact)[1]
-    stored, plastic = medium_energy(u[new, n], (ends[S_MEDIUM], ends[S_MEDIUM + 1],
-                                                ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]), medium)
+    stored, plastic = medium_energy(u[new, n], medium_state(ends), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
     energy[0, E_EXTERNAL_WORK] += work
@@ -1792,10 +1792,10 @@ def track_energy_excess(extremes, balance):
 def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod,
                               step):
     """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
-    (largest contact force, its time, least, its time), `end_range` (the force on the tool's
-    struck end's) and `working_range` (the medium force's, with their offsets from the step's
-    start)."""
-    f_max, t_max = contact_range[0], contact_range[1]
+    (largest contact force, its time), `end_range` (the force on the tool's struck end: largest,
+    its time, least, its time) and `working_range` (the medium force's, with their offsets from
+    the step's start)."""
+    f_max, t_max = contact_range
     e_max, te_max, e_min, te_min = end_range
     g_max, tg_max, g_min, tg_min = working_range
     n, h, tau = step.n, rod.cell_length, rod.time_step

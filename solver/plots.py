@@ -284,7 +284,7 @@ def _energy(fig: Figure, src: _Source, times) -> None:
                 + src.history("energy/external_work", MAX_FILL_POINTS))
     if "energy/launched" in src.h5:
         launched = src.history("energy/launched", MAX_FILL_POINTS)
-        supplied += launched - src.history("energy/launched")[-1]
+        supplied += launched - src.h5["energy/launched"][-1]
     labels = {name: label for name, label in ENERGY_TERMS.items() if f"energy/{name}" in src.h5}
     terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in labels]
     numerical = supplied - np.sum(terms, axis=0)

@@ -143,6 +143,13 @@ def to_medium(energy: np.ndarray) -> float:
                  + energy[L.E_DISSIPATED_MEDIUM])
 
 
+def launch_energy(case: Case) -> float:
+    """What one launch brings (J): the striker's kinetic energy at impact, and an anvil's."""
+    anvil = case.anvil
+    return (0.5 * striker_mass(case.striker) * case.striker.velocity**2
+            + (0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0))
+
+
 def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
                   contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
                   history: dict[str, np.ndarray], extra_warnings: list[str] | None = None,
@@ -160,9 +167,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
-    anvil = case.anvil
-    initial = (0.5 * striker_mass(case.striker) * case.striker.velocity**2 + energy[L.E_LAUNCHED]
-               + (0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0))
+    initial = launch_energy(case) + energy[L.E_LAUNCHED]
     at_end = {
         "striker_kinetic": energy[L.E_STRIKER_KINETIC],
         "striker_strain": energy[L.E_STRIKER_STRAIN],
