@@ -269,6 +269,99 @@ def _plots(args: argparse.Namespace) -> int:
     return 0 if written else EXIT_FAILED
 
 
+def _bounds(text: str) -> tuple[str, list[float]]:
+    """`path=LOW:HIGH`, two numbers."""
+    path, sep, pair = text.partition("=")
+    low, colon, high = pair.partition(":")
+    try:
+        if not (sep and path and colon):
+            raise ValueError
+        return path, [float(low), float(high)]
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected FIELD=LOW:HIGH (e.g. contact.stiffness=1e9:1e13), not {text!r}") from None
+
+
+def _limit(text: str) -> tuple[str, dict]:
+    """`QUANTITY<=VALUE` or `QUANTITY>=VALUE`."""
+    for sign, side in (("<=", "max"), (">=", "min")):
+        name, found, value = text.partition(sign)
+        if found:
+            try:
+                return name.strip(), {side: float(value)}
+            except ValueError:
+                break
+    raise argparse.ArgumentTypeError(
+        f"expected QUANTITY<=VALUE or QUANTITY>=VALUE (e.g. max_compressive_stress<=250e6), not {text!r}")
+
+
+def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict) -> None:
+    """The full answer to --output, its plot to --plot (format from the extension), `shown` to
+    stdout and the warnings to stderr."""
+    from .solver.study_plots import render_study
+
+    if args.output:
+        Path(args.output).write_text(json.dumps(answer, indent=2) + "\n")
+    if args.plot:
+        fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
+        Path(args.plot).write_bytes(render_study(answer, plot, fmt, name=Path(args.case).stem))
+    for warning in answer.get("warnings", []):
+        print(f"percussim: warning: {warning}", file=sys.stderr)
+    print(json.dumps(shown, indent=2))
+
+
+def _study(args: argparse.Namespace, what: str, request: Callable[[], dict],
+           solve: Callable[..., dict]) -> dict | int:
+    """Run a calibration or an optimisation here; the answer, or the exit status of a refusal."""
+    from .solver.case import CaseError
+
+    try:
+        with _progress_bar(args.progress) as advance:
+            return solve(request(), processes=args.processes, progress=advance, limits=_limits())
+    except FileNotFoundError as error:
+        return _no_such_file(error.filename or args.case)
+    except CaseError as error:
+        return _refused(f"{what} of {args.case}", error)
+    except KeyboardInterrupt:
+        print("\npercussim: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+def _calibrate(args: argparse.Namespace) -> int:
+    from .solver.calibrate import calibrate
+    from .solver.case import as_case
+    from .solver.record import read_record
+
+    def request() -> dict:
+        return {"case": as_case(_case_source(args.case)), "record": read_record(args.record),
+                "parameters": dict(args.fit)}
+
+    fit = _study(args, "calibration", request, calibrate)
+    if isinstance(fit, int):
+        return fit
+    _write_study(fit, args, "fit", {key: fit[key] for key in (
+        "parameters", "correlation", "nrmse", "noise", "evaluations", "warnings", "grid", "seconds")})
+    return 0
+
+
+def _optimize(args: argparse.Namespace) -> int:
+    from .solver.case import as_case
+    from .solver.optimize import optimize
+
+    def request() -> dict:
+        return {"case": as_case(_case_source(args.case)), "variables": dict(args.vary),
+                "objective": {"maximize": args.maximize} if args.maximize else {"minimize": args.minimize},
+                "limits": {name: bound for name, bound in (args.limit or [])},
+                "max_evaluations": args.evaluations}
+
+    answer = _study(args, "optimisation", request, optimize)
+    if isinstance(answer, int):
+        return answer
+    _write_study(answer, args, "convergence", {key: answer[key] for key in (
+        "objective", "values", "quantities", "evaluations", "stopped", "warnings", "grid", "seconds")})
+    return 0 if answer["values"] is not None else EXIT_FAILED
+
+
 def _warmup(args: argparse.Namespace) -> int:
     from .solver.controller import warm_up
 
@@ -341,6 +434,34 @@ def parser() -> argparse.ArgumentParser:
     which.add_argument("--write", metavar="DIR", help="write every preset's case JSON into DIR as NAME.json")
     presets.add_argument("-o", "--output", metavar="FILE", help="write the named preset here instead")
     presets.set_defaults(handler=_presets)
+    fit = commands.add_parser("calibrate", help="fit a case's parameters to a measured record (CSV)")
+    fit.add_argument("case", help="impact case JSON, or a preset's name")
+    fit.add_argument("--record", required=True, metavar="RECORD.csv",
+                     help="header time,<quantity> (contact_force, medium_force, stress@X, "
+                          "struck_end_velocity, working_end_velocity), then samples in SI units")
+    fit.add_argument("--fit", type=_bounds, action="append", required=True, metavar="FIELD=LOW:HIGH",
+                     help="a parameter and its bounds (repeat), e.g. contact.stiffness=1e9:1e13")
+    optimise = commands.add_parser("optimize", help="find the fields' values that maximise or minimise "
+                                                    "a summary quantity within limits")
+    optimise.add_argument("case", help="impact case JSON, or a preset's name")
+    optimise.add_argument("--vary", type=_bounds, action="append", required=True, metavar="FIELD=LOW:HIGH",
+                          help="a field and its bounds (repeat), e.g. striker.length=0.1:0.8")
+    goal = optimise.add_mutually_exclusive_group(required=True)
+    goal.add_argument("--maximize", metavar="QUANTITY", help="e.g. energy.transfer_efficiency")
+    goal.add_argument("--minimize", metavar="QUANTITY", help="e.g. max_compressive_stress")
+    optimise.add_argument("--limit", type=_limit, action="append", metavar="QUANTITY<=VALUE",
+                          help="a limit on a summary quantity (repeat; <= or >=), e.g. "
+                               "max_compressive_stress<=250e6")
+    optimise.add_argument("--evaluations", type=int, default=1000, metavar="N",
+                          help="the global stage's budget of runs (default 1000)")
+    for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
+        study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
+        study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")
+        study.add_argument("--processes", type=_count, help="processes here (default: one a core)")
+        study.add_argument("--progress", action="store_true",
+                           help="show the progress bar on stderr even when it is not a terminal")
+    fit.set_defaults(handler=_calibrate)
+    optimise.set_defaults(handler=_optimize)
     plot = commands.add_parser("plot", help="draw the plots of a result file (PNG, SVG)")
     plot.add_argument("result", help="an HDF5 result of percussim run --output or the service")
     plot.add_argument("--out", metavar="DIR", help="folder for the plots (default: RESULT-plots next to the file)")

@@ -10,11 +10,12 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal, TypeVar, Union
 
 from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
+_M = TypeVar("_M", bound=BaseModel)
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
 # Upper bounds wide enough for any percussive device, from a dental scaler to a pile hammer, and
@@ -37,7 +38,7 @@ class _Model(BaseModel):
     model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
 
 
-def _field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationError:
+def field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationError:
     """A validation error attached to `loc` below the model being validated."""
     detail = InitErrorDetails(
         type=PydanticCustomError("value_error", message), loc=loc, input=value
@@ -68,7 +69,7 @@ class Profile(_Model):
     @model_validator(mode="after")
     def _same_length(self) -> "Profile":
         if len(self.area) != len(self.x):
-            raise _field_error(
+            raise field_error(
                 "Profile", ("area",),
                 f"must have one area per station: {len(self.area)} areas for {len(self.x)} stations",
                 self.area,
@@ -97,12 +98,12 @@ class Tool(_Model):
 def _check_shape(rod: "Tool | Striker", name: str) -> None:
     """A rod has a uniform `area` or a `profile` whose last station is its length."""
     if (rod.area is None) == (rod.profile is None):
-        raise _field_error(name, ("area",),
+        raise field_error(name, ("area",),
                            f"give exactly one of {name}.area (uniform) or {name}.profile", rod.area)
     if rod.profile is not None:
         last = rod.profile.x[-1]
         if abs(last - rod.length) > 1e-9 * rod.length:
-            raise _field_error(name, ("profile", "x", len(rod.profile.x) - 1),
+            raise field_error(name, ("profile", "x", len(rod.profile.x) - 1),
                                f"the last station must equal {name}.length = {rod.length} m", last)
 
 
@@ -122,12 +123,12 @@ class Striker(_Model):
     @model_validator(mode="after")
     def _lumped_or_rod(self) -> "Striker":
         if self.mass is not None and self.length is not None:
-            raise _field_error(
+            raise field_error(
                 "Striker", ("mass",),
                 "cannot be given with striker.length: striker.mass makes a lumped striker, "
                 "striker.length an elastic rod; give one of them", self.mass)
         if self.mass is None and self.length is None:
-            raise _field_error(
+            raise field_error(
                 "Striker", ("mass",),
                 "is required (a lumped striker), unless the striker is an elastic rod "
                 "(striker.length, youngs_modulus, density and area or profile)", None)
@@ -135,14 +136,14 @@ class Striker(_Model):
         if self.mass is not None:
             for name in rod_fields:
                 if getattr(self, name) is not None:
-                    raise _field_error(
+                    raise field_error(
                         "Striker", (name,),
                         "belongs to an elastic striker (with striker.length), not a lumped one "
                         "(striker.mass)", getattr(self, name))
             return self
         for name in ("youngs_modulus", "density"):
             if getattr(self, name) is None:
-                raise _field_error("Striker", (name,),
+                raise field_error("Striker", (name,),
                                    "is required for an elastic striker (striker.length)", None)
         _check_shape(self, "striker")
         return self
@@ -216,15 +217,15 @@ class Medium(_Model):
             value = getattr(self, name)
             # given: a value other than the field's default (a stored case spells out defaults)
             if name != "kind" and value is not None and value != spec.default and name not in allowed:
-                raise _field_error(
+                raise field_error(
                     "Medium", (name,),
                     f"is not a field of a {self.kind} medium (its fields: {', '.join(allowed)})",
                     getattr(self, name))
         for name in MEDIUM_REQUIRED[self.kind]:
             if getattr(self, name) is None:
-                raise _field_error("Medium", (name,), f"is required for a {self.kind} medium", None)
+                raise field_error("Medium", (name,), f"is required for a {self.kind} medium", None)
         if self.kind == "bilinear" and self.unloading_stiffness < self.stiffness:
-            raise _field_error(
+            raise field_error(
                 "Medium", ("unloading_stiffness",),
                 f"must be ≥ medium.stiffness = {self.stiffness:.6g} N/m: rock unloads at least as "
                 "stiffly as it loads", self.unloading_stiffness)
@@ -344,7 +345,7 @@ class Numerics(_Model):
         if self.tolerance is not None:
             given = [name for name in ("time_step", "cells") if getattr(self, name) is not None]
             if given:
-                raise _field_error(
+                raise field_error(
                     "Numerics", ("tolerance",),
                     f"cannot be combined with numerics.{given[0]}: under a tolerance the solver "
                     "chooses the grid; give one or the other", self.tolerance,
@@ -381,7 +382,7 @@ class Case(_Model):
     def _probes_on_tool(self) -> "Case":
         for i, x in enumerate(self.outputs.probes):
             if not 0.0 <= x <= self.tool.length:
-                raise _field_error(
+                raise field_error(
                     "Case", ("outputs", "probes", i),
                     f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m", x,
                 )
@@ -390,7 +391,7 @@ class Case(_Model):
     @model_validator(mode="after")
     def _force_on_a_lumped_striker(self) -> "Case":
         if self.force is not None and self.striker.elastic:
-            raise _field_error(
+            raise field_error(
                 "Case", ("force",),
                 "acts on a lumped striker (striker.mass); an elastic striker (striker.length) is "
                 "driven by its velocity at impact only", self.force.kind)
@@ -476,6 +477,16 @@ def describe(errors: list[dict]) -> list[FieldError]:
         loc = tuple(p for p in e["loc"] if p not in ("sine", "abs_sine", "pulse"))
         described.append(FieldError(field=field_path(loc), message=message))
     return described
+
+
+def validated(model: type[_M], data: Any, field: str = "") -> _M:
+    """`data` (JSON as Python) validated as `model`; `CaseError` names each bad field, under
+    `field` when given (a record's `time[3]` as `record.time[3]`)."""
+    try:
+        return model.model_validate(data)
+    except ValidationError as error:
+        raise CaseError([FieldError(field=f"{field}.{e.field}" if field else e.field, message=e.message)
+                         for e in describe_errors(error)]) from None
 
 
 def parse_case(data: dict | str | bytes) -> Case:

@@ -38,7 +38,7 @@ DEFAULT_TIMES = 5  # curves of stress along the tool when no times are given
 MAX_TIMES = 12  # curves of stress along the tool at the most: more is a tangle, not a plot
 ALONG_THE_TOOL = "x along the tool (m), struck end at 0"
 # matplotlib's font cache is shared by every figure and is not thread-safe.
-_DRAWING = threading.Lock()
+DRAWING = threading.Lock()
 
 
 class NotAResult(ValueError):
@@ -53,7 +53,7 @@ class NotAvailable(ValueError):
     """This result cannot make this plot; the message says what to change."""
 
 
-def _time_unit(end: float) -> tuple[float, str]:
+def time_unit(end: float) -> tuple[float, str]:
     """(scale, unit) of times up to `end` (s): µs below 2 ms, so that a scale reads 0 … 2000 at
     worst, never 0 … 0.002."""
     return (1e6, "µs") if end < 2e-3 else (1e3, "ms")
@@ -75,7 +75,7 @@ class _Source:
     def __post_init__(self) -> None:
         self.rows = len(self.h5["time"])
         self.end = float(self.h5["time"][-1])
-        self.t_scale, self.t_unit = _time_unit(self.end)
+        self.t_scale, self.t_unit = time_unit(self.end)
 
     def history(self, path: str, points: int | None = None) -> np.ndarray:
         """A history read with the stride that keeps about `points` (MAX_CURVE_POINTS) samples,
@@ -113,7 +113,7 @@ def _open(path: str | Path) -> Iterator[_Source]:
         yield _Source(h5, json.loads(h5.attrs["case"]), json.loads(h5["summary"][()]))
 
 
-def _decorate(ax: Axes, xlabel: str, ylabel: str) -> None:
+def decorate(ax: Axes, xlabel: str, ylabel: str) -> None:
     ax.set_xlabel(xlabel)
     ax.set_ylabel(ylabel)
     ax.grid(alpha=0.3)
@@ -143,7 +143,7 @@ def _force(fig: Figure, src: _Source, times) -> None:
                     (peak["time"] * src.t_scale, peak["value"] / 1e3), xytext=(8, -4),
                     textcoords="offset points", va="top", fontsize=9)
     ax.axhline(0, color="0.5", lw=0.6)
-    _decorate(ax, src.t_label(), "force (kN), compression > 0")
+    decorate(ax, src.t_label(), "force (kN), compression > 0")
     ax.legend(loc="upper right", fontsize=9)
 
 
@@ -157,7 +157,7 @@ def _displacements(fig: Figure, src: _Source, times) -> None:
                                ("tool/struck_end_displacement", "struck end of the tool", "--"),
                                ("tool/working_end_displacement", "working end of the tool", "-.")):
         ax.plot(t, src.history(path) * 1e3, ls=style, lw=1.3, label=label)
-    _decorate(ax, src.t_label(), "displacement (mm), toward the medium > 0")
+    decorate(ax, src.t_label(), "displacement (mm), toward the medium > 0")
     ax.legend(fontsize=9)
 
 
@@ -169,7 +169,7 @@ def _probes(fig: Figure, src: _Source, times) -> None:
     for k, x in enumerate(src.h5["probes/x"][()]):
         ax.plot(t, stress[:, k], lw=1.1, label=f"x = {x:.4g} m")
     ax.axhline(0, color="0.5", lw=0.6)
-    _decorate(ax, src.t_label(), "stress σ (MPa), compression < 0")
+    decorate(ax, src.t_label(), "stress σ (MPa), compression < 0")
     ax.legend(title="probe", fontsize=9)
 
 
@@ -233,11 +233,11 @@ def _stress_along(fig: Figure, src: _Source, times) -> None:
     stress = src.h5["fields/stress"][frames] / 1e6
     shown = src.h5["fields/time"][frames]
     # The legend's unit is the times' own: the first wave is a few µs into a run of ms.
-    scale, unit = _time_unit(shown[-1])
+    scale, unit = time_unit(shown[-1])
     for row, t in zip(stress, shown):
         ax.plot(x, row, lw=1.3, label=f"t = {_in_unit(t, scale, unit)}")
     ax.axhline(0, color="0.5", lw=0.6)
-    _decorate(ax, ALONG_THE_TOOL, "stress σ (MPa), compression < 0")
+    decorate(ax, ALONG_THE_TOOL, "stress σ (MPa), compression < 0")
     ax.legend(fontsize=9)
 
 
@@ -299,7 +299,7 @@ def _energy(fig: Figure, src: _Source, times) -> None:
                 xy=(t[-1], supplied[-1] - 0.5 * numerical[-1]), xytext=(-8, 0),
                 textcoords="offset points", ha="right", va="center", fontsize=9,
                 color="firebrick" if abs(lost) > 0.01 else "0.3")
-    _decorate(ax, src.t_label(), "energy (J)")
+    decorate(ax, src.t_label(), "energy (J)")
     ax.set_ylim(0, 1.06 * max(supplied.max(), np.sum(terms, axis=0).max()))
     fig.legend(loc="outside right upper", fontsize=9, frameon=False)
 
@@ -323,7 +323,7 @@ def _force_penetration(fig: Figure, src: _Source, times) -> None:
                 f"(the loop's area once the medium is unloaded)\n"
                 f"deepest penetration {penetration['max'] * 1e3:.4g} mm",
                 xy=(0.02, 0.97), xycoords="axes fraction", va="top", fontsize=9)
-    _decorate(ax, "penetration of the working end u_N (mm)", "medium force (kN), compression > 0")
+    decorate(ax, "penetration of the working end u_N (mm)", "medium force (kN), compression > 0")
     ax.margins(x=0.02)
     ax.legend(loc="best", fontsize=9)
 
@@ -349,7 +349,7 @@ def _blows(fig: Figure, src: _Source, times) -> None:
         ax.plot(number, [row[column] * scale for row in table], "o-", color="C0", lw=1.2, ms=4,
                 label=title)
         ax.set_title(title, fontsize=10)
-        _decorate(ax, "blow", unit)
+        decorate(ax, "blow", unit)
         ax.margins(x=0.05)
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
@@ -457,7 +457,7 @@ def _check_format(fmt: str) -> None:
         raise ValueError(f"unknown format {fmt!r}; the formats are: {', '.join(FORMATS)}")
 
 
-def _save(fig: Figure, fmt: str, to) -> None:
+def save(fig: Figure, fmt: str, to) -> None:
     _check_format(fmt)
     # No date in an SVG: the same result gives the same file.
     fig.savefig(to, format=fmt, metadata={"Date": None} if fmt == "svg" else None)
@@ -466,8 +466,8 @@ def _save(fig: Figure, fmt: str, to) -> None:
 def render(path: str | Path, name: str, fmt: str, times: Sequence[float] | None = None) -> bytes:
     """Plot `name` of the result at `path` as PNG or SVG bytes."""
     buffer = io.BytesIO()
-    with _DRAWING:
-        _save(figure(path, name, times), fmt, buffer)
+    with DRAWING:
+        save(figure(path, name, times), fmt, buffer)
     return buffer.getvalue()
 
 
@@ -493,10 +493,10 @@ def write_plots(path: str | Path, out_dir: str | Path, formats: Sequence[str] = 
                 skipped[name] = reason
                 continue
             out_dir.mkdir(parents=True, exist_ok=True)
-            with _DRAWING:
+            with DRAWING:
                 fig = _figure(src, name, times)
                 for fmt in formats:
                     target = out_dir / f"{name}.{fmt}"
-                    _save(fig, fmt, target)
+                    save(fig, fmt, target)
                     written.append(target)
     return written, skipped

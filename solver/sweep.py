@@ -17,6 +17,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from .case import Case, CaseError, FieldError, Outputs, parse_case
 from .limits import Limits, check_case
+from .paths import set_field, value_at
 
 MAX_VARIANTS = 10_000
 MAX_ERRORS = 20  # bad variants named before giving up
@@ -50,32 +51,18 @@ class Sweep(BaseModel):
         min_length=1, description="dotted field path → the values it takes; every combination runs")
 
 
-def _set(tree: dict, path: str, value: Any) -> None:
-    """Set `path` (dots; list items by their index) in the case JSON `tree`. A path the case does
-    not have is created, so that validation names it as an unknown field."""
-    *parents, leaf = path.split(".")
-    node: Any = tree
-    for key in parents:
-        node = node[int(key)] if isinstance(node, list) else node.setdefault(key, {})
-    if isinstance(node, list):
-        node[int(leaf)] = value
-    elif isinstance(node, dict):
-        node[leaf] = value
-    else:
-        raise TypeError(f"{path}: {node!r} has no fields")
-
-
-def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
-             limits: Limits = Limits()) -> list[tuple[dict[str, Any], Case]]:
+def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits = Limits(),
+             field: str = "parameters") -> list[tuple[dict[str, Any], Case]]:
     """Every (parameter values, validated case) of the sweep, or `CaseError` naming, for each bad
-    variant (invalid, or over a size limit), the parameter value it came from and what it breaks."""
+    variant (invalid, or over a size limit), the parameter value it came from (as
+    `field[path][index]`) and what it breaks."""
     names = list(sweep.parameters)
     for name, values in sweep.parameters.items():
         if not values:
-            raise CaseError([FieldError(field=f"parameters[{name!r}]", message="give at least one value")])
+            raise CaseError([FieldError(field=f"{field}[{name!r}]", message="give at least one value")])
     count = math.prod(len(v) for v in sweep.parameters.values())
     if count > max_variants:
-        raise CaseError([FieldError(field="parameters", message=(
+        raise CaseError([FieldError(field=field, message=(
             f"{count} variants ({' × '.join(str(len(sweep.parameters[n])) for n in names)}) exceed "
             f"the limit of {max_variants}: sweep fewer values"))])
     base = sweep.case.model_dump(mode="json", exclude_none=True)
@@ -85,8 +72,8 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
         values = {name: value for name, (_, value) in zip(names, picks)}
         try:
             for name, (k, value) in zip(names, picks):
-                where = f"parameters[{name!r}][{k}]"
-                _set(tree, name, value)
+                where = f"{field}[{name!r}][{k}]"
+                set_field(tree, name, value)
             case = parse_case(tree)
             check_case(case, limits)
             found.append((values, case))
@@ -95,9 +82,9 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
                 # The parameter whose path the broken field starts with; else the only parameter
                 # (the base case is valid, so it broke another field: striker.length makes
                 # striker.mass wrong); else the whole variant.
-                culprit = next((f"parameters[{n!r}][{k}]" for n, (k, _) in zip(names, picks)
+                culprit = next((f"{field}[{n!r}][{k}]" for n, (k, _) in zip(names, picks)
                                 if e.field == n or e.field.startswith(n + ".") or len(names) == 1),
-                               "parameters (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")")
+                               f"{field} (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")")
                 errors.setdefault(culprit, FieldError(field=culprit, message=f"{e.field}: {e.message}"))
         except (IndexError, ValueError, TypeError) as error:
             errors[where] = FieldError(field=where, message=f"cannot be set: {error}")
@@ -108,22 +95,8 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS,
     return found
 
 
-def _at(summary: dict, path: tuple) -> Any:
-    """The summary's value at `path`; None where it has none (no medium, no blows, or a summary
-    stored before the quantity existed, as a service's older jobs have)."""
-    value: Any = summary
-    for key in path:
-        if isinstance(value, dict):
-            value = value.get(key)
-        elif isinstance(value, list) and value:
-            value = value[key]
-        else:
-            return None
-    return value
-
-
 def table_row(summary: dict) -> dict[str, Any]:
     """The sweep table's columns from one variant's summary."""
-    row = {column: _at(summary, path) for column, path in COLUMNS}
+    row = {column: value_at(summary, path) for column, path in COLUMNS}
     row["warnings"] = len(summary["warnings"])
     return row

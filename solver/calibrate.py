@@ -1,0 +1,377 @@
+"""Calibration: the case's parameters that make a run reproduce a measured record.
+
+The method, in order:
+
+0. Checks (`check_calibration`, also the service's before it queues a fit): the record against
+   the case, the parameters' paths and bounds, and the record's units: its peak must come within
+   `UNITS_FACTOR` of the model's at some corner of the bounds (a prefix off gives 1000).
+1. A global stage: the case at its own values and at a scrambled Sobol sample of the bounds
+   (8 points a parameter, rounded up to a power of 2), in one batch; further rounds, each with a
+   sample as large again and fresh starts, while the misfit stays above the record's noise.
+2. Bounded least squares (`scipy.optimize.least_squares`, trust-region reflective) on the record's
+   residual, from the `STARTS` best points of the global stage, over the unit cube of `Space`
+   (logarithmic for positive bounds). The Jacobian's columns are forward differences run as one
+   batch, so they spread over the evaluator's processes or workers.
+3. The uncertainty at the optimum: the Jacobian by central differences, the residual's variance
+   s² = Σr²/(m − n), covariance s²(JᵀJ)⁻¹ mapped from the cube to the parameters, standard errors,
+   the correlation matrix and 95% confidence bounds (Student's t; on the logarithmic scale for a
+   logarithmic parameter, so they stay positive).
+4. The grid: every run is on one grid chosen by the tolerance machinery (`evaluate.study_grid`);
+   the fit is repeated on a grid twice as fine, from its optimum, until the values move by less
+   than `GRID_SHARE` of their standard errors, so that the grid's error is a small part of the
+   answer's uncertainty.
+
+The answer says, in `warnings`, when the fit is not unique: parameters strongly correlated, one at
+a bound, one the record does not determine, or starts that ended apart at the same misfit.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+import time
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field
+from scipy.optimize import least_squares
+from scipy.stats import qmc, t as student
+
+from .case import Case, CaseError, FieldError, validated
+from .errors import Cancelled
+from .evaluate import Batch, Evaluator, Space, check_grid, evaluate_batch, evaluator_for, study_grid
+from .grid import first_cells
+from .limits import Limits
+from .record import Record
+from .result import CancelCheck, ProgressCallback
+
+POINTS_PER_PARAMETER = 8
+STARTS = 3  # least-squares starts a round, from the global stage's best points not yet tried
+ROUNDS = 3  # each with a global sample twice as large, until the misfit is the record's noise
+MISFIT_RATIO = 1.25  # a misfit within this × the record's noise: the model reproduces the record
+MAX_RUNS_PER_START = 60  # model runs a start may use (its Jacobians' included)
+STEP = 1e-4  # finite-difference step on the unit cube
+CONFIDENCE = 0.95
+GRID_SHARE = 1.0 / 3.0  # of a standard error: how far a finer grid may move the values
+MAX_REFINEMENTS = 3
+UNITS_FACTOR = 30.0  # a record this far above or below every model's peak has the wrong units
+COARSE_TOLERANCE = 0.1  # of the grid of the units check: a peak within tens of percent is enough
+CORRELATED = 0.95  # |correlation| above which two parameters are not told apart
+UNDETERMINED = 0.5  # a 95% interval wider than this share of the bounds (on the unit cube)
+AT_BOUND = 1e-3  # on the unit cube
+SAME_MISFIT = 4.0  # residual variances: starts whose sums of squares differ less fit as well
+
+
+class Calibration(BaseModel):
+    """A case, a measured record, and the parameters to fit with their bounds."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    case: Case
+    record: Record
+    parameters: dict[str, list[float]] = Field(
+        min_length=1, description="dotted field path → [low, high], the bounds of the fit")
+
+
+def parse_calibration(data: dict) -> Calibration:
+    """Validate a calibration given as JSON; `CaseError` names each bad field."""
+    return validated(Calibration, data)
+
+
+class _Problem:
+    """The fit's residual on one grid, each run counted and cancellable."""
+
+    def __init__(self, base: dict, space: Space, record: Record, cells: int, evaluator: Evaluator,
+                 cancelled: CancelCheck | None):
+        self.base, self.space, self.record, self.cells = base, space, record, cells
+        self.evaluator, self.cancelled = evaluator, cancelled
+        self.times = np.asarray(record.time)
+        self.values = np.asarray(record.values)
+        self.scale = float(np.ptp(self.values))
+        self.runs = 0
+        self._cache: dict[bytes, np.ndarray] = {}
+
+    def model(self, units: list[np.ndarray]) -> list[np.ndarray]:
+        """The model's series at the record's instants, per point of the unit cube."""
+        if self.cancelled is not None and self.cancelled():
+            raise Cancelled
+        wanted = [u for u in units if u.tobytes() not in self._cache]
+        trees = [self.space.tree(self.base, self.space.values(u)) for u in wanted]
+        answers = self.evaluator(Batch(
+            cases=trees, cells=self.cells, duration=float(self.times[-1]),
+            series={"quantity": self.record.quantity, "times": self.record.time},
+            quantities=None)) if trees else []
+        self.runs += len(answers)
+        for u, answer in zip(wanted, answers):
+            if "error" in answer:
+                raise CaseError([FieldError(field="parameters", message=(
+                    f"the model fails at {self.describe(u)}: {answer['error']}"))])
+            self._cache[u.tobytes()] = np.asarray(answer["series"])
+        return [self._cache[u.tobytes()] for u in units]
+
+    def describe(self, u: np.ndarray) -> str:
+        return ", ".join(f"{p} = {v:.6g}" for p, v in zip(self.space.paths, self.space.values(u)))
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        """(model − record) over the record's range, at each sample."""
+        return (self.model([u])[0] - self.values) / self.scale
+
+    def jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Forward differences, stepping inward at an upper bound, one batch of runs."""
+        steps = np.where(u + STEP > 1.0, -STEP, STEP)
+        points = [u + np.eye(len(u))[k] * steps[k] for k in range(len(u))]
+        base = self.residual(u)
+        moved = self.model(points)
+        return np.column_stack([((m - self.values) / self.scale - base) / s
+                                for m, s in zip(moved, steps)])
+
+    def central_jacobian(self, u: np.ndarray) -> np.ndarray:
+        """Central differences (one-sided at a bound), one batch of runs: for the covariance."""
+        eye = np.eye(len(u))
+        ahead = [np.minimum(u + STEP * eye[k], 1.0) for k in range(len(u))]
+        behind = [np.maximum(u - STEP * eye[k], 0.0) for k in range(len(u))]
+        series = self.model(ahead + behind)
+        n = len(u)
+        return np.column_stack([(series[k] - series[n + k]) / self.scale / (ahead[k][k] - behind[k][k])
+                                for k in range(n)])
+
+    def solve(self, start: np.ndarray) -> Any:
+        return least_squares(self.residual, start, jac=self.jacobian, bounds=(0.0, 1.0),
+                             method="trf", x_scale="jac", ftol=1e-10, xtol=1e-7, gtol=1e-10,
+                             max_nfev=MAX_RUNS_PER_START // (len(start) + 1))
+
+
+def calibrate(calibration: Calibration | dict, evaluator: Evaluator | None = None,
+              processes: int | None = None, progress: ProgressCallback | None = None,
+              cancelled: CancelCheck | None = None, limits: Limits = Limits()) -> dict:
+    """Fit `calibration.parameters` so that the case reproduces the record (see the module's
+    docstring). `evaluator` runs the batches (default: a pool over `processes`, one a core).
+    Returns the fit as JSON: parameters with standard errors and confidence bounds, correlation,
+    nrmse, evaluations, warnings, the fitted case and the record against the model."""
+    if not isinstance(calibration, Calibration):
+        calibration = parse_calibration(calibration)
+    with evaluator_for(evaluator, processes) as run:
+        return _calibrate(calibration, run, progress, cancelled, limits)
+
+
+def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Space:
+    """Refuse, naming the field, what no fit can use: a record the case cannot produce, a
+    parameter that is not a number of the case or bounds it cannot take, and a record whose peak
+    is `UNITS_FACTOR` or more from the model's at every corner of the bounds (its units are off),
+    from quick runs on a coarse grid. Returns the parameters' space."""
+    case, record = calibration.case, calibration.record
+    record.check_against(case)
+    space = Space.of(calibration.parameters, "parameters")
+    space.check(case, "parameters", limits)
+    base = case.model_dump(mode="json", exclude_none=True)
+    base["outputs"] = record.outputs()
+    corners = [space.tree(base, space.values(np.array(corner, dtype=float)))
+               for corner in itertools.product((0.0, 1.0), repeat=len(space.paths))]
+    coarse = first_cells(case, COARSE_TOLERANCE)
+    check_grid(case, coarse, record.time[-1], limits, field="record.time")
+    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=record.time[-1],
+                                   series={"quantity": record.quantity, "times": record.time},
+                                   quantities=None))
+    peaks = [float(np.max(np.abs(a["series"]))) for a in answers if "series" in a]
+    if peaks:
+        _check_units(record, peaks)
+    return space
+
+
+def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: ProgressCallback | None,
+               cancelled: CancelCheck | None, limits: Limits) -> dict:
+    started = time.monotonic()
+    case, record = calibration.case, calibration.record
+    space = check_calibration(calibration, limits)
+    report = progress or (lambda fraction: None)
+
+    own = space.own(case)
+    base = case.model_dump(mode="json", exclude_none=True)
+    base["outputs"] = record.outputs()
+    own_case = Case.model_validate(space.tree(base, space.values(own)))
+    cells = study_grid(own_case, None, limits)
+    check_grid(own_case, cells, record.time[-1], limits, field="record.time")
+    problem = _Problem(base, space, record, cells, evaluator, cancelled)
+
+    n = len(space.paths)
+    noise = record_noise(record)
+    sobol = qmc.Sobol(n, scramble=True, seed=20261125)
+    points = [own] + list(sobol.random_base2(math.ceil(math.log2(POINTS_PER_PARAMETER * n))))
+    costs: list[float] = []
+    solutions, tried = [], set()
+    for round_ in range(ROUNDS):
+        models = problem.model(points[len(costs):])
+        costs += [float(np.sum(((m - problem.values) / problem.scale) ** 2)) for m in models]
+        fresh = [k for k in np.argsort(costs) if k not in tried][:STARTS]
+        for k in fresh:
+            solutions.append(problem.solve(points[k]))
+            report(0.7 * (1.0 - 0.5 ** (round_ + len(solutions) / (len(fresh) * ROUNDS))))
+        tried.update(fresh)
+        if _nrmse(min(s.cost for s in solutions), record) <= MISFIT_RATIO * noise:
+            break
+        points += list(sobol.random(len(points) - 1))  # as many again: a Sobol sample stays balanced
+    best = min(solutions, key=lambda s: s.cost)
+    fit = _uncertainty(problem, best.x)
+
+    refinements, moved = 0, 0.0
+    while True:
+        finer = _Problem(base, space, record, 2 * problem.cells, evaluator, cancelled)
+        try:
+            check_grid(own_case, finer.cells, record.time[-1], limits, field="record.time")
+        except CaseError:
+            break
+        finer.runs = problem.runs
+        refined = finer.solve(fit["unit"])
+        refined_fit = _uncertainty(finer, refined.x)
+        moved = float(np.max(np.abs(refined.x - fit["unit"]) / np.maximum(refined_fit["unit_error"], 1e-300)))
+        problem, fit, best, refinements = finer, refined_fit, refined, refinements + 1
+        report(0.7 + 0.3 * refinements / MAX_REFINEMENTS)
+        if moved <= GRID_SHARE or refinements >= MAX_REFINEMENTS:
+            break
+
+    warnings = _warnings(space, fit, solutions, problem)
+    if fit["nrmse"] > MISFIT_RATIO * noise:
+        warnings.append(
+            f"the misfit (nrmse {fit['nrmse']:.3g}) is {fit['nrmse'] / max(noise, 1e-300):.3g}× the "
+            f"record's noise ({noise:.3g}, from its sample-to-sample scatter) after {len(solutions)} "
+            "starts: the model does not reproduce the record within its noise (a parameter not "
+            "fitted, something the model lacks, or an optimum the starts did not find)")
+    if moved > GRID_SHARE:
+        warnings.append(
+            f"the grid is not fine enough for this record: on {problem.cells} cells, twice as fine "
+            f"as the last, the values moved by {moved:.2g} of their standard errors (more than "
+            f"{GRID_SHARE:.2g}); the uncertainty does not include the grid's error")
+    fitted = case.model_dump(mode="json", exclude_none=True)
+    values = space.values(fit["unit"])
+    fitted = space.tree(fitted, values)
+    model = problem.model([fit["unit"]])[0]
+    report(1.0)
+    return {
+        "parameters": {path: {"value": float(v), "standard_error": _finite(se), "low": _finite(lo),
+                              "high": _finite(hi)}
+                       for path, v, se, lo, hi in zip(space.paths, values, fit["standard_error"],
+                                                      fit["low"], fit["high"])},
+        "correlation": fit["correlation"],
+        "nrmse": fit["nrmse"],
+        "evaluations": problem.runs,
+        "warnings": warnings,
+        "confidence": CONFIDENCE,
+        "noise": noise,
+        "case": fitted,
+        "record": {"quantity": record.quantity, "x": record.x, "unit": record.unit},
+        "series": {"time": record.time, "record": record.values, "model": model.tolist()},
+        "grid": {"cells": problem.cells, "refinements": refinements, "moved": moved},
+        "starts": [{"values": dict(zip(space.paths, space.values(s.x).tolist())),
+                    "nrmse": _nrmse(s.cost, record), "stopped": s.message}
+                   for s in solutions],
+        "seconds": time.monotonic() - started,
+    }
+
+
+def _finite(value: float) -> float | None:
+    """A number for JSON; None for an infinite one (a parameter the record does not determine)."""
+    return float(value) if math.isfinite(value) else None
+
+
+def _nrmse(cost: float, record: Record) -> float:
+    """The normalised RMS misfit of a least-squares cost (half the sum of squared residuals)."""
+    return math.sqrt(2.0 * cost / len(record.time))
+
+
+def record_noise(record: Record) -> float:
+    """The record's noise over its range, from the scatter of its second differences (robust: a
+    median), which a pulse sampled finely enough hardly has: the least misfit a fit can reach."""
+    values = np.asarray(record.values)
+    second = np.diff(values, 2)
+    scatter = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
+    return scatter / float(np.ptp(values))
+
+
+def _check_units(record: Record, peaks: list[float]) -> None:
+    peak = float(np.max(np.abs(record.values)))
+    low, high = min(peaks), max(peaks)
+    if peak > UNITS_FACTOR * high or peak < low / UNITS_FACTOR:
+        ratio = peak / high if peak > high else peak / low
+        raise CaseError([FieldError(field="record.values", message=(
+            f"the record's peak |{record.quantity}| is {peak:.4g} {record.unit}, {ratio:.3g}× the "
+            f"model's ({low:.4g} to {high:.4g} {record.unit} at the bounds' corners): give the record in "
+            f"SI units ({record.unit}); a factor near 1000 is a unit off by a prefix (kN, MPa, mm/s)"))])
+
+
+def _uncertainty(problem: _Problem, u: np.ndarray) -> dict:
+    """Standard errors, correlation and confidence bounds at the optimum `u` of the cube."""
+    space = problem.space
+    residual = problem.residual(u)
+    jac = problem.central_jacobian(u)
+    m, n = jac.shape
+    dof = max(m - n, 1)
+    variance = float(residual @ residual) / dof
+    # On the Jacobian's range only: a parameter with a part in its null space does not change the
+    # model at the record's instants, and its error is infinite, not the pseudo-inverse's 0.
+    _, singular_values, vt = np.linalg.svd(jac, full_matrices=False)
+    rank = int(np.sum(singular_values > 1e-8 * max(singular_values[0], 1e-300)))
+    null = vt[rank:]
+    undetermined = np.linalg.norm(null, axis=0) > 1e-3 if rank < n else np.zeros(n, bool)
+    inverse = (vt[:rank].T / singular_values[:rank] ** 2) @ vt[:rank]
+    cov_unit = variance * inverse
+    unit_error = np.where(undetermined, np.inf, np.sqrt(np.maximum(np.diag(cov_unit), 0.0)))
+    slope = space.slope(u)
+    standard_error = unit_error * np.abs(slope)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        correlation = cov_unit / np.outer(unit_error, unit_error)
+    correlation = np.where(np.isfinite(correlation), np.clip(correlation, -1.0, 1.0), 0.0)
+    np.fill_diagonal(correlation, 1.0)
+    spread = student.ppf(0.5 + CONFIDENCE / 2.0, dof) * unit_error
+    values = space.values(u)
+    # On the cube (logarithmic for a positive parameter), then back: bounds that can leave [low,
+    # high], since they say what the record allows, not what the fit was allowed.
+    ratio = np.where(space.logarithmic, space.high / np.where(space.logarithmic, space.low, 1.0), 1.0)
+    with np.errstate(over="ignore"):
+        low = np.where(space.logarithmic, values * ratio ** -spread, values - spread * (space.high - space.low))
+        high = np.where(space.logarithmic, values * ratio ** spread, values + spread * (space.high - space.low))
+    low, high = np.where(undetermined, -np.inf, low), np.where(undetermined, np.inf, high)
+    return {"unit": u, "unit_error": unit_error, "standard_error": standard_error, "low": low,
+            "high": high, "correlation": correlation.tolist(),
+            "nrmse": math.sqrt(float(residual @ residual) / m), "spread": spread, "variance": variance,
+            "undetermined": undetermined}
+
+
+def _warnings(space: Space, fit: dict, solutions: list, problem: _Problem) -> list[str]:
+    """Why the fit may not be unique, in words, naming the parameters."""
+    warnings = []
+    paths, u = space.paths, fit["unit"]
+    corr = np.asarray(fit["correlation"])
+    for i in range(len(paths)):
+        for j in range(i + 1, len(paths)):
+            if abs(corr[i, j]) >= CORRELATED:
+                warnings.append(
+                    f"{paths[i]} and {paths[j]} are strongly correlated ({corr[i, j]:+.3f}): the "
+                    "record does not tell them apart, and other pairs of values fit it as well; the "
+                    "fit is not unique")
+    values = space.values(u)
+    for k, path in enumerate(paths):
+        if u[k] <= AT_BOUND or u[k] >= 1.0 - AT_BOUND:
+            side, bound = ("lower", space.low[k]) if u[k] <= AT_BOUND else ("upper", space.high[k])
+            warnings.append(f"{path} ended at its {side} bound ({bound:.6g}): the best fit may lie "
+                            "beyond it; widen the bounds or fix the parameter")
+        elif fit["undetermined"][k]:
+            warnings.append(f"{path} is not determined by the record: changing it does not change the "
+                            "model at the record's instants; the fit is not unique")
+        elif 2.0 * fit["spread"][k] >= UNDETERMINED:
+            warnings.append(
+                f"{path} is poorly determined by the record: its {CONFIDENCE:.0%} interval "
+                f"[{fit['low'][k]:.4g}, {fit['high'][k]:.4g}] around {values[k]:.4g} spans more than "
+                f"{UNDETERMINED:.0%} of the bounds' range (on their scale); the fit is not unique")
+    # Another start as good within the noise (its sum of squares within `SAME_MISFIT` residual
+    # variances of the best), yet over three standard errors away: no single basin has both.
+    # The starts ran on the first grid: they are compared with the best of them, not with the fit.
+    best = min(solutions, key=lambda s: s.cost)
+    error = np.maximum(fit["unit_error"], 1e-12)
+    apart = [s for s in solutions if 2.0 * (s.cost - best.cost) <= SAME_MISFIT * fit["variance"]
+             and np.any(np.abs(s.x - best.x) > 3.0 * error)]
+    if apart:
+        warnings.append(
+            "starts ended at different values with the same misfit ("
+            + problem.describe(apart[0].x) + " against " + problem.describe(best.x)
+            + "): the record has more than one best fit; the fit is not unique")
+    return warnings

@@ -1,0 +1,225 @@
+"""Many runs of one case with a few fields changed: what fits and optimisations are made of.
+
+`Space` is the fields varied (dotted paths) and their bounds, mapped onto the unit cube: a field
+whose bounds are both positive on a logarithmic scale, so that six decades of a stiffness are as
+well posed as one, any other linearly. Its cases are validated at every corner before anything
+runs, each refusal naming the path and bound it came from.
+
+Every run of a study is on one grid (`study_grid`), chosen by the tolerance machinery for the base
+case: the runs' answers are then smooth functions of the fields, which finite differences and
+least squares need (a grid chosen anew for each run would jump with it). The study checks its
+answer on a finer grid (fits) or under the tolerance (optimisations).
+
+A batch of runs is plain JSON (`Batch`: cases, the grid, what to read from each), so that it runs
+in this process, in a pool over every core (`LocalEvaluator`) or on the service's workers alike:
+an evaluator maps `evaluate_batch` over batches.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+import os
+import time
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass
+from contextlib import contextmanager
+from typing import Any, Callable, Iterable, Iterator, TypedDict
+
+import numpy as np
+
+from .adaptive import solve_to_tolerance
+from .case import Case, CaseError, FieldError, Outputs, parse_case
+from .controller import simulate_rod
+from .errors import NumericalFailure
+from .grid import DEFAULT_TOLERANCE, explicit_numerics
+from .limits import Limits, check_limits
+from .paths import quantity, set_field, value_at
+from .record import series
+from .sweep import Sweep, variants
+
+
+class Batch(TypedDict):
+    """Runs to make: `cases` (case JSON), each on `cells` cells (explicit, Courant 1) over
+    `duration` s, read for `series` ({quantity, times}) or `quantities` (summary paths)."""
+
+    cases: list[dict]
+    cells: int
+    duration: float
+    series: dict | None
+    quantities: list[str] | None
+
+
+# An evaluator runs a batch and returns per case {"series": [...]}, {"quantities": {...}} or
+# {"error": why}, in order. It may split the batch and run its parts anywhere.
+Evaluator = Callable[[Batch], list[dict]]
+
+
+def evaluate_batch(batch: Batch) -> list[dict]:
+    """Run every case of `batch` on its grid; per case what it asks, or why the run failed."""
+    return [_evaluate(tree, batch) for tree in batch["cases"]]
+
+
+def _evaluate(tree: dict, batch: Batch) -> dict:
+    try:
+        case = parse_case(tree)
+        case = case.model_copy(update={"numerics": case.numerics.model_copy(
+            update={"duration": batch["duration"]})})
+        result = simulate_rod(case, numerics=explicit_numerics(case, batch["cells"]))
+    except (CaseError, NumericalFailure) as error:
+        return {"error": str(error)}
+    if batch["series"] is not None:
+        wanted = batch["series"]
+        values = series(wanted["quantity"], result.history, result.probe_stress,
+                        np.asarray(wanted["times"]))
+        return {"series": values.tolist()}
+    return {"quantities": {path: quantity(result.summary, path) for path in batch["quantities"]}}
+
+
+class LocalEvaluator:
+    """Batches over `processes` processes on this machine (default: one a core), as a context
+    manager that closes its pool. Runs of a few milliseconds cost less here than the pipe to a
+    pool: batches run in this process until one shows runs of `POOL_SECONDS` or more."""
+
+    POOL_SECONDS = 0.02
+
+    def __init__(self, processes: int | None = None):
+        self.processes = processes or os.cpu_count() or 1
+        self.pool: ProcessPoolExecutor | None = None
+        self.run_seconds = 0.0
+
+    def __enter__(self) -> "LocalEvaluator":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        if self.pool is not None:
+            self.pool.shutdown(cancel_futures=True)
+
+    def __call__(self, batch: Batch) -> list[dict]:
+        if self.processes == 1 or len(batch["cases"]) == 1 or self.run_seconds < self.POOL_SECONDS:
+            started = time.perf_counter()
+            answers = evaluate_batch(batch)
+            per_run = (time.perf_counter() - started) / max(len(answers), 1)
+            self.run_seconds = max(self.run_seconds, per_run)
+            return answers
+        if self.pool is None:
+            self.pool = ProcessPoolExecutor(self.processes)
+        parts = [Batch(batch, cases=cases) for cases in split(batch["cases"], self.processes)]
+        return [answer for answers in self.pool.map(evaluate_batch, parts) for answer in answers]
+
+
+@contextmanager
+def evaluator_for(evaluator: Evaluator | None, processes: int | None) -> Iterator[Evaluator]:
+    """`evaluator`, or else a `LocalEvaluator` over `processes`, closed afterwards."""
+    if evaluator is not None:
+        yield evaluator
+        return
+    with LocalEvaluator(processes) as local:
+        yield local
+
+
+def split(cases: list[dict], pieces: int) -> list[list[dict]]:
+    """`cases` in at most `pieces` runs of consecutive cases, as even as can be."""
+    if not cases:
+        return []
+    pieces = max(1, min(pieces, len(cases)))
+    size = math.ceil(len(cases) / pieces)
+    return [cases[i:i + size] for i in range(0, len(cases), size)]
+
+
+@dataclass(frozen=True)
+class Space:
+    """The fields varied (`paths`) between `low` and `high`, and the unit cube they map onto."""
+
+    paths: tuple[str, ...]
+    low: np.ndarray
+    high: np.ndarray
+    logarithmic: np.ndarray  # per field: both bounds > 0
+
+    @classmethod
+    def of(cls, bounds: dict[str, Any], field: str) -> "Space":
+        """The space of `bounds` ({path: [low, high]}); `CaseError` names a bad pair as
+        `field[path]`."""
+        errors = []
+        for path, pair in bounds.items():
+            if (not isinstance(pair, (list, tuple)) or len(pair) != 2
+                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in pair)
+                    or not all(math.isfinite(v) for v in pair)):
+                errors.append(FieldError(field=f"{field}[{path!r}]",
+                                         message="must be [low, high]: two finite numbers"))
+            elif not pair[0] < pair[1]:
+                errors.append(FieldError(field=f"{field}[{path!r}]",
+                                         message=f"must have low < high, not [{pair[0]:g}, {pair[1]:g}]"))
+        if not bounds:
+            errors.append(FieldError(field=field, message="give at least one field and its bounds"))
+        if errors:
+            raise CaseError(errors)
+        low = np.array([float(p[0]) for p in bounds.values()])
+        high = np.array([float(p[1]) for p in bounds.values()])
+        return cls(tuple(bounds), low, high, low > 0.0)
+
+    def values(self, unit: np.ndarray) -> np.ndarray:
+        """The fields' values at a point of the unit cube."""
+        u = np.clip(unit, 0.0, 1.0)
+        log = self.low * (self.high / np.where(self.logarithmic, self.low, 1.0)) ** u
+        return np.where(self.logarithmic, log, self.low + (self.high - self.low) * u)
+
+    def unit(self, values: np.ndarray) -> np.ndarray:
+        """The point of the unit cube of the fields' values."""
+        ratio = np.where(self.logarithmic, self.high / np.where(self.logarithmic, self.low, 1.0), 2.0)
+        log = np.log(np.maximum(values, 1e-300) / np.where(self.logarithmic, self.low, 1.0)) / np.log(ratio)
+        return np.where(self.logarithmic, log, (values - self.low) / (self.high - self.low))
+
+    def slope(self, unit: np.ndarray) -> np.ndarray:
+        """d(value)/d(unit) per field: the chain rule from the cube to the fields."""
+        values = self.values(unit)
+        ratio = np.where(self.logarithmic, self.high / np.where(self.logarithmic, self.low, 1.0), 1.0)
+        return np.where(self.logarithmic, values * np.log(ratio), self.high - self.low)
+
+    def own(self, case: Case) -> np.ndarray:
+        """The point of the unit cube of the case's own values (clipped to the bounds; the
+        bounds' middle, on their scale, for a field the case leaves out)."""
+        tree = case.model_dump(mode="json")
+        found = [value_at(tree, path) for path in self.paths]
+        middle = self.values(np.full(len(self.paths), 0.5))
+        values = np.array([v if isinstance(v, float) else m for v, m in zip(found, middle)])
+        return self.unit(np.clip(values, self.low, self.high))
+
+    def tree(self, base: dict, values: Iterable[float]) -> dict:
+        """The case JSON `base` with the fields set to `values`."""
+        tree = copy.deepcopy(base)
+        for path, value in zip(self.paths, values):
+            set_field(tree, path, float(value))
+        return tree
+
+    def check(self, case: Case, field: str, limits: Limits) -> None:
+        """Refuse a corner of the bounds the case cannot take (naming `field[path][0 or 1]`), and
+        a field that is not a continuous number of the case, before any run."""
+        corners = Sweep(case=case, parameters={p: [float(lo), float(hi)] for p, lo, hi
+                                               in zip(self.paths, self.low, self.high)})
+        _, corner = variants(corners, limits=limits, field=field)[0]
+        tree = corner.model_dump(mode="json", exclude_none=True)
+        errors = [FieldError(field=f"{field}[{path!r}]", message=(
+                      f"is {value_at(tree, path)!r} in the case, not a continuous number: only such "
+                      "fields can vary"))
+                  for path in self.paths if not isinstance(value_at(tree, path), float)]
+        if errors:
+            raise CaseError(errors)
+
+
+def study_grid(case: Case, tolerance: float | None, limits: Limits) -> int:
+    """The cells the tolerance machinery chooses for `case` (its own tolerance, else `tolerance`,
+    else the default): the one grid every run of a study uses."""
+    tol = case.numerics.tolerance or tolerance or DEFAULT_TOLERANCE
+    plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
+    return solve_to_tolerance(plain, tol, limits=limits).numerics.cells
+
+
+def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: str) -> None:
+    """Refuse, naming `field`, a study whose runs would exceed the limits."""
+    short = case.model_copy(update={"numerics": case.numerics.model_copy(update={"duration": duration})})
+    try:
+        check_limits(short, explicit_numerics(short, cells), limits)
+    except CaseError as error:
+        raise CaseError([FieldError(field=field, message=f"a run on the study's grid of {cells} cells "
+                                                         f"is beyond the limits: {error}")]) from None
