@@ -11,13 +11,14 @@ from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse
 
 from percussim.worker.settings import Settings, settings as env_settings
-from percussim.worker.store import WorkerRegistry
+from percussim.worker.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
 
 from . import errors, page, presets
 from .auth import authenticate
 from .jobs import jobs_router
 from .limits import BodySizeLimit
 from .queue import JobQueue
+from .studies import studies_router
 from .sweeps import sweeps_router
 
 READY_WITHIN = 15.0  # seconds: three missed worker heartbeats (every 5 s) and a worker is gone
@@ -44,6 +45,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     keyed = [Depends(authenticate(settings))]
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
     app.include_router(sweeps_router(settings, queue), dependencies=keyed)
+    for kind in (CALIBRATION, OPTIMIZATION):
+        app.include_router(studies_router(settings, queue, kind), dependencies=keyed)
     app.include_router(presets.router, dependencies=keyed)
     app.include_router(page.router)
 

@@ -67,7 +67,7 @@ def _view(request: Request, record: dict) -> dict:
     }}
 
 
-def _not_ready(record: dict, what: str) -> HTTPException:
+def not_ready_error(record: dict, what: str) -> HTTPException:
     """409 naming the job's status (and its error if it failed)."""
     status = record["status"]
     if status == FAILED:
@@ -166,7 +166,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         jobs = store(request)
         record = jobs.get(job_id)
         if record["status"] != SUCCEEDED:
-            raise _not_ready(record, "summary")
+            raise not_ready_error(record, "summary")
         return jobs.summary(job_id)
 
     @router.get("/{job_id}/result.h5", response_class=FileResponse, responses=not_found | not_ready | {
@@ -176,7 +176,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         jobs = store(request)
         record = jobs.get(job_id)
         if record["status"] != SUCCEEDED:
-            raise _not_ready(record, "result")
+            raise not_ready_error(record, "result")
         return FileResponse(jobs.result_path(job_id), media_type="application/x-hdf5",
                             filename=_download_name(record))
 
@@ -187,7 +187,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         jobs = store(request)
         record = jobs.get(job_id)
         if record["status"] != SUCCEEDED:
-            raise _not_ready(record, "plots")
+            raise not_ready_error(record, "plots")
         reasons = problems(jobs.result_path(job_id))
         return {"plots": [{
             "name": name, "title": title, "available": reasons[name] is None, "reason": reasons[name],
@@ -219,7 +219,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         if times is not None and name != "stress_along":
             raise CaseError([FieldError(field="query.times", message="only the stress_along plot takes times")])
         if record["status"] != SUCCEEDED:
-            raise _not_ready(record, "plots")
+            raise not_ready_error(record, "plots")
         kept, result = jobs.plot_path(job_id, name, fmt), jobs.result_path(job_id)
         try:
             if times is not None:

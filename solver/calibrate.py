@@ -27,22 +27,20 @@ a bound, one the record does not determine, or starts that ended apart at the sa
 
 from __future__ import annotations
 
-import itertools
 import math
 import time
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field
 from scipy.optimize import least_squares
 from scipy.stats import qmc, t as student
 
-from .case import Case, CaseError, FieldError, validated
+from .case import Case, CaseError, FieldError
 from .errors import Cancelled
-from .evaluate import Batch, Evaluator, Space, check_grid, evaluate_batch, evaluator_for, study_grid
-from .grid import first_cells
+from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
 from .limits import Limits
 from .record import Record
+from .study import Calibration, check_calibration, parse_calibration
 from .result import CancelCheck, ProgressCallback
 
 POINTS_PER_PARAMETER = 8
@@ -54,28 +52,10 @@ STEP = 1e-4  # finite-difference step on the unit cube
 CONFIDENCE = 0.95
 GRID_SHARE = 1.0 / 3.0  # of a standard error: how far a finer grid may move the values
 MAX_REFINEMENTS = 3
-UNITS_FACTOR = 30.0  # a record this far above or below every model's peak has the wrong units
-COARSE_TOLERANCE = 0.1  # of the grid of the units check: a peak within tens of percent is enough
 CORRELATED = 0.95  # |correlation| above which two parameters are not told apart
 UNDETERMINED = 0.5  # a 95% interval wider than this share of the bounds (on the unit cube)
 AT_BOUND = 1e-3  # on the unit cube
 SAME_MISFIT = 4.0  # residual variances: starts whose sums of squares differ less fit as well
-
-
-class Calibration(BaseModel):
-    """A case, a measured record, and the parameters to fit with their bounds."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    case: Case
-    record: Record
-    parameters: dict[str, list[float]] = Field(
-        min_length=1, description="dotted field path → [low, high], the bounds of the fit")
-
-
-def parse_calibration(data: dict) -> Calibration:
-    """Validate a calibration given as JSON; `CaseError` names each bad field."""
-    return validated(Calibration, data)
 
 
 class _Problem:
@@ -152,30 +132,6 @@ def calibrate(calibration: Calibration | dict, evaluator: Evaluator | None = Non
         calibration = parse_calibration(calibration)
     with evaluator_for(evaluator, processes) as run:
         return _calibrate(calibration, run, progress, cancelled, limits)
-
-
-def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Space:
-    """Refuse, naming the field, what no fit can use: a record the case cannot produce, a
-    parameter that is not a number of the case or bounds it cannot take, and a record whose peak
-    is `UNITS_FACTOR` or more from the model's at every corner of the bounds (its units are off),
-    from quick runs on a coarse grid. Returns the parameters' space."""
-    case, record = calibration.case, calibration.record
-    record.check_against(case)
-    space = Space.of(calibration.parameters, "parameters")
-    space.check(case, "parameters", limits)
-    base = case.model_dump(mode="json", exclude_none=True)
-    base["outputs"] = record.outputs()
-    corners = [space.tree(base, space.values(np.array(corner, dtype=float)))
-               for corner in itertools.product((0.0, 1.0), repeat=len(space.paths))]
-    coarse = first_cells(case, COARSE_TOLERANCE)
-    check_grid(case, coarse, record.time[-1], limits, field="record.time")
-    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=record.time[-1],
-                                   series={"quantity": record.quantity, "times": record.time},
-                                   quantities=None))
-    peaks = [float(np.max(np.abs(a["series"]))) for a in answers if "series" in a]
-    if peaks:
-        _check_units(record, peaks)
-    return space
 
 
 def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: ProgressCallback | None,
@@ -285,17 +241,6 @@ def record_noise(record: Record) -> float:
     second = np.diff(values, 2)
     scatter = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
     return scatter / float(np.ptp(values))
-
-
-def _check_units(record: Record, peaks: list[float]) -> None:
-    peak = float(np.max(np.abs(record.values)))
-    low, high = min(peaks), max(peaks)
-    if peak > UNITS_FACTOR * high or peak < low / UNITS_FACTOR:
-        ratio = peak / high if peak > high else peak / low
-        raise CaseError([FieldError(field="record.values", message=(
-            f"the record's peak |{record.quantity}| is {peak:.4g} {record.unit}, {ratio:.3g}× the "
-            f"model's ({low:.4g} to {high:.4g} {record.unit} at the bounds' corners): give the record in "
-            f"SI units ({record.unit}); a factor near 1000 is a unit off by a prefix (kN, MPa, mm/s)"))])
 
 
 def _uncertainty(problem: _Problem, u: np.ndarray) -> dict:

@@ -28,9 +28,7 @@ from typing import Any, Callable, Iterable, Iterator, TypedDict
 
 import numpy as np
 
-from .adaptive import solve_to_tolerance
 from .case import Case, CaseError, FieldError, Outputs, parse_case
-from .controller import simulate_rod
 from .errors import NumericalFailure
 from .grid import DEFAULT_TOLERANCE, explicit_numerics
 from .limits import Limits, check_limits
@@ -61,6 +59,8 @@ def evaluate_batch(batch: Batch) -> list[dict]:
 
 
 def _evaluate(tree: dict, batch: Batch) -> dict:
+    from .controller import simulate_rod  # the kernel, loaded when a run needs it
+
     try:
         case = parse_case(tree)
         case = case.model_copy(update={"numerics": case.numerics.model_copy(
@@ -78,10 +78,11 @@ def _evaluate(tree: dict, batch: Batch) -> dict:
 
 class LocalEvaluator:
     """Batches over `processes` processes on this machine (default: one a core), as a context
-    manager that closes its pool. Runs of a few milliseconds cost less here than the pipe to a
-    pool: batches run in this process until one shows runs of `POOL_SECONDS` or more."""
+    manager that closes its pool. A batch of a few milliseconds costs less here than the pipe to
+    a pool: one runs in this process unless its runs, at the longest run seen, would take
+    `SPREAD_SECONDS` or more."""
 
-    POOL_SECONDS = 0.02
+    SPREAD_SECONDS = 0.1
 
     def __init__(self, processes: int | None = None):
         self.processes = processes or os.cpu_count() or 1
@@ -95,8 +96,13 @@ class LocalEvaluator:
         if self.pool is not None:
             self.pool.shutdown(cancel_futures=True)
 
+    def worth_spreading(self, batch: Batch) -> bool:
+        """Whether `batch` is long enough to spread: runs that would take `SPREAD_SECONDS` here
+        (the first batch runs here, to learn what a run costs)."""
+        return len(batch["cases"]) > 1 and len(batch["cases"]) * self.run_seconds >= self.SPREAD_SECONDS
+
     def __call__(self, batch: Batch) -> list[dict]:
-        if self.processes == 1 or len(batch["cases"]) == 1 or self.run_seconds < self.POOL_SECONDS:
+        if self.processes == 1 or not self.worth_spreading(batch):
             started = time.perf_counter()
             answers = evaluate_batch(batch)
             per_run = (time.perf_counter() - started) / max(len(answers), 1)
@@ -210,6 +216,8 @@ class Space:
 def study_grid(case: Case, tolerance: float | None, limits: Limits) -> int:
     """The cells the tolerance machinery chooses for `case` (its own tolerance, else `tolerance`,
     else the default): the one grid every run of a study uses."""
+    from .adaptive import solve_to_tolerance  # the kernel, loaded when a run needs it
+
     tol = case.numerics.tolerance or tolerance or DEFAULT_TOLERANCE
     plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
     return solve_to_tolerance(plain, tol, limits=limits).numerics.cells

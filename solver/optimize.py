@@ -22,88 +22,22 @@ import math
 import time
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
 from .adaptive import solve_to_tolerance
-from .case import Case, CaseError, FieldError, field_error, validated
+from .case import Case, CaseError, FieldError
 from .errors import Cancelled
 from .evaluate import Batch, Evaluator, Space, evaluator_for, study_grid
 from .grid import DEFAULT_TOLERANCE
 from .limits import Limits
 from .paths import quantity
 from .result import CancelCheck, ProgressCallback
+from .study import Optimization, check_optimization, parse_optimization
 
 POPULATION = 10  # per variable: differential evolution's population
 MIN_POPULATION = 8
 STEP = 1e-5  # finite-difference step on the unit cube, for the local stage
 CHECKED = 3  # designs checked under the tolerance before giving up on the limits
-EXAMPLE_QUANTITIES = ("energy.transfer_efficiency", "max_compressive_stress", "peak_contact_force",
-                      "energy.to_medium", "medium_penetration.permanent")
-
-
-class Objective(BaseModel):
-    """The summary quantity to maximise or to minimise (one of the two)."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    maximize: str | None = None
-    minimize: str | None = None
-
-    @model_validator(mode="after")
-    def _one(self) -> "Objective":
-        if (self.maximize is None) == (self.minimize is None):
-            raise field_error("Objective", ("maximize",),
-                              "give one of maximize or minimize, with a summary quantity such as "
-                              "energy.transfer_efficiency", None)
-        return self
-
-    @property
-    def quantity(self) -> str:
-        return self.maximize or self.minimize
-
-    @property
-    def sign(self) -> float:
-        """+1 to minimise, −1 to maximise: what the optimiser minimises is sign × quantity."""
-        return -1.0 if self.maximize is not None else 1.0
-
-
-class Bound(BaseModel):
-    """A limit on a summary quantity: at most `max`, at least `min`, or both."""
-
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
-
-    max: float | None = None
-    min: float | None = None
-
-    @model_validator(mode="after")
-    def _some(self) -> "Bound":
-        if self.max is None and self.min is None:
-            raise field_error("Bound", ("max",), "give max, min or both", None)
-        if self.max is not None and self.min is not None and self.min > self.max:
-            raise field_error("Bound", ("min",), f"must be ≤ max = {self.max:g}", self.min)
-        return self
-
-
-class Optimization(BaseModel):
-    """A case, the fields to vary with their bounds, the objective and the limits."""
-
-    model_config = ConfigDict(extra="forbid")
-
-    case: Case
-    variables: dict[str, list[float]] = Field(
-        min_length=1, description="dotted field path → [low, high]")
-    objective: Objective
-    limits: dict[str, Bound] = Field(default_factory=dict,
-                                     description="summary quantity → its {max} and/or {min}")
-    max_evaluations: int = Field(default=1000, ge=10, le=100_000,
-                                 description="the budget of model runs of the global stage")
-    seed: int = Field(default=0, ge=0, description="of the global stage's random choices")
-
-
-def parse_optimization(data: dict) -> Optimization:
-    """Validate an optimisation given as JSON; `CaseError` names each bad field."""
-    return validated(Optimization, data)
 
 
 class _Study:
@@ -198,8 +132,7 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
               cancelled: CancelCheck | None, limits: Limits) -> dict:
     started = time.monotonic()
     case = request.case
-    space = Space.of(request.variables, "variables")
-    space.check(case, "variables", limits)
+    space = check_optimization(request, limits)
     report = progress or (lambda fraction: None)
     tol = case.numerics.tolerance or DEFAULT_TOLERANCE
     own = space.own(case)
@@ -263,8 +196,8 @@ def _check_quantities(study: _Study, own: np.ndarray) -> None:
     for name, field in where.items():
         if found.get(name) is None:
             errors.append(FieldError(field=field, message=(
-                f"{name!r} is not a number in the case's summary: give a summary quantity such as "
-                + ", ".join(EXAMPLE_QUANTITIES))))
+                f"{name!r} has no value for this case (a medium's penetration with no medium, the "
+                "blows of a single blow)")))
     if errors:
         raise CaseError(errors)
 

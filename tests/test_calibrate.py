@@ -12,7 +12,8 @@ import numpy as np
 import pytest
 
 from percussim.cli import main
-from percussim.solver.calibrate import calibrate, check_calibration, parse_calibration, record_noise
+from percussim.solver.calibrate import calibrate, record_noise
+from percussim.solver.study import check_calibration, parse_calibration
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.evaluate import Space

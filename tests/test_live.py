@@ -157,3 +157,69 @@ def test_a_job_past_its_time_limit_ends_failed_with_the_reason(redis_url, tmp_pa
         assert (finished - started).total_seconds() < 5  # stopped between chunks, not at the end
     finally:
         s.stop()
+
+
+def test_a_calibration_runs_as_a_job_and_recovers_the_parameters(stack):
+    """A record made by the σ-scheme on a finer grid with 2% noise: the fit through the service
+    recovers what the solver's own fit does, with its plot; a bad record is refused with 422."""
+    from test_calibrate import TRUE, other_setting_record, start_case
+
+    names = ("contact.stiffness", "medium.stiffness")
+    request = {"case": start_case(names), "record": other_setting_record("stress"),
+               "parameters": {"contact.stiffness": [1e9, 1e15], "medium.stiffness": [1e7, 1e11]}}
+    answer = stack.client.post("/v1/calibrations", json=request)
+    assert answer.status_code == 202, answer.text
+    assert answer.headers["Location"] == answer.json()["links"]["self"]
+    done = stack.wait_status(answer.json()["id"], ("succeeded", "failed"))
+    assert done["status"] == "succeeded", (done, stack.logs())
+    fit = stack.client.get(answer.json()["links"]["self"]).json()["fit"]
+    for name in names:
+        found = fit["parameters"][name]
+        assert abs(found["value"] / TRUE[name] - 1.0) < 0.05
+        assert abs(found["value"] - TRUE[name]) <= 3 * found["standard_error"]
+    assert stack.client.get(answer.json()["links"]["plot_png"]).content[:4] == b"\x89PNG"
+    late = dict(request["record"], time=[t * 1e3 for t in request["record"]["time"]])
+    refused = stack.client.post("/v1/calibrations", json=request | {"record": late})
+    assert refused.status_code == 422
+    assert refused.json()["detail"][0]["field"] == "record.time"
+
+
+def test_an_optimisation_spreads_its_runs_over_the_workers_and_keeps_its_limit(redis_url, tmp_path):
+    """Runs of tens of milliseconds (a 1.5-m rod on thousands of cells) go to the other worker too;
+    the answer keeps the stress limit when checked under the tolerance."""
+    from test_optimize import short_rock_drill
+
+    s = Stack(tmp_path, redis_url, workers=2)
+    try:
+        allowable = 250e6
+        answer = s.client.post("/v1/optimizations", json={
+            "case": short_rock_drill(),
+            "variables": {"striker.length": [0.1, 0.6], "striker.velocity": [5.0, 20.0]},
+            "objective": {"maximize": "energy.to_medium"},
+            "limits": {"max_compressive_stress": {"max": allowable}}, "max_evaluations": 120})
+        assert answer.status_code == 202, answer.text
+        done = s.wait_status(answer.json()["id"], ("succeeded", "failed"), timeout=300)
+        assert done["status"] == "succeeded", (done, s.logs())
+        optimum = s.client.get(answer.json()["links"]["self"]).json()["optimum"]
+        assert optimum["summary"]["max_compressive_stress"]["value"] <= allowable
+        spread = optimum["runs_spread"]
+        print(f"optimisation: {optimum['evaluations']} runs, spread {spread}")
+        assert spread["other_workers"] > 0 and spread["here"] > 0
+        assert s.client.get(answer.json()["links"]["plot_svg"]).text.startswith("<?xml")
+    finally:
+        s.stop()
+
+
+def test_a_running_optimisation_can_be_cancelled(stack):
+    from test_optimize import short_rock_drill
+
+    answer = stack.client.post("/v1/optimizations", json={
+        "case": short_rock_drill(), "variables": {"striker.length": [0.1, 0.6]},
+        "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 5000})
+    assert answer.status_code == 202, answer.text
+    study = answer.json()["links"]["self"]
+    wait_for(lambda: stack.client.get(study).json()["status"] == "running", 60, "the optimisation")
+    assert stack.client.delete(study).status_code == 202
+    done = stack.wait_status(answer.json()["id"], ("cancelled", "succeeded", "failed"))
+    assert done["status"] == "cancelled", done
+    assert stack.client.get(study).json()["optimum"] is None

@@ -12,6 +12,7 @@ from pathlib import Path
 from .settings import Settings
 
 RUN_JOB = "percussim.run_job"  # the job task's name
+EVALUATE_PART = "percussim.evaluate_part"  # a part of a study's batch of runs
 CONNECT_TIMEOUT = 3.0  # seconds: an unreachable broker must not hold a request for long
 
 

@@ -1,7 +1,11 @@
 """The results store: one folder a job under the results folder, readable by any process.
 
-    jobs/<id>/job.json      status, progress, timestamps, error (rewritten atomically)
+    jobs/<id>/job.json      status, progress, timestamps, error, kind (rewritten atomically)
     jobs/<id>/case.json     the case as submitted
+    jobs/<id>/request.json  a calibration's or an optimisation's request (kind 'calibration',
+                            'optimization'; a run's kind is 'run')
+    jobs/<id>/answer.json   their answer, once succeeded
+    jobs/<id>/batches/      their batches of runs while they are spread over the workers
     jobs/<id>/summary.json  the pulse summary, once succeeded
     jobs/<id>/result.h5     the HDF5 result, once succeeded
     jobs/<id>/cancel        present once a cancel was asked for
@@ -26,6 +30,7 @@ from typing import Iterator
 
 QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
 FINISHED = (SUCCEEDED, FAILED, CANCELLED)
+RUN, CALIBRATION, OPTIMIZATION = "run", "calibration", "optimization"  # a job's kind
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
 
@@ -65,15 +70,18 @@ class JobStore:
             raise UnknownJob(job_id)
         return folder
 
-    def create(self, case: dict) -> dict:
-        """A new queued job for `case` (validated JSON); returns its record."""
+    def create(self, case: dict, kind: str = RUN, request: dict | None = None) -> dict:
+        """A new queued job for `case` (validated JSON), of `kind` with its `request` (a
+        calibration's or an optimisation's, which holds the case too); returns its record."""
         job_id = secrets.token_urlsafe(16)  # 22 characters, 128 random bits
         folder = self.jobs / job_id
         folder.mkdir()
         write_atomic(folder / "case.json", json.dumps(case).encode())
-        record = {"id": job_id, "name": case.get("name"), "status": QUEUED, "progress": 0.0,
-                  "created": now(), "started": None, "finished": None, "error": None,
-                  "attempts": 0, "worker": None, "owner": self.owner}
+        if request is not None:
+            write_atomic(folder / "request.json", json.dumps(request).encode())
+        record = {"id": job_id, "name": case.get("name"), "kind": kind, "status": QUEUED,
+                  "progress": 0.0, "created": now(), "started": None, "finished": None,
+                  "error": None, "attempts": 0, "worker": None, "owner": self.owner}
         write_atomic(folder / "job.json", json.dumps(record).encode())
         return record
 
@@ -100,6 +108,19 @@ class JobStore:
     def write_summary(self, job_id: str, summary_json: str) -> None:
         """Store the summary, given as JSON text (the result file's copy: it is encoded once)."""
         write_atomic(self.folder(job_id) / "summary.json", summary_json.encode())
+
+    def request(self, job_id: str) -> dict:
+        return json.loads((self.folder(job_id) / "request.json").read_text())
+
+    def answer(self, job_id: str) -> dict:
+        return json.loads((self.folder(job_id) / "answer.json").read_text())
+
+    def write_answer(self, job_id: str, answer: dict) -> None:
+        write_atomic(self.folder(job_id) / "answer.json", json.dumps(answer).encode())
+
+    def batches(self, job_id: str) -> Path:
+        """Where a study's batches of runs wait for the workers."""
+        return self.folder(job_id) / "batches"
 
     def result_path(self, job_id: str) -> Path:
         return self.folder(job_id) / "result.h5"

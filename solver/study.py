@@ -1,0 +1,189 @@
+"""What a calibration and an optimisation ask (`Calibration`, `Optimization`), and the checks
+made before any of their runs: the fields, the bounds, the record against the case and its units,
+the summary quantities named. Neither SciPy nor the kernel is loaded by importing this module,
+so that the service validates a request as cheaply as a case; the units check runs the model,
+and loads the kernel then."""
+
+from __future__ import annotations
+
+import itertools
+import types
+import typing
+from typing import Any
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict, Field, model_validator
+
+from .case import Case, CaseError, FieldError, field_error, validated
+from .evaluate import Batch, Space, check_grid, evaluate_batch
+from .grid import first_cells
+from .limits import Limits
+from .record import Record
+from .summary import Summary
+
+UNITS_FACTOR = 30.0  # a record this far above or below every model's peak has the wrong units
+COARSE_TOLERANCE = 0.1  # of the grid of the units check: a peak within tens of percent is enough
+EXAMPLE_QUANTITIES = ("energy.transfer_efficiency", "max_compressive_stress", "peak_contact_force",
+                      "energy.to_medium", "medium_penetration.permanent")
+
+
+class Calibration(BaseModel):
+    """A case, a measured record, and the parameters to fit with their bounds."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    case: Case
+    record: Record
+    parameters: dict[str, list[float]] = Field(
+        min_length=1, description="dotted field path → [low, high], the bounds of the fit")
+
+
+def parse_calibration(data: dict) -> Calibration:
+    """Validate a calibration given as JSON; `CaseError` names each bad field."""
+    return validated(Calibration, data)
+
+
+def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Space:
+    """Refuse, naming the field, what no fit can use: a record the case cannot produce, a
+    parameter that is not a number of the case or bounds it cannot take, and a record whose peak
+    is `UNITS_FACTOR` or more from the model's at every corner of the bounds (its units are off),
+    from quick runs on a coarse grid. Returns the parameters' space."""
+    case, record = calibration.case, calibration.record
+    record.check_against(case)
+    space = Space.of(calibration.parameters, "parameters")
+    space.check(case, "parameters", limits)
+    base = case.model_dump(mode="json", exclude_none=True)
+    base["outputs"] = record.outputs()
+    corners = [space.tree(base, space.values(np.array(corner, dtype=float)))
+               for corner in itertools.product((0.0, 1.0), repeat=len(space.paths))]
+    coarse = first_cells(case, COARSE_TOLERANCE)
+    check_grid(case, coarse, record.time[-1], limits, field="record.time")
+    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=record.time[-1],
+                                   series={"quantity": record.quantity, "times": record.time},
+                                   quantities=None))
+    peaks = [float(np.max(np.abs(a["series"]))) for a in answers if "series" in a]
+    if peaks:
+        _check_units(record, peaks)
+    return space
+
+
+def _check_units(record: Record, peaks: list[float]) -> None:
+    peak = float(np.max(np.abs(record.values)))
+    low, high = min(peaks), max(peaks)
+    if peak > UNITS_FACTOR * high or peak < low / UNITS_FACTOR:
+        ratio = peak / high if peak > high else peak / low
+        raise CaseError([FieldError(field="record.values", message=(
+            f"the record's peak |{record.quantity}| is {peak:.4g} {record.unit}, {ratio:.3g}× the "
+            f"model's ({low:.4g} to {high:.4g} {record.unit} at the bounds' corners): give the record in "
+            f"SI units ({record.unit}); a factor near 1000 is a unit off by a prefix (kN, MPa, mm/s)"))])
+
+
+class Objective(BaseModel):
+    """The summary quantity to maximise or to minimise (one of the two)."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    maximize: str | None = None
+    minimize: str | None = None
+
+    @model_validator(mode="after")
+    def _one(self) -> "Objective":
+        if (self.maximize is None) == (self.minimize is None):
+            raise field_error("Objective", ("maximize",),
+                              "give one of maximize or minimize, with a summary quantity such as "
+                              "energy.transfer_efficiency", None)
+        return self
+
+    @property
+    def quantity(self) -> str:
+        return self.maximize or self.minimize
+
+    @property
+    def sign(self) -> float:
+        """+1 to minimise, −1 to maximise: what the optimiser minimises is sign × quantity."""
+        return -1.0 if self.maximize is not None else 1.0
+
+
+class Bound(BaseModel):
+    """A limit on a summary quantity: at most `max`, at least `min`, or both."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+
+    max: float | None = None
+    min: float | None = None
+
+    @model_validator(mode="after")
+    def _some(self) -> "Bound":
+        if self.max is None and self.min is None:
+            raise field_error("Bound", ("max",), "give max, min or both", None)
+        if self.max is not None and self.min is not None and self.min > self.max:
+            raise field_error("Bound", ("min",), f"must be ≤ max = {self.max:g}", self.min)
+        return self
+
+
+class Optimization(BaseModel):
+    """A case, the fields to vary with their bounds, the objective and the limits."""
+
+    model_config = ConfigDict(extra="forbid")
+
+    case: Case
+    variables: dict[str, list[float]] = Field(
+        min_length=1, description="dotted field path → [low, high]")
+    objective: Objective
+    limits: dict[str, Bound] = Field(default_factory=dict,
+                                     description="summary quantity → its {max} and/or {min}")
+    max_evaluations: int = Field(default=1000, ge=10, le=100_000,
+                                 description="the budget of model runs of the global stage")
+    seed: int = Field(default=0, ge=0, description="of the global stage's random choices")
+
+
+def parse_optimization(data: dict) -> Optimization:
+    """Validate an optimisation given as JSON; `CaseError` names each bad field."""
+    return validated(Optimization, data)
+
+
+def _summary_has(path: str) -> bool:
+    """Whether `path` names a number of the pulse summary's schema (a peak by its value; a list's
+    item by its index), without a run."""
+    model: Any = Summary
+    for key in path.split("."):
+        origin = typing.get_origin(model)
+        if origin in (list, typing.Union, types.UnionType):
+            args = [a for a in typing.get_args(model) if a is not type(None)]
+            if origin is list:
+                if not key.lstrip("-").isdigit():
+                    return False
+                model = args[0]
+                continue
+            model = args[0]
+            if typing.get_origin(model) is list:
+                if not key.lstrip("-").isdigit():
+                    return False
+                model = typing.get_args(model)[0]
+                continue
+        if not (isinstance(model, type) and issubclass(model, BaseModel)) or key not in model.model_fields:
+            return False
+        model = model.model_fields[key].annotation
+    args = [a for a in typing.get_args(model) if a is not type(None)] or [model]
+    target = args[0]
+    if isinstance(target, type) and issubclass(target, BaseModel):
+        return "value" in target.model_fields
+    return target in (float, int)
+
+
+def check_optimization(request: Optimization, limits: Limits = Limits()) -> Space:
+    """Refuse, naming the field, variables the case cannot take and quantities the summary does
+    not have, without a run (the service's check before it queues). Returns the variables' space."""
+    space = Space.of(request.variables, "variables")
+    space.check(request.case, "variables", limits)
+    where = {request.objective.quantity: "objective." + ("maximize" if request.objective.maximize else "minimize")}
+    where |= {name: f"limits[{name!r}]" for name in request.limits}
+    errors = [FieldError(field=field, message=(
+                  f"{name!r} is not a number of the pulse summary: give a summary quantity such as "
+                  + ", ".join(EXAMPLE_QUANTITIES)))
+              for name, field in where.items() if not _summary_has(name)]
+    if errors:
+        raise CaseError(errors)
+    return space
+
+
