@@ -36,6 +36,7 @@ from .study import Optimization, check_optimization, parse_optimization
 
 POPULATION = 10  # per variable: differential evolution's population
 MIN_POPULATION = 8
+GLOBAL_SHARE = 0.8  # of the budget of runs: the global stage's; the local stage has the rest
 STEP = 1e-5  # finite-difference step on the unit cube, for the local stage
 CHECKED = 3  # designs checked under the tolerance before giving up on the limits
 
@@ -148,7 +149,7 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
     def generation(intermediate_result) -> bool:
         """Report progress; stop once the budget of runs is spent."""
         report(0.8 * min(1.0, len(study.history) / request.max_evaluations))
-        return len(study.history) >= request.max_evaluations
+        return len(study.history) >= GLOBAL_SHARE * request.max_evaluations
 
     constraints = ([NonlinearConstraint(study.margins_many, 0.0, np.inf)] if request.limits else [])
     found = differential_evolution(
@@ -156,12 +157,16 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
         init="sobol", seed=request.seed, tol=1e-6, atol=0.0, polish=False, vectorized=True,
         updating="deferred", constraints=constraints, callback=generation)
     global_runs = len(study.history)
-    local = _local_stage(study, found.x)
+    local = _local_stage(study, found.x, request.max_evaluations)
     report(0.9)
     best, checked = _check(study, case, tol, limits)
     report(1.0)
-    stopped = f"global stage: {found.message} ({global_runs} runs, {found.nit} generations)"
-    stopped += f"; local stage: {local.message}" if local is not None else ""
+    spent = "its share of the budget of runs was spent"
+    stopped = (f"global stage: {spent if global_runs >= GLOBAL_SHARE * request.max_evaluations else found.message} "
+               f"({global_runs} runs, {found.nit} generations)")
+    if local is not None:
+        local_spent = len(study.history) >= request.max_evaluations
+        stopped += f"; local stage: {'the budget of runs was spent' if local_spent else local.message}"
     answer = {
         "objective": {("maximize" if request.objective.maximize else "minimize"): request.objective.quantity},
         "stopped": stopped,
@@ -202,8 +207,9 @@ def _check_quantities(study: _Study, own: np.ndarray) -> None:
         raise CaseError(errors)
 
 
-def _local_stage(study: _Study, start: np.ndarray):
-    """SLSQP from the global stage's best point, its gradients from batched differences."""
+def _local_stage(study: _Study, start: np.ndarray, budget: int):
+    """SLSQP from the global stage's best point, its gradients from batched differences, until
+    it converges or the runs reach `budget`."""
     memo: dict[bytes, tuple] = {}
 
     def at(u: np.ndarray) -> tuple:
@@ -218,7 +224,13 @@ def _local_stage(study: _Study, start: np.ndarray):
                    if study.request.limits else [])
     return minimize(lambda u: at(u)[0], start, jac=lambda u: at(u)[1], method="SLSQP",
                     bounds=[(0.0, 1.0)] * len(start), constraints=constraints,
-                    options={"maxiter": 30, "ftol": 1e-10})
+                    options={"maxiter": 30, "ftol": 1e-10}, callback=lambda u: _spent(study, budget))
+
+
+def _spent(study: _Study, budget: int) -> None:
+    """Stop the local stage once the runs reach the budget (SciPy ends on StopIteration)."""
+    if len(study.history) >= budget:
+        raise StopIteration
 
 
 def _check(study: _Study, case: Case, tol: float, limits: Limits) -> tuple[tuple | None, list[dict]]:

@@ -133,7 +133,9 @@ class Optimization(BaseModel):
     limits: dict[str, Bound] = Field(default_factory=dict,
                                      description="summary quantity → its {max} and/or {min}")
     max_evaluations: int = Field(default=1000, ge=10, le=100_000,
-                                 description="the budget of model runs of the global stage")
+                                 description="the budget of model runs: 80% for the global stage, the rest "
+                                             "for the local stage (a stage stops at the end of the "
+                                             "generation or iteration that reaches it)")
     seed: int = Field(default=0, ge=0, description="of the global stage's random choices")
 
 
