@@ -453,7 +453,7 @@ def parser() -> argparse.ArgumentParser:
                           help="a limit on a summary quantity (repeat; <= or >=), e.g. "
                                "max_compressive_stress<=250e6")
     optimise.add_argument("--evaluations", type=int, default=1000, metavar="N",
-                          help="the global stage's budget of runs (default 1000)")
+                          help="the budget of model runs, both stages (default 1000)")
     for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
         study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
         study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")

@@ -114,6 +114,14 @@ def cancel(jobs: JobStore, job_id: str) -> dict:
     return record
 
 
+def cancel_unfinished(jobs: JobStore, record: dict, what: str = "job") -> dict:
+    """Cancel the job of `record` (`cancel`), or answer 409 if it has already finished."""
+    if record["status"] in FINISHED:
+        raise HTTPException(status_code=409,
+                            detail=f"{what} {record['id']} has already finished: it is {record['status']}")
+    return cancel(jobs, record["id"])
+
+
 def queue_jobs(jobs: JobStore, queue: JobQueue, job_ids: list[str]) -> None:
     """Publish the jobs; if the broker cannot take them, record why in each and answer 503."""
     error = queue.enqueue_or_fail(jobs, job_ids, "the job could not be queued")
@@ -240,10 +248,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         409: {"model": Problem, "description": "the job has already finished"}})
     def cancel_job(request: Request, job_id: str) -> dict:
         """Cancel a job: a queued one at once, a running one between two chunks of its run."""
-        record = store(request).get(job_id)
-        if record["status"] in FINISHED:
-            raise HTTPException(status_code=409,
-                                detail=f"job {job_id} has already finished: it is {record['status']}")
-        return _view(request, cancel(store(request), job_id))
+        jobs = store(request)
+        return _view(request, cancel_unfinished(jobs, jobs.get(job_id)))
 
     return router

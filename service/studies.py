@@ -8,7 +8,7 @@ here. No `from __future__ import annotations`: FastAPI reads the signatures.
 
 from typing import Annotated, Callable, Literal
 
-from fastapi import APIRouter, Body, HTTPException, Request, Response
+from fastapi import APIRouter, Body, Request, Response
 from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
@@ -17,10 +17,10 @@ from percussim.solver.study import Calibration, Optimization, check_calibration,
 from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.plots import FORMATS
 from percussim.worker.settings import Settings
-from percussim.worker.store import CALIBRATION, FINISHED, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
+from percussim.worker.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
 
 from .errors import FieldErrors, Problem
-from .jobs import not_ready_error, cancel, queue_jobs
+from .jobs import cancel_unfinished, not_ready_error, queue_jobs
 from .queue import JobQueue
 
 
@@ -126,11 +126,7 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     @router.delete("/{study_id}", status_code=202, response_model=Study, name=f"cancel_{kind}",
                    responses=not_found | {409: {"model": Problem, "description": "already finished"}})
     def cancel_study(request: Request, study_id: str) -> dict:
-        record = record_of(request, study_id)
-        if record["status"] in FINISHED:
-            raise HTTPException(status_code=409,
-                                detail=f"{kind} {study_id} has already finished: it is {record['status']}")
-        return view(request, cancel(store(request), study_id))
+        return view(request, cancel_unfinished(store(request), record_of(request, study_id), kind))
 
     cancel_study.__doc__ = f"Cancel the {kind}: a queued one at once, a running one between two batches."
     return router

@@ -92,18 +92,19 @@ class _Problem:
     def describe(self, u: np.ndarray) -> str:
         return ", ".join(f"{p} = {v:.6g}" for p, v in zip(self.space.paths, self.space.values(u)))
 
-    def residual(self, u: np.ndarray) -> np.ndarray:
+    def misfit(self, series: np.ndarray) -> np.ndarray:
         """(model − record) over the record's range, at each sample."""
-        return (self.model([u])[0] - self.values) / self.scale
+        return (series - self.values) / self.scale
+
+    def residual(self, u: np.ndarray) -> np.ndarray:
+        return self.misfit(self.model([u])[0])
 
     def jacobian(self, u: np.ndarray) -> np.ndarray:
         """Forward differences, stepping inward at an upper bound, one batch of runs."""
         steps = np.where(u + STEP > 1.0, -STEP, STEP)
         points = [u + np.eye(len(u))[k] * steps[k] for k in range(len(u))]
-        base = self.residual(u)
-        moved = self.model(points)
-        return np.column_stack([((m - self.values) / self.scale - base) / s
-                                for m, s in zip(moved, steps)])
+        base = self.model([u])[0]
+        return np.column_stack([(m - base) / self.scale / s for m, s in zip(self.model(points), steps)])
 
     def central_jacobian(self, u: np.ndarray) -> np.ndarray:
         """Central differences (one-sided at a bound), one batch of runs: for the covariance."""
@@ -157,7 +158,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
     solutions, tried = [], set()
     for round_ in range(ROUNDS):
         models = problem.model(points[len(costs):])
-        costs += [float(np.sum(((m - problem.values) / problem.scale) ** 2)) for m in models]
+        costs += [float(np.sum(problem.misfit(m) ** 2)) for m in models]
         fresh = [k for k in np.argsort(costs) if k not in tried][:STARTS]
         for k in fresh:
             solutions.append(problem.solve(points[k]))
@@ -180,7 +181,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
         refined = finer.solve(fit["unit"])
         refined_fit = _uncertainty(finer, refined.x)
         moved = float(np.max(np.abs(refined.x - fit["unit"]) / np.maximum(refined_fit["unit_error"], 1e-300)))
-        problem, fit, best, refinements = finer, refined_fit, refined, refinements + 1
+        problem, fit, refinements = finer, refined_fit, refinements + 1
         report(0.7 + 0.3 * refinements / MAX_REFINEMENTS)
         if moved <= GRID_SHARE or refinements >= MAX_REFINEMENTS:
             break
@@ -270,10 +271,10 @@ def _uncertainty(problem: _Problem, u: np.ndarray) -> dict:
     values = space.values(u)
     # On the cube (logarithmic for a positive parameter), then back: bounds that can leave [low,
     # high], since they say what the record allows, not what the fit was allowed.
-    ratio = np.where(space.logarithmic, space.high / np.where(space.logarithmic, space.low, 1.0), 1.0)
+    reach = space.log_span * spread
     with np.errstate(over="ignore"):
-        low = np.where(space.logarithmic, values * ratio ** -spread, values - spread * (space.high - space.low))
-        high = np.where(space.logarithmic, values * ratio ** spread, values + spread * (space.high - space.low))
+        low = np.where(space.logarithmic, values * np.exp(-reach), values - spread * (space.high - space.low))
+        high = np.where(space.logarithmic, values * np.exp(reach), values + spread * (space.high - space.low))
     low, high = np.where(undetermined, -np.inf, low), np.where(undetermined, np.inf, high)
     return {"unit": u, "unit_error": unit_error, "standard_error": standard_error, "low": low,
             "high": high, "correlation": correlation.tolist(),

@@ -164,23 +164,27 @@ class Space:
         high = np.array([float(p[1]) for p in bounds.values()])
         return cls(tuple(bounds), low, high, low > 0.0)
 
+    @property
+    def log_span(self) -> np.ndarray:
+        """ln(high/low) of a logarithmic field (its cube's unit length on the log scale); 1 for a
+        linear one, where it is not used."""
+        return np.log(np.where(self.logarithmic, self.high / np.where(self.logarithmic, self.low, 1.0), np.e))
+
     def values(self, unit: np.ndarray) -> np.ndarray:
         """The fields' values at a point of the unit cube."""
         u = np.clip(unit, 0.0, 1.0)
-        log = self.low * (self.high / np.where(self.logarithmic, self.low, 1.0)) ** u
-        return np.where(self.logarithmic, log, self.low + (self.high - self.low) * u)
+        return np.where(self.logarithmic, self.low * np.exp(self.log_span * u),
+                        self.low + (self.high - self.low) * u)
 
     def unit(self, values: np.ndarray) -> np.ndarray:
         """The point of the unit cube of the fields' values."""
-        ratio = np.where(self.logarithmic, self.high / np.where(self.logarithmic, self.low, 1.0), 2.0)
-        log = np.log(np.maximum(values, 1e-300) / np.where(self.logarithmic, self.low, 1.0)) / np.log(ratio)
+        low = np.where(self.logarithmic, self.low, 1.0)
+        log = np.log(np.maximum(values, 1e-300) / low) / self.log_span
         return np.where(self.logarithmic, log, (values - self.low) / (self.high - self.low))
 
     def slope(self, unit: np.ndarray) -> np.ndarray:
         """d(value)/d(unit) per field: the chain rule from the cube to the fields."""
-        values = self.values(unit)
-        ratio = np.where(self.logarithmic, self.high / np.where(self.logarithmic, self.low, 1.0), 1.0)
-        return np.where(self.logarithmic, values * np.log(ratio), self.high - self.low)
+        return np.where(self.logarithmic, self.values(unit) * self.log_span, self.high - self.low)
 
     def own(self, case: Case) -> np.ndarray:
         """The point of the unit cube of the case's own values (clipped to the bounds; the

@@ -32,7 +32,7 @@ from .grid import DEFAULT_TOLERANCE
 from .limits import Limits
 from .paths import quantity
 from .result import CancelCheck, ProgressCallback
-from .study import Optimization, check_optimization, parse_optimization
+from .study import Optimization, check_optimization, parse_optimization, quantity_fields
 
 POPULATION = 10  # per variable: differential evolution's population
 MIN_POPULATION = 8
@@ -168,7 +168,7 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
         local_spent = len(study.history) >= request.max_evaluations
         stopped += f"; local stage: {'the budget of runs was spent' if local_spent else local.message}"
     answer = {
-        "objective": {("maximize" if request.objective.maximize else "minimize"): request.objective.quantity},
+        "objective": {request.objective.goal: request.objective.quantity},
         "stopped": stopped,
         "evaluations": len(study.history),
         "grid": {"cells": cells, "tolerance": tol},
@@ -196,9 +196,7 @@ def _check_quantities(study: _Study, own: np.ndarray) -> None:
     entry = study.history[-1]
     if "error" in entry:
         raise CaseError([FieldError(field="case", message=f"the case itself fails: {entry['error']}")])
-    where = {request.objective.quantity: "objective." + ("maximize" if request.objective.maximize else "minimize")}
-    where |= {name: f"limits[{name!r}]" for name in request.limits}
-    for name, field in where.items():
+    for name, field in quantity_fields(request).items():
         if found.get(name) is None:
             errors.append(FieldError(field=field, message=(
                 f"{name!r} has no value for this case (a medium's penetration with no medium, the "

@@ -99,6 +99,11 @@ class Objective(BaseModel):
         return self.maximize or self.minimize
 
     @property
+    def goal(self) -> str:
+        """'maximize' or 'minimize'."""
+        return "maximize" if self.maximize is not None else "minimize"
+
+    @property
     def sign(self) -> float:
         """+1 to minimise, −1 to maximise: what the optimiser minimises is sign × quantity."""
         return -1.0 if self.maximize is not None else 1.0
@@ -144,33 +149,37 @@ def parse_optimization(data: dict) -> Optimization:
     return validated(Optimization, data)
 
 
+def _present(annotation: Any) -> Any:
+    """`X` of an optional `X | None`; any other annotation as it is."""
+    args = [a for a in typing.get_args(annotation) if a is not type(None)]
+    optional = typing.get_origin(annotation) in (typing.Union, types.UnionType)
+    return args[0] if optional and len(args) == 1 else annotation
+
+
 def _summary_has(path: str) -> bool:
     """Whether `path` names a number of the pulse summary's schema (a peak by its value; a list's
     item by its index), without a run."""
     model: Any = Summary
     for key in path.split("."):
-        origin = typing.get_origin(model)
-        if origin in (list, typing.Union, types.UnionType):
-            args = [a for a in typing.get_args(model) if a is not type(None)]
-            if origin is list:
-                if not key.lstrip("-").isdigit():
-                    return False
-                model = args[0]
-                continue
-            model = args[0]
-            if typing.get_origin(model) is list:
-                if not key.lstrip("-").isdigit():
-                    return False
-                model = typing.get_args(model)[0]
-                continue
-        if not (isinstance(model, type) and issubclass(model, BaseModel)) or key not in model.model_fields:
+        model = _present(model)
+        if typing.get_origin(model) is list:
+            if not key.lstrip("-").isdigit():
+                return False
+            model = typing.get_args(model)[0]
+        elif isinstance(model, type) and issubclass(model, BaseModel) and key in model.model_fields:
+            model = model.model_fields[key].annotation
+        else:
             return False
-        model = model.model_fields[key].annotation
-    args = [a for a in typing.get_args(model) if a is not type(None)] or [model]
-    target = args[0]
+    target = _present(model)
     if isinstance(target, type) and issubclass(target, BaseModel):
         return "value" in target.model_fields
     return target in (float, int)
+
+
+def quantity_fields(request: "Optimization") -> dict[str, str]:
+    """Each summary quantity a request names → the request's field that names it."""
+    return ({request.objective.quantity: f"objective.{request.objective.goal}"}
+            | {name: f"limits[{name!r}]" for name in request.limits})
 
 
 def check_optimization(request: Optimization, limits: Limits = Limits()) -> Space:
@@ -178,12 +187,10 @@ def check_optimization(request: Optimization, limits: Limits = Limits()) -> Spac
     not have, without a run (the service's check before it queues). Returns the variables' space."""
     space = Space.of(request.variables, "variables")
     space.check(request.case, "variables", limits)
-    where = {request.objective.quantity: "objective." + ("maximize" if request.objective.maximize else "minimize")}
-    where |= {name: f"limits[{name!r}]" for name in request.limits}
     errors = [FieldError(field=field, message=(
                   f"{name!r} is not a number of the pulse summary: give a summary quantity such as "
                   + ", ".join(EXAMPLE_QUANTITIES)))
-              for name, field in where.items() if not _summary_has(name)]
+              for name, field in quantity_fields(request).items() if not _summary_has(name)]
     if errors:
         raise CaseError(errors)
     return space

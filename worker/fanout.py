@@ -79,15 +79,15 @@ class QueueEvaluator:
         if not self.here.worth_spreading(batch):
             self.runs["here"] += len(batch["cases"])
             return self.here(batch)
-        folder = self.folder / str(self.batch)
-        self.batch += 1
+        number, self.batch = self.batch, self.batch + 1
+        folder = self.folder / str(number)
         folder.mkdir(parents=True)
         parts = [Batch(batch, cases=cases) for cases in split(batch["cases"], self.parts)]
         paths = [folder / f"{k}.json" for k in range(len(parts))]
         for path, part in zip(paths, parts):
             write_atomic(path, json.dumps(part).encode())
         for k in range(1, len(paths)):  # the first is the study's own
-            self.publish(self.batch - 1, k)
+            self.publish(number, k)
         expected = self.here.run_seconds * max(len(p["cases"]) for p in parts)
         stale = max(MIN_STALE_SECONDS, STALE_FACTOR * expected)
         mine = set()
@@ -96,12 +96,12 @@ class QueueEvaluator:
                 run_part(path)
                 mine.add(k)
         answers = []
-        for path in paths:
+        for k, path in enumerate(paths):
             answer, waited = path.with_suffix(".answer"), time.monotonic()
             while not answer.is_file():
                 if time.monotonic() - waited > stale:
                     run_part(path)  # its claimer is gone
-                    mine.add(paths.index(path))
+                    mine.add(k)
                     break
                 time.sleep(POLL_SECONDS)
             answers += json.loads(answer.read_text())
