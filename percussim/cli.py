@@ -105,12 +105,8 @@ def _submit(args: argparse.Namespace) -> int:
                 print(json.dumps(job, indent=2))
                 return 0
             try:
-                with _progress_bar(args.progress) as advance:
-                    api.wait(job["id"], progress=lambda fraction, record: advance(fraction))
+                _wait(api, job["id"], args.progress)
             except KeyboardInterrupt:
-                # Ctrl-C stops the job, as it stops a local run, rather than leave it running unseen.
-                api.cancel(job["id"])
-                print(f"percussim: cancelled job {job['id']}", file=sys.stderr)
                 return EXIT_INTERRUPTED
             if args.output:
                 api.download(job["id"], args.output)
@@ -123,6 +119,18 @@ def _submit(args: argparse.Namespace) -> int:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
     return _print_summary(summary, args.summary)
+
+
+def _wait(api, job_id: str, progress: bool) -> None:
+    """Wait for a job (or a study) on the service with a progress bar; Ctrl-C cancels it, as it
+    stops a local run, rather than leave it running unseen, and raises KeyboardInterrupt."""
+    try:
+        with _progress_bar(progress) as advance:
+            api.wait(job_id, progress=lambda fraction, record: advance(fraction))
+    except KeyboardInterrupt:
+        api.cancel(job_id)
+        print(f"percussim: cancelled job {job_id}", file=sys.stderr)
+        raise
 
 
 def _presets(args: argparse.Namespace) -> int:
@@ -312,19 +320,41 @@ def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict)
 
 def _study(args: argparse.Namespace, what: str, request: Callable[[], dict],
            solve: Callable[..., dict]) -> dict | int:
-    """Run a calibration or an optimisation here; the answer, or the exit status of a refusal."""
+    """Run a calibration or an optimisation (`what`) here, or on the service at `args.url`;
+    the answer, or the exit status of a refusal or a failure."""
+    from .client import Refused, ServiceError
     from .solver.case import CaseError
 
     try:
+        if args.url:
+            return _study_on_service(args, what, request())
         with _progress_bar(args.progress) as advance:
             return solve(request(), processes=args.processes, progress=advance, limits=_limits())
     except FileNotFoundError as error:
         return _no_such_file(error.filename or args.case)
-    except CaseError as error:
+    except (CaseError, Refused) as error:
         return _refused(f"{what} of {args.case}", error)
+    except ServiceError as error:  # a failed or cancelled study, an unreachable service, a bad key
+        print(f"percussim: {error}", file=sys.stderr)
+        return EXIT_FAILED
     except KeyboardInterrupt:
-        print("\npercussim: interrupted", file=sys.stderr)
+        if not args.url:
+            print("\npercussim: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _study_on_service(args: argparse.Namespace, what: str, request: dict) -> dict:
+    """The study as a job on the service: submitted, waited for, its answer read back."""
+    from .client import Client
+
+    with Client(args.url, api_key=args.api_key) as api:
+        if what == "calibration":
+            submit, view, answer = api.submit_calibration, api.calibration, "fit"
+        else:
+            submit, view, answer = api.submit_optimization, api.optimization, "optimum"
+        study_id = submit(request)["id"]
+        _wait(api, study_id, args.progress)
+        return view(study_id)[answer]
 
 
 def _calibrate(args: argparse.Namespace) -> int:
@@ -457,7 +487,12 @@ def parser() -> argparse.ArgumentParser:
     for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
         study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
         study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")
-        study.add_argument("--processes", type=_count, help="processes here (default: one a core)")
+        where = study.add_mutually_exclusive_group()
+        where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
+        where.add_argument("--url", help="run it as a job on this service instead, its runs spread over "
+                                         "the service's workers")
+        study.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
+                           help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
         study.add_argument("--progress", action="store_true",
                            help="show the progress bar on stderr even when it is not a terminal")
     fit.set_defaults(handler=_calibrate)

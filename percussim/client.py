@@ -6,9 +6,12 @@
         summary = api.run("examples/fig9.json", progress=lambda fraction, record: print(fraction))
         print(summary["co_impact_time"], summary["peak_contact_force"]["value"])
         rows = api.run_sweep("examples/fig5.json", {"striker.velocity": [3, 5, 7]})
+        fit = api.calibrate({"case": "examples/fig5.json", "record": "record.csv",
+                             "parameters": {"contact.stiffness": [1e10, 1e13]}})
 
 It needs only httpx: the solver (and so NumPy, h5py and Numba) is imported by `result` alone,
-which reads the HDF5 result into the same `Result` a local run gives.
+which reads the HDF5 result into the same `Result` a local run gives, and by a calibration
+given its record as a CSV file, which is read and checked here.
 
 Every error the service answers is raised as a `ServiceError` that says what went wrong:
 `Refused` (422, 413) lists each offending field, `JobFailed` carries the failed or cancelled
@@ -97,6 +100,13 @@ def _error(response: httpx.Response) -> ServiceError:
                        response.status_code)
     kind = {401: Unauthorized, 404: NotFound, 503: Unavailable}.get(response.status_code, ServiceError)
     return kind(f"{detail} (HTTP {response.status_code} from {response.request.url})", response.status_code)
+
+
+def _case_json(case: dict | str | os.PathLike | Case) -> dict:
+    """Case JSON from a dict, the path of a case JSON file or a `percussim.Case`."""
+    if isinstance(case, (str, os.PathLike)):
+        return json.loads(Path(case).read_bytes())
+    return case if isinstance(case, dict) else case.model_dump(mode="json", exclude_none=True)
 
 
 def _retry_after(response: httpx.Response) -> float:
@@ -235,11 +245,7 @@ class Client:
         `{"striker.velocity": [3, 5, 7], "contact.stiffness": [4e11, 8e11]}`) over `case` (as for
         `submit`), each a job of its own over all the workers. Returns the sweep (`id`, `total`,
         `rows`, ...); raises `Refused` naming the parameter value each bad variant came from."""
-        if isinstance(case, (str, os.PathLike)):
-            case = json.loads(Path(case).read_bytes())
-        elif not isinstance(case, dict):
-            case = case.model_dump(mode="json", exclude_none=True)
-        return self._json("POST", "/v1/sweeps", json={"case": case, "parameters": parameters})
+        return self._json("POST", "/v1/sweeps", json={"case": _case_json(case), "parameters": parameters})
 
     def sweep(self, sweep_id: str) -> dict:
         """The sweep: `progress` 0..1, `counts` by status, `finished`, `columns`, and a row per
@@ -266,6 +272,56 @@ class Client:
         table, a row per variant in the order of the parameters' combinations."""
         sweep_id = self.submit_sweep(case, parameters)["id"]
         return self.wait_sweep(sweep_id, progress=progress, timeout=timeout)["rows"]
+
+    # -- calibrations and optimisations: each a job, so `wait`, `job` and `cancel` take its id too
+
+    def submit_calibration(self, request: dict) -> dict:
+        """Queue a fit of a case's parameters to a measured record, on the workers. `request` is
+        that of a local `percussim.calibrate`: `{"case", "record", "parameters": {PATH: [low,
+        high]}}`, with the case as for `submit` and the record a `Record`, its JSON
+        (`{"quantity", "x", "time", "values"}`) or the path of a CSV record (read here: one that
+        is not a record raises `percussim.CaseError` naming its line before anything is sent).
+        Returns the study's record (`id`, `status` "queued", ...); raises `Refused` naming each
+        offending field."""
+        record = request["record"]
+        if isinstance(record, (str, os.PathLike)):
+            from percussim.solver.record import read_record
+
+            record = read_record(record)
+        if not isinstance(record, dict):
+            record = record.model_dump(mode="json", exclude_none=True)
+        return self._json("POST", "/v1/calibrations",
+                          json=request | {"case": _case_json(request["case"]), "record": record})
+
+    def calibration(self, study_id: str) -> dict:
+        """The calibration's record, with its `fit` once it has succeeded (None before)."""
+        return self._json("GET", f"/v1/calibrations/{quote(study_id, safe='')}")
+
+    def calibrate(self, request: dict, progress: Progress | None = None, timeout: float | None = None) -> dict:
+        """Submit a calibration (see `submit_calibration`), wait for it (see `wait`) and return
+        its fit, as a local `percussim.calibrate` returns it."""
+        study_id = self.submit_calibration(request)["id"]
+        self.wait(study_id, progress=progress, timeout=timeout)
+        return self.calibration(study_id)["fit"]
+
+    def submit_optimization(self, request: dict) -> dict:
+        """Queue an optimisation on the workers. `request` is that of a local `percussim.optimize`:
+        `{"case", "variables": {PATH: [low, high]}, "objective": {"maximize" or "minimize":
+        QUANTITY}, "limits": {QUANTITY: {"max": v} or {"min": v}}, "max_evaluations": N}`, with
+        the case as for `submit`. Returns the study's record; raises `Refused` naming each
+        offending field."""
+        return self._json("POST", "/v1/optimizations", json=request | {"case": _case_json(request["case"])})
+
+    def optimization(self, study_id: str) -> dict:
+        """The optimisation's record, with its `optimum` once it has succeeded (None before)."""
+        return self._json("GET", f"/v1/optimizations/{quote(study_id, safe='')}")
+
+    def optimize(self, request: dict, progress: Progress | None = None, timeout: float | None = None) -> dict:
+        """Submit an optimisation (see `submit_optimization`), wait for it (see `wait`) and return
+        its optimum, as a local `percussim.optimize` returns it."""
+        study_id = self.submit_optimization(request)["id"]
+        self.wait(study_id, progress=progress, timeout=timeout)
+        return self.optimization(study_id)["optimum"]
 
     @staticmethod
     def _poll(fetch: Callable[[], dict], finished: Callable[[dict], bool], progress: Progress | None,

@@ -16,12 +16,13 @@ import httpx
 import numpy as np
 import pytest
 
-from conftest import BASE_CASE, CHATTERS, merge
+from conftest import CHATTERS, merge
 from live_stack import ROOT, Stack, wait_for
 from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 from percussim.solver.case import load_case
 from percussim.solver.io import read_result
 from percussim.solver.presets import load_preset, preset_json
+from percussim.solver.record import read_record
 from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import COLUMNS, Sweep
 from test_cli import _percussim
@@ -257,6 +258,73 @@ def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_pa
     done = wait_for(lambda: (v := stack.client.get(f"/v1/sweeps/{sweep_id}").json())["finished"] and v,
                     30, "the sweep's variants ended")
     assert done["counts"] == {"cancelled": 2}, done
+
+
+def _csv_record(path, quantity: str, stretch: float = 1.0):
+    """A σ-scheme record with noise (see test_calibrate) written to `path` as CSV, its times
+    multiplied by `stretch` (1000: milliseconds given as seconds)."""
+    from percussim.solver.record import parse_record, record_to_csv
+    from test_calibrate import other_setting_record
+
+    record = other_setting_record(quantity)
+    record["time"] = [t * stretch for t in record["time"]]
+    path.write_text(record_to_csv(parse_record(record)))
+    return path
+
+
+def test_a_calibration_from_a_csv_file_gives_the_local_fit(api, tmp_path):
+    """The client reads the CSV record, the service's workers fit it: the same fit, number for
+    number, as `percussim.calibrate` here (both are deterministic: a seeded global stage)."""
+    from percussim.solver.calibrate import calibrate
+    from test_calibrate import BOUNDS, TRUE, start_case
+
+    names = ("contact.stiffness", "medium.stiffness")
+    request = {"case": start_case(names), "record": str(_csv_record(tmp_path / "record.csv", "stress")),
+               "parameters": {n: BOUNDS[n] for n in names}}
+    seen = []
+    fit = api.calibrate(request, progress=lambda fraction, study: seen.append(study["kind"]))
+    assert seen and set(seen) == {"calibration"}
+    here = calibrate(request | {"record": read_record(request["record"])}, processes=1)
+    for name in names:
+        assert fit["parameters"][name] == pytest.approx(here["parameters"][name], rel=1e-9)
+        assert fit["parameters"][name]["value"] == pytest.approx(TRUE[name], rel=0.05)
+    assert fit["evaluations"] == here["evaluations"] and fit["warnings"] == here["warnings"]
+    late = _csv_record(tmp_path / "late.csv", "stress", stretch=1e3)
+    with pytest.raises(Refused) as refused:
+        api.submit_calibration(request | {"record": late})
+    assert refused.value.status == 422 and refused.value.errors[0].field == "record.time"
+
+
+def test_calibrate_and_optimize_url_print_what_they_print_here(stack, tmp_path):
+    """`--url` runs the study on the service's workers: the same printed answer as a local run;
+    a record the service refuses exits 2 naming its field."""
+    from test_calibrate import start_case
+    from test_optimize import short_rock_drill
+
+    (tmp_path / "case.json").write_text(json.dumps(start_case(("contact.stiffness",))))
+    (tmp_path / "drill.json").write_text(json.dumps(short_rock_drill()))
+    _csv_record(tmp_path / "record.csv", "contact_force")
+    _csv_record(tmp_path / "late.csv", "contact_force", stretch=1e3)
+    fit = ["calibrate", "case.json", "--record", "record.csv", "--fit", "contact.stiffness=1e9:1e15"]
+    optimise = ["optimize", "drill.json", "--vary", "striker.length=0.1:0.6", "--maximize", "energy.to_medium",
+                "--limit", "max_compressive_stress<=250e6", "--evaluations", "40"]
+    printed = {}
+    for name, arguments in (("fit", fit), ("optimum", optimise)):
+        here = _percussim(*arguments, "--processes", "1", cwd=tmp_path)
+        there = _percussim(*arguments, "--url", stack.url, "--plot", f"{name}.svg", cwd=tmp_path)
+        assert here.returncode == 0 and there.returncode == 0, there.stderr
+        printed[name] = json.loads(here.stdout), json.loads(there.stdout)
+        assert printed[name][0].keys() == printed[name][1].keys()
+        assert (tmp_path / f"{name}.svg").read_text().startswith("<?xml")
+    local, remote = printed["fit"]
+    assert remote["parameters"]["contact.stiffness"] == pytest.approx(local["parameters"]["contact.stiffness"])
+    assert remote["evaluations"] == local["evaluations"]
+    local, remote = printed["optimum"]
+    assert remote["values"] == pytest.approx(local["values"]) and remote["stopped"] == local["stopped"]
+    assert remote["quantities"]["max_compressive_stress"] <= 250e6
+    refused = _percussim(*fit[:3], "late.csv", *fit[4:], "--url", stack.url, cwd=tmp_path)
+    assert refused.returncode == 2 and refused.stdout == "", refused.stderr
+    assert "percussim: invalid calibration of case.json:\n  record.time: " in refused.stderr
 
 
 def _stand_in(*answers: httpx.Response) -> tuple[Client, list[httpx.Request]]:

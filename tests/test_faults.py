@@ -11,7 +11,7 @@ import time
 import h5py
 import pytest
 
-from conftest import BASE_CASE, CHATTERS, merge
+from conftest import CHATTERS, merge
 from live_stack import RedisServer, Stack, children, command_line, wait_for
 from percussim.solver.presets import preset_json
 
