@@ -420,6 +420,15 @@ def _count(text: str) -> int:
     return int(text)
 
 
+def _here_or_on_service(command: argparse.ArgumentParser, on_service: str) -> None:
+    """--processes here, or --url (with --api-key) for a service instead."""
+    where = command.add_mutually_exclusive_group()
+    where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
+    where.add_argument("--url", help=on_service)
+    command.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
+                         help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+
+
 def parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog="percussim", description=__doc__)
     commands = p.add_subparsers(dest="command", required=True)
@@ -449,12 +458,7 @@ def parser() -> argparse.ArgumentParser:
     sweep.add_argument("case", help="the base impact case JSON, or a preset's name")
     sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
                        help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7")
-    where = sweep.add_mutually_exclusive_group()
-    where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
-    where.add_argument("--url", help="run every variant as a job on this service instead (each keeps "
-                                     "its result there)")
-    sweep.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
-                       help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+    _here_or_on_service(sweep, "run every variant as a job on this service instead (each keeps its result there)")
     sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
     sweep.set_defaults(handler=_sweep)
     presets = commands.add_parser(
@@ -487,12 +491,8 @@ def parser() -> argparse.ArgumentParser:
     for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
         study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
         study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")
-        where = study.add_mutually_exclusive_group()
-        where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
-        where.add_argument("--url", help="run it as a job on this service instead, its runs spread over "
-                                         "the service's workers")
-        study.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
-                           help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+        _here_or_on_service(study, "run it as a job on this service instead, its runs spread over the "
+                                   "service's workers")
         study.add_argument("--progress", action="store_true",
                            help="show the progress bar on stderr even when it is not a terminal")
     fit.set_defaults(handler=_calibrate)

@@ -301,8 +301,7 @@ class Client:
         """Submit a calibration (see `submit_calibration`), wait for it (see `wait`) and return
         its fit, as a local `percussim.calibrate` returns it."""
         study_id = self.submit_calibration(request)["id"]
-        self.wait(study_id, progress=progress, timeout=timeout)
-        return self.calibration(study_id)["fit"]
+        return self._answer(study_id, self.calibration, "fit", progress, timeout)
 
     def submit_optimization(self, request: dict) -> dict:
         """Queue an optimisation on the workers. `request` is that of a local `percussim.optimize`:
@@ -320,8 +319,13 @@ class Client:
         """Submit an optimisation (see `submit_optimization`), wait for it (see `wait`) and return
         its optimum, as a local `percussim.optimize` returns it."""
         study_id = self.submit_optimization(request)["id"]
+        return self._answer(study_id, self.optimization, "optimum", progress, timeout)
+
+    def _answer(self, study_id: str, view: Callable[[str], dict], name: str, progress: Progress | None,
+                timeout: float | None) -> dict:
+        """The study's answer `name` from its `view`, once `wait` has seen it succeed."""
         self.wait(study_id, progress=progress, timeout=timeout)
-        return self.optimization(study_id)["optimum"]
+        return view(study_id)[name]
 
     @staticmethod
     def _poll(fetch: Callable[[], dict], finished: Callable[[dict], bool], progress: Progress | None,

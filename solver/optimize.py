@@ -169,6 +169,9 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
         stopped += f"; local stage: {'the budget of runs was spent' if local_spent else local.message}"
     answer = {
         "objective": {request.objective.goal: request.objective.quantity},
+        "variables": {path: [low, high] for path, low, high in zip(space.paths, space.low.tolist(),
+                                                                    space.high.tolist())},
+        "limits": {name: bound.model_dump(exclude_none=True) for name, bound in request.limits.items()},
         "stopped": stopped,
         "evaluations": len(study.history),
         "grid": {"cells": cells, "tolerance": tol},

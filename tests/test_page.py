@@ -40,12 +40,13 @@ def chromium() -> str:
 
 
 def shown(value: float, digits: int = 4) -> str:
-    """A number as the page writes it: `digits` significant digits, an exponent below 0.001."""
+    """A number as the page writes it: `digits` significant digits, an exponent below 0.001 and
+    from 1e6 up (as JavaScript's toExponential: 8.014e+11, 4.682e-13)."""
     if value == 0:
         return "0"
-    if abs(value) < 1e-3:
+    if abs(value) < 1e-3 or abs(value) >= 1e6:
         mantissa, exponent = f"{value:.{digits - 1}e}".split("e")
-        return f"{mantissa}e{int(exponent)}"
+        return f"{mantissa}e{int(exponent):+d}"
     decimals = max(digits - 1 - math.floor(math.log10(abs(value))), 0)
     # JavaScript's toFixed rounds the exact binary value, a tie away from zero (606.25 -> 606.3).
     return str(Decimal(value).quantize(Decimal(1).scaleb(-decimals), rounding=ROUND_HALF_UP))
@@ -267,3 +268,115 @@ def test_a_run_of_blows_shows_its_table_penetration_and_plots(page, stack):
         image = page.locator(f"figure[data-plot={name}] img")
         expect(image).to_be_visible()
         assert image.evaluate("img => img.complete && img.naturalWidth > 0"), name
+
+
+def test_a_calibration_from_an_uploaded_record_shows_its_fit(page, stack, tmp_path):
+    """A CSV record chosen from disk, the form's two stiffnesses: the page shows the service's fit
+    (values, standard errors, bounds, correlation, the overlay plot) and loads the fitted case; a
+    record's bad sample is named with its line in the file, a file that is no record is not sent."""
+    from percussim.solver.record import parse_record, record_to_csv
+    from test_calibrate import BOUNDS, other_setting_record, start_case
+
+    names = ("contact.stiffness", "medium.stiffness")
+    page.fill("#case-json", json.dumps(start_case(names), indent=2))
+    page.click("#calibration-panel summary")
+    record = other_setting_record("stress")
+    (tmp_path / "record.csv").write_text(record_to_csv(parse_record(record)))
+    page.set_input_files("#record-file", str(tmp_path / "record.csv"))
+    expect(page.locator("#record-info")).to_contain_text(f"{len(record['time'])} samples of stress at x = 0.3000 m")
+    starting = {}  # the form's rows: field, low, high
+    for row in page.locator("#fit-parameters tbody tr").all():
+        field, low, high = (c.input_value() for c in row.locator("input").all())
+        starting[field] = [float(low), float(high)]
+    assert starting == {name: BOUNDS[name] for name in names}
+    page.click("#fit")
+    expect(page.locator("#job-status")).to_have_text("succeeded", timeout=60_000)
+    study = stack.client.get(f"/v1/calibrations/{_shown_job(page)}").json()
+    fit = study["fit"]
+    for name in names:
+        cells = [t.strip() for t in page.locator(f"[data-parameter='{name}'] td").all_inner_texts()]
+        p = fit["parameters"][name]
+        assert cells == [shown(p["value"]), shown(p["standard_error"]),
+                         shown(100 * p["standard_error"] / p["value"], 2), shown(p["low"]), shown(p["high"])]
+    correlation = page.locator("table.correlation tbody td").all_inner_texts()
+    assert correlation == [shown(r, 3) for row in fit["correlation"] for r in row]
+    expect(page.locator(".fit-figures")).to_contain_text(f"{fit['evaluations']} model runs")
+    expect(page.locator("#study")).to_contain_text("No warnings." if not fit["warnings"] else fit["warnings"][0])
+    image = page.locator("figure[data-plot=calibration] img")
+    expect(image).to_be_visible()
+    assert image.evaluate("img => img.complete && img.naturalWidth > 0")
+    assert page.locator("#download").is_hidden()  # a study has no HDF5 result
+    page.get_by_role("button", name="Load the fitted case").click()
+    assert json.loads(page.input_value("#case-json")) == fit["case"]
+
+    # A sample that is not a number: the service names it, the page adds its line in the file.
+    lines = record_to_csv(parse_record(record)).splitlines()
+    lines[6] = lines[6].split(",")[0] + ",nan"  # sample 5: the header is line 1
+    (tmp_path / "nan.csv").write_text("\n".join(lines) + "\n")
+    page.set_input_files("#record-file", str(tmp_path / "nan.csv"))
+    page.click("#fit")
+    problems = page.locator("#calibration-errors td.field")
+    expect(problems.first).to_have_text("record.values[5] (line 7)")
+    (tmp_path / "plain.csv").write_text("t;force\n0;1\n")
+    before = stack.client.get("/v1/jobs").json()["total"]
+    page.set_input_files("#record-file", str(tmp_path / "plain.csv"))
+    expect(page.locator("#calibration-errors")).to_contain_text("plain.csv is not a record")
+    expect(problems.first).to_have_text("line 1")
+    page.click("#fit")
+    expect(page.locator("#calibration-errors")).to_contain_text("Choose the record's CSV file first")
+    assert stack.client.get("/v1/jobs").json()["total"] == before
+
+
+def test_an_optimisation_shows_its_progress_and_best_design(page, stack):
+    """The rock drill's piston length and speed for the most energy into the rock within a stress
+    limit: the progress bar moves while it runs, then the best design, its limit, every run and
+    the convergence plot are those of the API's answer; an unknown quantity is named."""
+    case = preset_json("rock_drill")
+    page.fill("#case-json", json.dumps(case, indent=2))
+    page.click("#optimization-panel summary")
+    page.fill("#variables tbody tr:first-child td:nth-child(1) input", "striker.length")
+    page.get_by_role("button", name="add a field").click()
+    second = page.locator("#variables tbody tr").nth(1).locator("input")
+    for cell, text in zip(second.all(), ("striker.velocity", "5", "20")):
+        cell.fill(text)
+    page.select_option("#goal", "maximize")
+    page.fill("#objective", "energy.to_medium")
+    page.get_by_role("button", name="add a limit").click()
+    limit = page.locator("#limits tbody tr").first
+    limit.locator("input").first.fill("max_compressive_stress")
+    limit.locator("select").select_option("max")
+    limit.locator("input").last.fill("250e6")
+    page.fill("#evaluations", "300")
+    # Every (status, progress) the page shows, as it shows it.
+    page.evaluate("""() => {
+        window.seen = [];
+        new MutationObserver(() => window.seen.push([document.querySelector('#job-status').textContent,
+            parseFloat(document.querySelector('#progress-bar').style.width)]))
+          .observe(document.querySelector('#progress-bar'), {attributes: true, childList: true});
+    }""")
+    page.click("#optimize")
+    expect(page.locator("#job-status")).to_have_text("succeeded", timeout=120_000)
+    seen = page.evaluate("window.seen")
+    assert any(status == "running" and 0 < width < 100 for status, width in seen), seen
+    optimum = stack.client.get(f"/v1/optimizations/{_shown_job(page)}").json()["optimum"]
+    assert optimum["quantities"]["max_compressive_stress"] <= 250e6
+    for path in ("striker.length", "striker.velocity"):
+        value = page.locator(f"table.optimum [data-variable='{path}'] .value")
+        expect(value).to_have_text(shown(optimum["values"][path]))
+    for name in ("energy.to_medium", "max_compressive_stress"):
+        value = page.locator(f"table.optimum [data-quantity='{name}'] .value")
+        expect(value).to_have_text(shown(optimum["quantities"][name]))
+    expect(page.locator("#study .stopped")).to_contain_text(optimum["stopped"])
+    page.click("#study details.history summary")
+    expect(page.locator("table.history tbody tr")).to_have_count(optimum["evaluations"])
+    expect(page.locator("#study table.pulse")).to_be_visible()  # the best design's pulse summary
+    image = page.locator("figure[data-plot=optimization] img")
+    expect(image).to_be_visible()
+    assert image.evaluate("img => img.complete && img.naturalWidth > 0")
+    with page.expect_download() as download:
+        page.get_by_role("button", name="Download the runs (CSV)").click()
+    assert len(Path(download.value.path()).read_text().splitlines()) == optimum["evaluations"] + 1
+
+    page.fill("#objective", "energy.to_rock")
+    page.click("#optimize")
+    expect(page.locator("#optimization-errors td.field").first).to_have_text("objective.maximize")

@@ -20,11 +20,12 @@ function h(tag, attrs = {}, ...children) {
 }
 
 // `digits` significant digits: 484.0, 179.9, 12345, 0.9335; an exponent only below 0.001
-// (4.682e-13), where fixed decimals would run off the table.
+// (4.682e-13) and from a million up (8.014e+11), where fixed decimals would run off the table
+// or bury the digits that count.
 function fmt(value, digits = 4) {
   if (typeof value !== "number" || !Number.isFinite(value)) return "—";
   if (value === 0) return "0";
-  if (Math.abs(value) < 1e-3) return value.toExponential(digits - 1);
+  if (Math.abs(value) < 1e-3 || Math.abs(value) >= 1e6) return value.toExponential(digits - 1);
   const decimals = digits - 1 - Math.floor(Math.log10(Math.abs(value)));
   return value.toFixed(Math.max(decimals, 0));
 }
@@ -105,10 +106,10 @@ async function loadPresets() {
     const presets = await getJSON("/v1/presets");
     $("preset").replaceChildren(h("option", { value: "" }, "— choose a preset —"),
       ...presets.map((p) => h("option", { value: p.name }, p.name)));
-    showCaseErrors(null);
+    showProblems($("case-errors"), null);
   } catch (error) {
     // A missing key has its own banner.
-    if (error.status !== 401) showCaseErrors(`The presets could not be loaded: ${describe(error)}`);
+    if (error.status !== 401) showProblems($("case-errors"), `The presets could not be loaded: ${describe(error)}`);
   }
 }
 
@@ -121,14 +122,15 @@ async function choosePreset() {
     // The description last: the physics is what one reads and edits.
     const { description, ...physics } = preset;
     $("case-json").value = JSON.stringify({ ...physics, description }, null, 2);
-    showCaseErrors(null);
+    showProblems($("case-errors"), null);
   } catch (error) {
-    showCaseErrors(`Preset ${name} could not be loaded: ${describe(error)}`);
+    showProblems($("case-errors"), `Preset ${name} could not be loaded: ${describe(error)}`);
   }
 }
 
-function showCaseErrors(title, problems = [], where = "field") {
-  const box = $("case-errors");
+// A box of problems under a form: a title, then a table of each field (or place) and its problem;
+// `title` null empties and hides it.
+function showProblems(box, title, problems = [], where = "field") {
   box.hidden = !title;
   box.replaceChildren();
   if (!title) return;
@@ -154,37 +156,50 @@ function syntaxProblem(text, error) {
            message: error.message.replace(/ in JSON at position \d+.*$/, "") };
 }
 
-async function submitCase(event) {
-  event.preventDefault();
+// The case in the editor, parsed; null, with the reason shown in `box`, when there is none or it
+// is not JSON.
+function editedCase(box) {
   const text = $("case-json").value;
   if (!text.trim()) {
-    showCaseErrors("Pick a preset or paste a case first.");
-    return;
+    showProblems(box, "Pick a preset or paste a case first.");
+    return null;
   }
   try {
-    JSON.parse(text);
+    return JSON.parse(text);
   } catch (error) {
-    showCaseErrors("The case is not valid JSON, so it was not sent.", [syntaxProblem(text, error)], "where");
-    return;
+    showProblems(box, "The case is not valid JSON, so it was not sent.", [syntaxProblem(text, error)], "where");
+    return null;
   }
-  const button = $("submit");
+}
+
+// POST `body` (JSON text) to `path` from the form whose submit button is `button`, then open the
+// new job; a refusal is shown in `box`, each field with its problem (`where` maps a field to where
+// the user finds it).
+async function send(path, body, { button, box, what, where = (field) => field }) {
   button.disabled = true;
   try {
-    const job = await getJSON("/v1/jobs", {
-      method: "POST", headers: { "Content-Type": "application/json" }, body: text });
-    showCaseErrors(null);
+    const job = await getJSON(path, { method: "POST", headers: { "Content-Type": "application/json" }, body });
+    showProblems(box, null);
     openJob(job.id);
     refreshJobs();
   } catch (error) {
     if (Array.isArray(error.detail)) {
       const n = error.detail.length;
-      showCaseErrors(`The service refused the case: ${n} problem${n === 1 ? "" : "s"}.`, error.detail);
+      showProblems(box, `The service refused the ${what}: ${n} problem${n === 1 ? "" : "s"}.`,
+                   error.detail.map((d) => ({ ...d, field: where(d.field) })));
     } else {
-      showCaseErrors(`The case was not submitted: ${describe(error)}`);
+      showProblems(box, `The ${what} was not submitted: ${describe(error)}`);
     }
   } finally {
     button.disabled = false;
   }
+}
+
+async function submitCase(event) {
+  event.preventDefault();
+  const box = $("case-errors");
+  // The text as typed: the service reads it and names what is wrong.
+  if (editedCase(box)) await send("/v1/jobs", $("case-json").value, { button: $("submit"), box, what: "case" });
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -197,7 +212,8 @@ async function refreshJobs() {
       h("button", { type: "button", class: "job-link", "data-job": job.id,
                     "aria-current": shown && shown.id === job.id ? "true" : null,
                     onclick: () => openJob(job.id) },
-        h("span", { class: "job-name" }, job.name || "(unnamed)"),
+        h("span", { class: "job-name" }, job.name || "(unnamed)",
+          job.kind && job.kind !== "run" ? h("span", { class: "kind" }, job.kind) : null),
         h("span", { class: `badge ${job.status}` }, job.status),
         h("span", { class: "muted small" }, clock(job.created))))));
     if (!jobs.length) $("jobs").replaceChildren(h("li", { class: "muted" }, "none yet"));
@@ -225,6 +241,7 @@ function openJob(id) {
   $("job-title").textContent = id;
   $("job-error").hidden = true;
   $("summary").replaceChildren();
+  $("study").replaceChildren();
   $("plots").replaceChildren();
   poll(shown);
 }
@@ -248,7 +265,9 @@ async function poll(view) {
   }
   refreshJobs();
   if (job.status === "failed") showJobError(job.error || "the job failed without a reason");
-  if (job.status === "succeeded") {
+  if (job.status === "succeeded" && isStudy(job)) {
+    await showStudy(view, job.kind);
+  } else if (job.status === "succeeded") {
     await showSummary(view);
     await showPlots(view);
   }
@@ -266,7 +285,7 @@ function renderJob(job) {
   bar.className = job.status;
   bar.textContent = `${percent}%`;
   $("cancel").hidden = FINISHED.includes(job.status);
-  $("download").hidden = job.status !== "succeeded";
+  $("download").hidden = job.status !== "succeeded" || isStudy(job);
   const ran = seconds(job.started, job.finished);
   $("job-times").textContent = [
     `submitted ${clock(job.created)}`,
@@ -276,6 +295,9 @@ function renderJob(job) {
     job.worker && `on ${job.worker}`,
   ].filter(Boolean).join(" · ");
 }
+
+// A calibration or an optimisation: a job whose answer is not a run's result.
+const isStudy = (job) => Boolean(job.kind) && job.kind !== "run";
 
 function showJobError(message) {
   const box = $("job-error");
@@ -292,6 +314,16 @@ async function cancelJob() {
   }
 }
 
+// Hand `blob` to the browser as a download named `name`.
+function save(blob, name) {
+  const url = URL.createObjectURL(blob);
+  const link = h("a", { href: url, download: name });
+  document.body.append(link);
+  link.click();
+  link.remove();
+  setTimeout(() => URL.revokeObjectURL(url), 60_000); // once the browser has taken the file
+}
+
 async function downloadResult() {
   const button = $("download");
   button.disabled = true;
@@ -300,12 +332,7 @@ async function downloadResult() {
     const response = await api(`/v1/jobs/${shown.id}/result.h5`);
     const disposition = response.headers.get("Content-Disposition") || "";
     const match = /filename\*=utf-8''([^;]+)/i.exec(disposition) || /filename="?([^";]+)"?/i.exec(disposition);
-    const url = URL.createObjectURL(await response.blob());
-    const link = h("a", { href: url, download: match ? decodeURIComponent(match[1]) : `${shown.id}.h5` });
-    document.body.append(link);
-    link.click();
-    link.remove();
-    setTimeout(() => URL.revokeObjectURL(url), 60_000); // once the browser has taken the file
+    save(await response.blob(), match ? decodeURIComponent(match[1]) : `${shown.id}.h5`);
   } catch (error) {
     showJobError(`The HDF5 result could not be downloaded: ${describe(error)}`);
   } finally {
@@ -446,6 +473,13 @@ function modelCard(s) {
     h("p", { class: "why" }, h("strong", {}, "Why: "), s.why || "—"));
 }
 
+function warningsBanner(warnings) {
+  return warnings.length
+    ? h("div", { class: "banner warning" }, h("p", { class: "title" },
+        `${warnings.length} warning${warnings.length === 1 ? "" : "s"}`), h("ul", {}, warnings.map((w) => h("li", {}, w))))
+    : h("p", { class: "muted small" }, "No warnings.");
+}
+
 async function showSummary(view) {
   let s;
   try {
@@ -455,12 +489,8 @@ async function showSummary(view) {
     return;
   }
   if (view !== shown) return;
-  const warnings = s.warnings || [];
   $("summary").replaceChildren(...[
-    warnings.length
-      ? h("div", { class: "banner warning" }, h("p", { class: "title" },
-          `${warnings.length} warning${warnings.length === 1 ? "" : "s"}`), h("ul", {}, warnings.map((w) => h("li", {}, w))))
-      : h("p", { class: "muted small" }, "No warnings."),
+    warningsBanner(s.warnings || []),
     pulseCard(s),
     s.blows && s.blows.length ? blowsCard(s.blows) : null, // null: a case without blows
     h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)),
@@ -486,19 +516,20 @@ async function showPlots(view) {
     h("figcaption", {}, plot.title || plot.name),
     plot.available && plot.name === "stress_along" ? timesForm(plot, view) : null));
   box.replaceChildren(card("Plots", h("div", { class: "plot-grid" }, figures)));
-  await Promise.all(plots.map(async (plot, i) => {
-    if (!plot.available) return;
-    const frame = figures[i].querySelector(".frame");
-    try {
-      const img = h("img", { src: await objectUrl(plot.links.png, view.urls), alt: plot.title || plot.name,
-                             title: "click to enlarge", onclick: () => enlarge(plot, view) });
-      frame.replaceChildren(img);
-    } catch (error) {
-      frame.textContent = describe(error);
-      frame.classList.add("unavailable");
-    }
-    frame.classList.remove("loading");
-  }));
+  await Promise.all(plots.map((plot, i) => plot.available && showImage(figures[i].querySelector(".frame"), plot, view)));
+}
+
+// The plot's PNG in `frame`, fetched with the key; a click enlarges it.
+async function showImage(frame, plot, view) {
+  try {
+    const img = h("img", { src: await objectUrl(plot.links.png, view.urls), alt: plot.title || plot.name,
+                           title: "click to enlarge", onclick: () => enlarge(plot, view) });
+    frame.replaceChildren(img);
+  } catch (error) {
+    frame.textContent = describe(error);
+    frame.classList.add("unavailable");
+  }
+  frame.classList.remove("loading");
 }
 
 // The stress along the tool at times the user chooses (µs here, s in the API).

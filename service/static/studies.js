@@ -1,0 +1,240 @@
+"use strict";
+// Calibrations and optimisations on the page: their forms (over the case in the editor) and a
+// finished study's answer in the job view. Uses page.js's helpers (h, $, api, fmt, card, ...).
+
+// The rows each form starts with: [field, low, high]; a limit's is [quantity, "max" or "min", value].
+const STARTING_ROWS = {
+  "fit-parameters": [["contact.stiffness", "1e9", "1e15"], ["medium.stiffness", "1e7", "1e11"]],
+  variables: [["striker.length", "0.1", "0.6"]],
+  limits: [],
+};
+
+let measured = null; // the record read from the chosen CSV file: {record, lines}, or null
+
+// A number as typed, or the text itself when it is not one, for the service to name.
+function typed(text) {
+  const value = Number(text);
+  return text !== "" && Number.isFinite(value) ? value : text;
+}
+
+function addRow(tableId, [path, second, third] = ["", "", ""]) {
+  const limit = tableId === "limits";
+  const input = (value, label, className, list) =>
+    h("input", { value, class: className, list, spellcheck: "false", "aria-label": label });
+  const row = h("tr", {},
+    h("td", {}, input(path, limit ? "quantity" : "field", "path", limit ? "quantities" : "fields")),
+    h("td", {}, limit
+      ? h("select", { "aria-label": "side" }, h("option", { value: "max", selected: second !== "min" }, "≤"),
+          h("option", { value: "min", selected: second === "min" }, "≥"))
+      : input(second, "low", "number")),
+    h("td", {}, input(third, limit ? "limit" : "high", "number")),
+    h("td", {}, h("button", { type: "button", class: "link remove", "aria-label": "remove this row",
+                              title: "remove this row", onclick: () => row.remove() }, "✕")));
+  $(tableId).tBodies[0].append(row);
+  return row;
+}
+
+// A form's table as {path: [low, high]}, or for limits {quantity: {max or min: value}}.
+function rows(tableId) {
+  const out = {};
+  for (const row of $(tableId).tBodies[0].rows) {
+    const [path, second, third] = [...row.querySelectorAll("input, select")].map((el) => el.value.trim());
+    if (!path) continue;
+    if (tableId === "limits") out[path] = { ...out[path], [second]: typed(third) };
+    else out[path] = [typed(second), typed(third)];
+  }
+  return out;
+}
+
+// A CSV record as the API's JSON. Only its shape is read here (a header `time,<quantity>`, two
+// columns): the service checks the samples and names any bad one, which `lines` maps back to
+// its line in the file.
+function parseRecord(text) {
+  const found = [];
+  text.split(/\r?\n/).forEach((line, i) => {
+    if (line.trim()) found.push([i + 1, line.split(",").map((cell) => cell.trim())]);
+  });
+  if (!found.length) throw [{ field: "record", message: "the file is empty" }];
+  const [[headerLine, header], ...samples] = found;
+  if (header.length !== 2 || header[0] !== "time") {
+    throw [{ field: `line ${headerLine}`, message: `must be the header time,<quantity>; found ${header.join(",")}` }];
+  }
+  const odd = samples.find(([, cells]) => cells.length !== 2);
+  if (odd) throw [{ field: `line ${odd[0]}`, message: `has ${odd[1].length} columns: give time,value` }];
+  const stress = header[1].startsWith("stress@");
+  const record = {
+    quantity: stress ? "stress" : header[1],
+    ...(stress ? { x: typed(header[1].slice("stress@".length)) } : {}),
+    time: samples.map(([, cells]) => typed(cells[0])),
+    values: samples.map(([, cells]) => typed(cells[1])),
+  };
+  return { record, lines: samples.map(([line]) => line) };
+}
+
+async function chooseRecord() {
+  const file = $("record-file").files[0];
+  const info = $("record-info");
+  const box = $("calibration-errors");
+  measured = null;
+  if (!file) return;
+  try {
+    measured = parseRecord(await file.text());
+    showProblems(box, null);
+    const { record } = measured;
+    const [first, last] = [record.time[0], record.time.at(-1)];
+    const span = typeof first === "number" && typeof last === "number" ? ` over ${us(first)}–${us(last)} µs` : "";
+    const where = record.quantity === "stress" ? ` at x = ${fmt(record.x)} m` : "";
+    info.textContent = `${file.name}: ${record.time.length} samples of ${record.quantity}${where}${span}.`;
+  } catch (problems) {
+    if (!Array.isArray(problems)) throw problems;
+    info.textContent = "";
+    showProblems(box, `${file.name} is not a record, so it cannot be fitted.`, problems, "where");
+  }
+}
+
+// A refused record's sample, `record.time[5]`, also as the line of the file it came from.
+function recordLine(field) {
+  const match = /^record\.(?:time|values)\[(\d+)\]$/.exec(field);
+  const line = match && measured ? measured.lines[Number(match[1])] : undefined;
+  return line === undefined ? field : `${field} (line ${line})`;
+}
+
+async function submitCalibration(event) {
+  event.preventDefault();
+  const box = $("calibration-errors");
+  const edited = editedCase(box);
+  if (!edited) return;
+  if (!measured) {
+    showProblems(box, "Choose the record's CSV file first.");
+    return;
+  }
+  const body = JSON.stringify({ case: edited, record: measured.record, parameters: rows("fit-parameters") });
+  await send("/v1/calibrations", body, { button: $("fit"), box, what: "calibration", where: recordLine });
+}
+
+async function submitOptimization(event) {
+  event.preventDefault();
+  const box = $("optimization-errors");
+  const edited = editedCase(box);
+  if (!edited) return;
+  const body = JSON.stringify({
+    case: edited, variables: rows("variables"), limits: rows("limits"),
+    objective: { [$("goal").value]: $("objective").value.trim() },
+    max_evaluations: typed($("evaluations").value.trim()),
+  });
+  await send("/v1/optimizations", body, { button: $("optimize"), box, what: "optimisation" });
+}
+
+// ---------------------------------------------------------------------------------------------
+// A finished study in the job view.
+
+const num = (text, className = "num") => h("td", { class: className }, text);
+
+async function showStudy(view, kind) {
+  let study;
+  try {
+    study = await getJSON(`/v1/${kind}s/${view.id}`);
+  } catch (error) {
+    if (view === shown) showJobError(`The ${kind} could not be loaded: ${describe(error)}`);
+    return;
+  }
+  if (view !== shown) return;
+  const title = kind === "calibration" ? "The record against the fitted model" : "Every run of the objective";
+  const plot = { name: kind, title, links: { png: study.links.plot_png, svg: study.links.plot_svg } };
+  const frame = h("div", { class: "frame loading" });
+  const figure = card("Plot", h("figure", { class: "plot wide", "data-plot": kind }, frame, h("figcaption", {}, title)));
+  $("study").replaceChildren(...(kind === "calibration" ? fitCards(study.fit) : optimumCards(study.optimum)), figure);
+  await showImage(frame, plot, view);
+}
+
+function loadCase(caseJson) {
+  $("case-json").value = JSON.stringify(caseJson, null, 2);
+  $("case-json").focus();
+}
+
+function fitCards(fit) {
+  const names = Object.keys(fit.parameters);
+  const parameters = names.map((name) => {
+    const p = fit.parameters[name];
+    const known = typeof p.standard_error === "number";
+    return h("tr", { "data-parameter": name }, h("th", {}, name), num(fmt(p.value), "num value"),
+      num(known ? fmt(p.standard_error) : "not determined"),
+      num(known && p.value ? fmt((100 * p.standard_error) / Math.abs(p.value), 2) : "—"),
+      num(fmt(p.low)), num(fmt(p.high)));
+  });
+  const correlation = names.length > 1 && h("details", { open: true, class: "correlation" },
+    h("summary", {}, "Correlation of the parameters"),
+    table("correlation", ["", ...names], names.map((name, i) => h("tr", {}, h("th", {}, name),
+      fit.correlation[i].map((r, j) => num(fmt(r, 3), i !== j && Math.abs(r) >= 0.95 ? "num strong" : "num"))))));
+  const file = `${(fit.case && fit.case.name) || "case"}-fit.json`;
+  return [
+    warningsBanner(fit.warnings),
+    card("Fit",
+      table("fit", ["parameter", "value", "standard error", "± %", "95% low", "95% high"], parameters),
+      h("p", { class: "muted small fit-figures" },
+        `Misfit (normalised RMS) ${fmt(fit.nrmse, 3)}, the record's own noise ${fmt(fit.noise, 3)} · `,
+        `${fit.evaluations} model runs in ${fmt(fit.seconds, 3)} s · ${fit.grid.cells} cells`),
+      correlation,
+      h("div", { class: "actions" },
+        h("button", { type: "button", onclick: () => loadCase(fit.case) }, "Load the fitted case"),
+        h("button", { type: "button", onclick: () => save(new Blob([JSON.stringify(fit, null, 2)],
+          { type: "application/json" }), file) }, "Download the fit (JSON)"))),
+  ];
+}
+
+function optimumCards(optimum) {
+  const paths = Object.keys(optimum.variables);
+  const goal = Object.keys(optimum.objective)[0];
+  const objective = optimum.objective[goal];
+  const limitText = (name) => Object.entries(optimum.limits[name] || {})
+    .map(([side, value]) => `${side === "max" ? "≤" : "≥"} ${fmt(value)}`).join(", ");
+  const quantities = [objective, ...Object.keys(optimum.limits)];
+  const found = optimum.values !== null;
+  const best = found && card("Best design",
+    table("optimum", ["", "value", "bounds"], [
+      paths.map((path) => h("tr", { "data-variable": path }, h("th", {}, path), num(fmt(optimum.values[path]), "num value"),
+        num(`${fmt(optimum.variables[path][0])} – ${fmt(optimum.variables[path][1])}`))),
+      quantities.map((name) => h("tr", { "data-quantity": name, class: name === objective ? "highlight" : null },
+        h("th", {}, name === objective ? `${name} (${goal === "maximize" ? "maximised" : "minimised"})` : name),
+        num(fmt(optimum.quantities[name]), "num value"), num(name === objective ? "" : limitText(name)))),
+    ]),
+    h("p", { class: "muted small" }, "Solved again under the tolerance; its pulse summary is below."),
+    h("div", { class: "actions" },
+      h("button", { type: "button", onclick: () => loadCase(optimum.case) }, "Load the best case")));
+  const columns = [...paths, ...quantities];
+  const history = h("details", { class: "history" },
+    h("summary", {}, `All ${optimum.history.length} runs`),
+    h("div", { class: "scroll" }, table("history", ["#", ...columns, "within limits"],
+      optimum.history.map((run, i) => h("tr", { class: run.feasible ? null : "infeasible" },
+        num(String(i + 1)), paths.map((p) => num(fmt(run.values[p]))),
+        quantities.map((q) => num(fmt(run.quantities[q]))), num(run.feasible ? "yes" : "no"))))),
+    h("button", { type: "button", onclick: () => save(new Blob([historyCsv(optimum.history, paths, quantities)],
+      { type: "text/csv" }), "runs.csv") }, "Download the runs (CSV)"));
+  return [
+    warningsBanner(optimum.warnings),
+    best,
+    card("Search",
+      h("p", { class: "stopped" }, h("strong", {}, "Stopped: "), optimum.stopped),
+      h("p", { class: "muted small" }, `${optimum.evaluations} model runs in ${fmt(optimum.seconds, 3)} s on `,
+        `${optimum.grid.cells} cells`, optimum.runs_spread
+          ? ` · runs here ${optimum.runs_spread.here}, on other workers ${optimum.runs_spread.other_workers}` : ""),
+      history),
+    found && pulseCard(optimum.summary),
+  ].filter(Boolean);
+}
+
+function historyCsv(history, paths, quantities) {
+  const lines = [["run", ...paths, ...quantities, "feasible"].join(",")];
+  history.forEach((run, i) => lines.push([i + 1, ...paths.map((p) => run.values[p]),
+    ...quantities.map((q) => run.quantities[q] ?? ""), run.feasible].join(",")));
+  return `${lines.join("\n")}\n`;
+}
+
+document.addEventListener("DOMContentLoaded", () => {
+  for (const [tableId, starting] of Object.entries(STARTING_ROWS)) starting.forEach((row) => addRow(tableId, row));
+  document.querySelectorAll("[data-add]").forEach((button) =>
+    button.addEventListener("click", () => addRow(button.dataset.add).querySelector("input").focus()));
+  $("record-file").addEventListener("change", chooseRecord);
+  $("calibration-form").addEventListener("submit", submitCalibration);
+  $("optimization-form").addEventListener("submit", submitOptimization);
+});
