@@ -60,6 +60,33 @@ def test_lundbergs_optimal_piston_length_is_found_within_1_percent():
     assert len(answer["history"]) == answer["evaluations"]
 
 
+def test_the_striker_tool_impedance_ratio_that_passes_the_most_energy_is_one():
+    """An elastic striker of length L1 on a tool whose far end is a matched dashpot (damping =
+    the tool's impedance Z2, so nothing reflects): in the window of the striker's first pulse,
+    L2/a + 2·L1/a, the medium receives 4r/(1 + r)² of the striker's energy, r = Z1/Z2 (the
+    transmission coefficient of a rod–rod impact), whose maximum is r = 1. Only the striker's
+    area varies (the same material: r = A1/A2)."""
+    speed = math.sqrt(STEEL_E / STEEL_RHO)
+    tool_area, striker_length, tool_length = 1e-3, 0.2, 1.0
+    rod = {"youngs_modulus": STEEL_E, "density": STEEL_RHO}
+    case = {"name": "impedance",
+            "striker": {"length": striker_length, "area": 1.7 * tool_area, "velocity": 10.0, **rod},
+            "tool": {"length": tool_length, "area": tool_area, **rod},
+            "contact": {"stiffness": 1e11, "exponent": 0.0},
+            "medium": {"stiffness": 1.0, "damping": STEEL_RHO * speed * tool_area},
+            "numerics": {"duration": (tool_length + 2.0 * striker_length) / speed}}
+    answer = optimize({"case": case, "variables": {"striker.area": [tool_area / 4, 4 * tool_area]},
+                       "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 200})
+    ratio = answer["values"]["striker.area"] / tool_area
+    assert ratio == pytest.approx(1.0, abs=0.01), answer["stopped"]
+    assert answer["quantities"]["energy.transfer_efficiency"] == pytest.approx(1.0, abs=0.01)
+    # The objective the optimiser saw is the closed form's, run by run (the contact's finite
+    # stiffness and the grid of the 1% tolerance aside).
+    for run in answer["history"]:
+        r = run["values"]["striker.area"] / tool_area
+        assert run["quantities"]["energy.transfer_efficiency"] == pytest.approx(4 * r / (1 + r) ** 2, rel=0.02)
+
+
 @pytest.mark.slow
 def test_a_limit_is_never_broken_by_the_answer():
     """More energy into the rock from a faster, longer piston, up to an allowable stress: the
