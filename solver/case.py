@@ -12,7 +12,7 @@ import os
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar, Union
 
-from pydantic import BaseModel, ConfigDict, Field, ValidationError, field_validator, model_validator
+from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 _M = TypeVar("_M", bound=BaseModel)
@@ -34,8 +34,22 @@ Duration = Annotated[float, Field(gt=0, le=1e4)]
 Instant = Annotated[float, Field(ge=0, le=1e4)]
 
 
+# Every input model's: an unknown field, a number that is not finite, and a boolean or a string
+# where a number is expected ("mass": true, "mass": "2") are refused, naming the field, rather
+# than read as 1 kg or 2 kg.
+INPUT = ConfigDict(extra="forbid", allow_inf_nan=False, strict=True)
+
+
+def _whole(value: Any) -> Any:
+    """A whole number written as a float (100.0, as many JSON writers print it) as the int it is."""
+    return int(value) if isinstance(value, float) and value.is_integer() else value
+
+
+Whole = Annotated[int, BeforeValidator(_whole)]  # an int field's type: strict, yet 100.0 is 100
+
+
 class _Model(BaseModel):
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = INPUT
 
 
 def field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationError:
@@ -242,7 +256,7 @@ class Medium(_Model):
 class Blows(_Model):
     """Blow after blow: `count` blows of `numerics.duration` each."""
 
-    count: int = Field(ge=1, le=1000, description="how many blows")
+    count: Whole = Field(ge=1, le=1000, description="how many blows")
 
 
 class SineForce(_Model):
@@ -282,7 +296,7 @@ class Numerics(_Model):
     duration: Duration
     time_step: Duration | None = Field(
         default=None, description="τ (s) of a fixed grid; default from the case itself")
-    cells: int | None = Field(  # the service limits are far lower than the bound
+    cells: Whole | None = Field(  # the service limits are far lower than the bound
         default=None, ge=1, le=2**31, description="N = L/h of a fixed grid; default 100 once a grid is asked")
     tolerance: float | None = Field(
         default=None, ge=1e-5, le=0.2,
@@ -357,9 +371,9 @@ class Outputs(_Model):
     """What to keep beyond the summary: probe stations, full fields, and their sampling strides."""
 
     probes: list[float] = Field(default_factory=list, description="stations x (m) for stress histories")
-    history_stride: int = Field(default=1, ge=1, description="keep every k-th step in the histories")
+    history_stride: Whole = Field(default=1, ge=1, description="keep every k-th step in the histories")
     fields: bool = Field(default=False, description="keep displacement and stress along the tool")
-    field_stride: int = Field(default=10, ge=1, description="keep every k-th step in the fields")
+    field_stride: Whole = Field(default=10, ge=1, description="keep every k-th step in the fields")
 
 
 class Case(_Model):
@@ -441,6 +455,8 @@ _MESSAGES = {
     "int_parsing": "must be a whole number",
     "int_type": "must be a whole number",
     "int_from_float": "must be a whole number",
+    "bool_type": "must be true or false",
+    "string_type": "must be a string",
     "too_short": "must have at least {min_length} entries",
     "list_type": "must be a list",
     "model_type": "must be an object",
@@ -448,6 +464,16 @@ _MESSAGES = {
     "union_tag_invalid": "kind must be one of {expected_tags}",
     "union_tag_not_found": "needs a 'kind' ({discriminator})",
 }
+
+
+_WRONG_TYPE = {"float_type", "int_type", "bool_type", "string_type"}
+
+
+def _as_json(value: bool | str) -> str:
+    if isinstance(value, bool):
+        return json.dumps(value)
+    text = json.dumps(value if len(value) <= 40 else value[:37] + "...", ensure_ascii=False)
+    return f"the string {text}"
 
 
 def field_path(loc: tuple) -> str:
@@ -473,6 +499,8 @@ def describe(errors: list[dict]) -> list[FieldError]:
     for e in errors:
         template = _MESSAGES.get(e["type"])
         message = template.format(**e.get("ctx", {})) if template else e["msg"]
+        if e["type"] in _WRONG_TYPE and isinstance(e.get("input"), (bool, str)):
+            message += f", not {_as_json(e['input'])}"  # what was sent: `true`, the string "2"
         # A discriminated union adds the chosen kind to the path ("force.pulse.duration").
         loc = tuple(p for p in e["loc"] if p not in ("sine", "abs_sine", "pulse"))
         described.append(FieldError(field=field_path(loc), message=message))

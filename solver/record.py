@@ -19,9 +19,9 @@ from pathlib import Path
 from typing import Literal
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 
-from .case import Case, CaseError, FieldError, field_error, validated
+from .case import INPUT, Case, CaseError, FieldError, field_error, validated
 
 MIN_SAMPLES = 20  # fewer say too little about any parameter's effect on the pulse
 MAX_SAMPLES = 200_000
@@ -40,7 +40,7 @@ class Record(BaseModel):
     """Samples `values` of `quantity` at `time` (s from the impact); `x` (m from the struck end)
     is the gauge's station for a stress."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = INPUT
 
     quantity: Literal["contact_force", "medium_force", "stress", "struck_end_velocity",
                       "working_end_velocity"]

@@ -12,9 +12,9 @@ import typing
 from typing import Any
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict, Field, model_validator
+from pydantic import BaseModel, Field, model_validator
 
-from .case import Case, CaseError, FieldError, field_error, validated
+from .case import INPUT, Case, CaseError, FieldError, Whole, field_error, validated
 from .evaluate import Batch, Space, check_grid, evaluate_batch
 from .grid import first_cells
 from .limits import Limits
@@ -30,7 +30,7 @@ EXAMPLE_QUANTITIES = ("energy.transfer_efficiency", "max_compressive_stress", "p
 class Calibration(BaseModel):
     """A case, a measured record, and the parameters to fit with their bounds."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = INPUT
 
     case: Case
     record: Record
@@ -81,7 +81,7 @@ def _check_units(record: Record, peaks: list[float]) -> None:
 class Objective(BaseModel):
     """The summary quantity to maximise or to minimise (one of the two)."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = INPUT
 
     maximize: str | None = None
     minimize: str | None = None
@@ -112,7 +112,7 @@ class Objective(BaseModel):
 class Bound(BaseModel):
     """A limit on a summary quantity: at most `max`, at least `min`, or both."""
 
-    model_config = ConfigDict(extra="forbid", allow_inf_nan=False)
+    model_config = INPUT
 
     max: float | None = None
     min: float | None = None
@@ -129,7 +129,7 @@ class Bound(BaseModel):
 class Optimization(BaseModel):
     """A case, the fields to vary with their bounds, the objective and the limits."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = INPUT
 
     case: Case
     variables: dict[str, list[float]] = Field(
@@ -137,11 +137,11 @@ class Optimization(BaseModel):
     objective: Objective
     limits: dict[str, Bound] = Field(default_factory=dict,
                                      description="summary quantity → its {max} and/or {min}")
-    max_evaluations: int = Field(default=1000, ge=10, le=100_000,
+    max_evaluations: Whole = Field(default=1000, ge=10, le=100_000,
                                  description="the budget of model runs: 80% for the global stage, the rest "
                                              "for the local stage (a stage stops at the end of the "
                                              "generation or iteration that reaches it)")
-    seed: int = Field(default=0, ge=0, description="of the global stage's random choices")
+    seed: Whole = Field(default=0, ge=0, description="of the global stage's random choices")
 
 
 def parse_optimization(data: dict) -> Optimization:

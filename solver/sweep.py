@@ -13,9 +13,9 @@ import itertools
 import math
 from typing import Any
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, Field
 
-from .case import Case, CaseError, FieldError, Outputs, parse_case
+from .case import INPUT, Case, CaseError, FieldError, Outputs, parse_case
 from .limits import Limits, check_case
 from .paths import set_field, value_at
 
@@ -44,7 +44,7 @@ COLUMNS = (
 class Sweep(BaseModel):
     """A base case and, per field path (`striker.velocity`, `tool.profile.area.2`), its values."""
 
-    model_config = ConfigDict(extra="forbid")
+    model_config = INPUT
 
     case: Case
     parameters: dict[str, list[Any]] = Field(

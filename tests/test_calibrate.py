@@ -159,6 +159,8 @@ def good_record() -> dict:
     ({"quantity": "stress"}, "record.x", "is required"),
     ({"quantity": "displacement"}, "record.quantity", ""),
     ({"values": [1.0] * 49}, "record.values", "one value per time"),
+    ({"values": [1.0] * 3 + [True] + [1.0] * 46}, "record.values[3]", "must be a number, not true"),
+    ({"time": ["0"] + [i * 1e-6 for i in range(1, 50)]}, "record.time[0]", 'not the string "0"'),
 ])
 def test_bad_records_are_refused_naming_the_field(change, field, words):
     with pytest.raises(CaseError) as refused:
