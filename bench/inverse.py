@@ -38,10 +38,12 @@ import time
 from pathlib import Path
 
 import numpy as np
-from scipy.optimize import brentq
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
+
+import closed_forms as CF  # noqa: E402
 
 from percussim.solver.calibrate import calibrate  # noqa: E402
 from percussim.solver.case import parse_case  # noqa: E402
@@ -60,7 +62,6 @@ SEED = 1
 MAX_PISTON = 0.6  # m
 ALLOWABLE = 250e6  # Pa
 LUNDBERG_BUDGET = 200
-STEEL_E, STEEL_RHO = 2.1e11, 7800.0  # Pa, kg/m³: the impedance case's striker and tool
 
 
 # The records and the cases
@@ -123,11 +124,11 @@ def single_pass(case: dict) -> str:
 def lundberg(case: dict) -> tuple[float, float]:
     """Lundberg's optimal piston length x*·Z·a/(2k), the stationary point x* of (1 − e^−x)²/x,
     and his efficiency there, 2(1 − e^−x*)²/x*·(1 − k/k_u)."""
-    x = brentq(lambda x: 2.0 * x * math.exp(-x) - (1.0 - math.exp(-x)), 0.5, 3.0)
+    x, _ = CF.lundberg_optimum()
     tool, rock = case["tool"], case["medium"]
     speed = math.sqrt(tool["youngs_modulus"] / tool["density"])
     impedance = tool["density"] * speed * tool["area"]
-    efficiency = 2.0 * (1.0 - math.exp(-x)) ** 2 / x * (1.0 - rock["stiffness"] / rock["unloading_stiffness"])
+    efficiency = CF.lundberg(x, unloading=rock["unloading_stiffness"] / rock["stiffness"])
     return x * impedance * speed / (2.0 * rock["stiffness"]), efficiency
 
 
@@ -256,27 +257,18 @@ def lundberg_table() -> Table:
 
 
 def impedance_table() -> Table:
-    speed = math.sqrt(STEEL_E / STEEL_RHO)
-    tool_area, striker_length, tool_length = 1e-3, 0.2, 1.0
-    rod = {"youngs_modulus": STEEL_E, "density": STEEL_RHO}
-    case = {"name": "impedance",
-            "striker": {"length": striker_length, "area": 1.7 * tool_area, "velocity": 10.0, **rod},
-            "tool": {"length": tool_length, "area": tool_area, **rod},
-            "contact": {"stiffness": 1e11, "exponent": 0.0},
-            "medium": {"stiffness": 1.0, "damping": STEEL_RHO * speed * tool_area},
-            "numerics": {"duration": (tool_length + 2.0 * striker_length) / speed}}
     answer, seconds, evaluator = timed(optimize, {
-        "case": case, "variables": {"striker.area": [tool_area / 4, 4 * tool_area]},
+        "case": CF.matched_tool_case(1.7), "variables": {"striker.area": [CF.AREA / 4, 4 * CF.AREA]},
         "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": LUNDBERG_BUDGET}, 2)
-    ratio = answer["values"]["striker.area"] / tool_area
+    ratio = answer["values"]["striker.area"] / CF.AREA
     efficiency = answer["quantities"]["energy.transfer_efficiency"]
     table = Table(f"e. The striker–tool impedance ratio r = A1/A2 that passes the most energy, budget "
                   f"{LUNDBERG_BUDGET} runs, 2 processes", ["", "r", "efficiency"])
     table.rows.append(["found", f"{ratio:.4f}", f"{efficiency:.4f}"])
     table.rows.append(["closed form", "1", "1"])
     table.rows.append(["difference", f"{ratio - 1.0:+.2%}", f"{efficiency - 1.0:+.2%}"])
-    worst = max(abs(run["quantities"]["energy.transfer_efficiency"] / (4 * r / (1 + r) ** 2) - 1.0)
-                for run in answer["history"] for r in [run["values"]["striker.area"] / tool_area])
+    worst = max(abs(run["quantities"]["energy.transfer_efficiency"]
+                    / CF.passed_share(run["values"]["striker.area"] / CF.AREA) - 1.0) for run in answer["history"])
     table.notes.append(
         f"{answer['evaluations']} runs in {seconds:.1f} s ({pool_note(evaluator)}) on {answer['grid']['cells']} cells; "
         f"every run's efficiency within {worst:.2%} of 4r/(1 + r)² (the contact's finite stiffness and the "

@@ -26,9 +26,9 @@ With --write, the figures go to docs/validation/ beside the markdown.
 from __future__ import annotations
 
 import argparse
-import importlib.util
 import json
 import math
+import sys
 from pathlib import Path
 from time import perf_counter
 from typing import NamedTuple
@@ -306,15 +306,8 @@ def recorded_force_report() -> list[str]:
 
 # --- The models beyond the paper: the one-dimensional impacts of tests/closed_forms.py ------------
 
-def _closed_forms():
-    """tests/closed_forms.py: the cases and closed forms the tests assert, loaded by path."""
-    spec = importlib.util.spec_from_file_location("closed_forms", ROOT / "tests" / "closed_forms.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module
-
-
-CF = _closed_forms()
+sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
+import closed_forms as CF  # noqa: E402
 TOLERANCE = 0.01
 
 

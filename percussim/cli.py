@@ -9,9 +9,10 @@ import os
 import sys
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Callable, Iterator, TypeVar
 
 EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 1, 2, 130, 141
+T = TypeVar("T")
 PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
 # What the optional installs bring (pyproject.toml's extras): a command needing one says which.
 EXTRA_OF = {"fastapi": "service", "starlette": "service", "uvicorn": "service", "celery": "service",
@@ -167,24 +168,32 @@ def _presets(args: argparse.Namespace) -> int:
     return 0
 
 
-def _sweep(args: argparse.Namespace) -> int:
+def _guarded(args: argparse.Namespace, what: str, work: Callable[[], T]) -> T | int:
+    """`work()` on the command's case, here or on the service at `args.url`; or the exit status of
+    what stopped it: a missing file, a refusal naming the fields (here or by the service), the
+    service's error (a failed or cancelled job, no answer, a bad key), or Ctrl-C."""
     from .client import Refused, ServiceError
-
     from .solver.case import CaseError
 
     try:
-        rows = _sweep_on_service(args) if args.url else _sweep_here(args)
-    except FileNotFoundError:
-        return _no_such_file(args.case)
+        return work()
+    except FileNotFoundError as error:
+        return _no_such_file(error.filename or args.case)
     except (CaseError, Refused) as error:
-        return _refused(f"sweep of {args.case}", error)
-    except ServiceError as error:  # an unreachable service, a bad key
+        return _refused(f"{what} of {args.case}", error)
+    except ServiceError as error:
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_FAILED
     except KeyboardInterrupt:
-        if not args.url:
+        if not args.url:  # on a service, the cancel said what was stopped
             print("\npercussim: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
+
+
+def _sweep(args: argparse.Namespace) -> int:
+    rows = _guarded(args, "sweep", lambda: _sweep_on_service(args) if args.url else _sweep_here(args))
+    if isinstance(rows, int):
+        return rows
     print(file=sys.stderr)
     columns = list(dict.fromkeys(key for row in rows for key in row))
     if args.csv:
@@ -322,25 +331,13 @@ def _study(args: argparse.Namespace, what: str, request: Callable[[], dict],
            solve: Callable[..., dict]) -> dict | int:
     """Run a calibration or an optimisation (`what`) here, or on the service at `args.url`;
     the answer, or the exit status of a refusal or a failure."""
-    from .client import Refused, ServiceError
-    from .solver.case import CaseError
-
-    try:
+    def work() -> dict:
         if args.url:
             return _study_on_service(args, what, request())
         with _progress_bar(args.progress) as advance:
             return solve(request(), processes=args.processes, progress=advance, limits=_limits())
-    except FileNotFoundError as error:
-        return _no_such_file(error.filename or args.case)
-    except (CaseError, Refused) as error:
-        return _refused(f"{what} of {args.case}", error)
-    except ServiceError as error:  # a failed or cancelled study, an unreachable service, a bad key
-        print(f"percussim: {error}", file=sys.stderr)
-        return EXIT_FAILED
-    except KeyboardInterrupt:
-        if not args.url:
-            print("\npercussim: interrupted", file=sys.stderr)
-        return EXIT_INTERRUPTED
+
+    return _guarded(args, what, work)
 
 
 def _study_on_service(args: argparse.Namespace, what: str, request: dict) -> dict:

@@ -65,6 +65,14 @@ def piston_case(ratio: float, numerics: dict | None = None, **changes) -> dict:
     }
 
 
+def matched_tool_case(ratio: float) -> dict:
+    """A piston of `ratio` on the tool whose far end is a dashpot of its impedance Z (nothing
+    reflects), run until the piston's first pulse has passed it (L/a + T): the medium receives
+    `passed_share(ratio)` of the piston's energy, largest at r = 1. A linear contact of 1e11 N/m."""
+    return piston_case(ratio, {"duration": TOOL / SPEED + T}, contact={"stiffness": 1e11, "exponent": 0.0},
+                       medium={"stiffness": 1.0, "damping": Z})
+
+
 def stepped_piston_case(cells: int) -> dict:
     """An equal piston whose back half has twice the area, on `cells` of the explicit scheme: with
     2000 its length is a whole number of its cells, with 2003 not (a delay at its free end)."""

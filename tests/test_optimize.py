@@ -6,14 +6,13 @@ import json
 import math
 
 import pytest
-from scipy.optimize import brentq
 
+from closed_forms import AREA, lundberg_optimum, matched_tool_case, passed_share
 from percussim.cli import main
 from percussim.solver.case import CaseError
 from percussim.solver.optimize import optimize
 from percussim.solver.presets import preset_json
 
-STEEL_E, STEEL_RHO = 2.1e11, 7800.0
 ROCK_K = 5e8
 
 
@@ -33,11 +32,12 @@ def short_rock_drill() -> dict:
 
 def lundberg_optimal_length(case: dict) -> float:
     """The piston length that maximises Lundberg's efficiency 2(1 − e^−x)²/x·(1 − k/k_u), x =
-    k·(2L_p/a)/Z, from the stationary point of (1 − e^−x)²/x, found here by root-finding."""
-    x = brentq(lambda x: 2.0 * x * math.exp(-x) - (1.0 - math.exp(-x)), 0.5, 3.0)
+    k·(2L_p/a)/Z, from the stationary point of (1 − e^−x)²/x (tests/closed_forms.py)."""
+    x, _ = lundberg_optimum()
     assert x == pytest.approx(1.2564, abs=1e-4)
-    speed = math.sqrt(STEEL_E / STEEL_RHO)
-    impedance = STEEL_RHO * speed * case["tool"]["area"]
+    tool = case["tool"]
+    speed = math.sqrt(tool["youngs_modulus"] / tool["density"])
+    impedance = tool["density"] * speed * tool["area"]
     return x * impedance * speed / (2.0 * case["medium"]["stiffness"])
 
 
@@ -61,30 +61,20 @@ def test_lundbergs_optimal_piston_length_is_found_within_1_percent():
 
 
 def test_the_striker_tool_impedance_ratio_that_passes_the_most_energy_is_one():
-    """An elastic striker of length L1 on a tool whose far end is a matched dashpot (damping =
-    the tool's impedance Z2, so nothing reflects): in the window of the striker's first pulse,
-    L2/a + 2·L1/a, the medium receives 4r/(1 + r)² of the striker's energy, r = Z1/Z2 (the
-    transmission coefficient of a rod–rod impact), whose maximum is r = 1. Only the striker's
-    area varies (the same material: r = A1/A2)."""
-    speed = math.sqrt(STEEL_E / STEEL_RHO)
-    tool_area, striker_length, tool_length = 1e-3, 0.2, 1.0
-    rod = {"youngs_modulus": STEEL_E, "density": STEEL_RHO}
-    case = {"name": "impedance",
-            "striker": {"length": striker_length, "area": 1.7 * tool_area, "velocity": 10.0, **rod},
-            "tool": {"length": tool_length, "area": tool_area, **rod},
-            "contact": {"stiffness": 1e11, "exponent": 0.0},
-            "medium": {"stiffness": 1.0, "damping": STEEL_RHO * speed * tool_area},
-            "numerics": {"duration": (tool_length + 2.0 * striker_length) / speed}}
-    answer = optimize({"case": case, "variables": {"striker.area": [tool_area / 4, 4 * tool_area]},
+    """An elastic striker on a tool whose far end is a matched dashpot (nothing reflects): over
+    its first pulse the medium receives 4r/(1 + r)² of the striker's energy, r = Z1/Z2 (the
+    transmission of a rod–rod impact), whose maximum is r = 1. Only the striker's area varies
+    (the same material: r = A1/A2)."""
+    answer = optimize({"case": matched_tool_case(1.7), "variables": {"striker.area": [AREA / 4, 4 * AREA]},
                        "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 200})
-    ratio = answer["values"]["striker.area"] / tool_area
+    ratio = answer["values"]["striker.area"] / AREA
     assert ratio == pytest.approx(1.0, abs=0.01), answer["stopped"]
     assert answer["quantities"]["energy.transfer_efficiency"] == pytest.approx(1.0, abs=0.01)
     # The objective the optimiser saw is the closed form's, run by run (the contact's finite
     # stiffness and the grid of the 1% tolerance aside).
     for run in answer["history"]:
-        r = run["values"]["striker.area"] / tool_area
-        assert run["quantities"]["energy.transfer_efficiency"] == pytest.approx(4 * r / (1 + r) ** 2, rel=0.02)
+        r = run["values"]["striker.area"] / AREA
+        assert run["quantities"]["energy.transfer_efficiency"] == pytest.approx(passed_share(r), rel=0.02)
 
 
 @pytest.mark.slow
