@@ -168,9 +168,12 @@ class Client:
         `progress` 0..1, `created`, `started`, `finished`, `error`."""
         return self._json("GET", self._job_path(job_id))
 
-    def jobs(self, offset: int = 0, limit: int = 50) -> list[dict]:
-        """Records of recent jobs, newest first, from `offset`, at most `limit` (≤ 500)."""
-        return self._json("GET", "/v1/jobs", params={"offset": offset, "limit": limit})["jobs"]
+    def jobs(self, offset: int = 0, limit: int = 50, status: str | None = None, name: str | None = None,
+             sweep: str | None = None) -> list[dict]:
+        """Records of recent jobs, newest first, from `offset`, at most `limit` (≤ 500); only those
+        of `status`, of cases named `name`, or the variants of `sweep`, when given."""
+        query = {"offset": offset, "limit": limit, "status": status, "name": name, "sweep": sweep}
+        return self._json("GET", "/v1/jobs", params={k: v for k, v in query.items() if v is not None})["jobs"]
 
     def wait(self, job_id: str, progress: Progress | None = None, poll: float = 0.2,
              timeout: float | None = None) -> dict:
@@ -226,10 +229,17 @@ class Client:
             answer.close()
 
     def cancel(self, job_id: str) -> dict:
-        """Cancel an unfinished job: a queued one at once, a running one between two chunks of its
-        run (`wait` then raises `JobFailed`). Returns its record; a finished job raises a 409
-        `ServiceError`."""
-        return self._json("DELETE", self._job_path(job_id))
+        """Cancel an unfinished job (or study): a queued one at once, a running one between two
+        chunks of its run (`wait` then raises `JobFailed`). Returns its record; a finished job is
+        left as it is and raises a 409 `ServiceError`."""
+        return self._json("POST", f"{self._job_path(job_id)}/cancel")
+
+    def delete(self, job_id: str) -> None:
+        """Remove a finished job (or study) and its files. An unfinished one raises a 409
+        `ServiceError` (cancel it first), and so does a sweep's variant (`delete_sweep`)."""
+        if self.job(job_id)["status"] not in FINISHED:
+            raise ServiceError(f"job {job_id} has not finished: cancel it first", status=409)
+        self._send("DELETE", self._job_path(job_id))
 
     def run(self, case: dict | str | os.PathLike | Case, progress: Progress | None = None,
             timeout: float | None = None) -> dict:
@@ -265,6 +275,10 @@ class Client:
     def cancel_sweep(self, sweep_id: str) -> dict:
         """Cancel every variant of the sweep that has not finished; returns the sweep."""
         return self._json("DELETE", self._sweep_path(sweep_id))
+
+    def delete_sweep(self, sweep_id: str) -> None:
+        """Remove a finished sweep with its jobs and files (409 while a variant has not finished)."""
+        self._send("DELETE", self._sweep_path(sweep_id), params={"purge": "true"})
 
     def run_sweep(self, case: dict | str | os.PathLike | Case, parameters: dict[str, list],
                   progress: Progress | None = None, timeout: float | None = None) -> list[dict]:

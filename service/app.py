@@ -13,10 +13,11 @@ from fastapi.responses import JSONResponse
 from percussim.worker.settings import Settings, settings as env_settings
 from percussim.worker.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
 
-from . import errors, page, presets
+from . import errors, page, presets, retention
 from .auth import authenticate
 from .jobs import jobs_router
 from .limits import BodySizeLimit
+from .metrics import metrics_router
 from .queue import JobQueue
 from .studies import studies_router
 from .sweeps import sweeps_router
@@ -35,6 +36,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                     "summary and its HDF5 result. The presets are the paper's cases, a rock drill and a pile. "
                     "In a browser, [the job page](/) does all of this.",
         version="1",
+        lifespan=retention.lifespan(settings),
     )
     errors.install(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
@@ -49,6 +51,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(studies_router(settings, queue, kind), dependencies=keyed)
     app.include_router(presets.router, dependencies=keyed)
     app.include_router(page.router)
+    app.include_router(metrics_router(settings, queue))
 
     @app.get("/healthz", tags=["health"])
     def healthz() -> dict:

@@ -1,7 +1,8 @@
 """Error answers: every refused case names its fields, in the words `percussim run` uses.
 
 422 `{"detail": [{"field": "contact.exponent", "message": "must be ≤ 0.5"}, ...]}` for a case
-that is invalid or too large, 404 `{"detail": "..."}` for an unknown job.
+that is invalid or too large, 404 `{"detail": "..."}` for an unknown job; 507 while the results
+store cannot write (a full disk) and 503 with `Retry-After` while the database is away, never 500.
 """
 
 from __future__ import annotations
@@ -16,7 +17,9 @@ from pydantic import BaseModel
 from starlette.exceptions import HTTPException
 
 from percussim.solver.case import CaseError, FieldError, describe, field_path
-from percussim.worker.store import UnknownJob, UnknownSweep
+from percussim.worker.store import StoreFull, StoreUnavailable, UnknownJob, UnknownSweep
+
+RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker or the database is down
 
 
 class FieldErrors(BaseModel):
@@ -87,6 +90,16 @@ async def _unknown_sweep(request: Request, exc: UnknownSweep) -> JSONResponse:
     return JSONResponse(status_code=404, content={"detail": f"no sweep with id {exc.args[0]!r}"})
 
 
+async def _store_full(request: Request, exc: StoreFull) -> JSONResponse:
+    return JSONResponse(status_code=507, content={"detail": (
+        f"{exc.strerror}: nothing was stored; free space in the results store, then submit again")})
+
+
+async def _store_unavailable(request: Request, exc: StoreUnavailable) -> JSONResponse:
+    return JSONResponse(status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
+                        content={"detail": f"{exc.args[0]}; try again later"})
+
+
 def install(app: FastAPI) -> None:
     """Register the handlers on `app`; FastAPI's own 404 and 405 answers are left as they are."""
     app.add_exception_handler(RequestValidationError, _invalid_request)
@@ -94,3 +107,5 @@ def install(app: FastAPI) -> None:
     app.add_exception_handler(UnknownJob, _unknown_job)
     app.add_exception_handler(UnknownSweep, _unknown_sweep)
     app.add_exception_handler(HTTPException, _http_error)
+    app.add_exception_handler(StoreFull, _store_full)
+    app.add_exception_handler(StoreUnavailable, _store_unavailable)

@@ -5,9 +5,11 @@ The routes only validate, publish and read the results store the workers write. 
 `jobs_router`, in the signature of `submit`.
 """
 
+import base64
 import re
 from datetime import datetime
 from typing import Annotated, Any, Literal
+from urllib.parse import urlencode
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
 from fastapi.responses import FileResponse
@@ -18,12 +20,12 @@ from percussim.solver.limits import check_case
 from percussim.solver.summary import Summary
 from percussim.solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
 from percussim.worker.settings import Settings
-from percussim.worker.store import CANCELLED, FAILED, FINISHED, QUEUED, SUCCEEDED, JobStore, now
+from percussim.worker.store import CANCELLED, FAILED, SUCCEEDED, JobStore, UnknownJob
 
-from .errors import FieldErrors, Problem
+from .errors import RETRY_AFTER_SECONDS, FieldErrors, Problem
 from .queue import JobQueue
 
-RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker is down
+Status = Literal["queued", "running", "succeeded", "failed", "cancelled"]
 
 
 class Links(BaseModel):
@@ -40,7 +42,7 @@ class Job(BaseModel):
 
     id: str
     name: str | None
-    status: Literal["queued", "running", "succeeded", "failed", "cancelled"]
+    status: Status
     progress: float
     created: datetime
     started: datetime | None
@@ -54,6 +56,7 @@ class JobList(BaseModel):
     offset: int
     limit: int
     jobs: list[Job]
+    next: str | None  # the next page, by creation time (`cursor`), or null on the last page
 
 
 def _view(request: Request, record: dict) -> dict:
@@ -104,22 +107,33 @@ def _download_name(record: dict) -> str:
     return f"{name}-{record['id']}.h5"
 
 
-def cancel(jobs: JobStore, job_id: str) -> dict:
-    """Cancel a job that has not finished: a queued one at once, a running one by its worker."""
-    # The marker first: a worker taking the job from now on sees it and does not run it.
-    jobs.request_cancel(job_id)
-    record = jobs.get(job_id)
-    if record["status"] == QUEUED:
-        record = jobs.update(job_id, status=CANCELLED, finished=now())
-    return record
+def cancel_or_delete(jobs: JobStore, record: dict, view, what: str = "job") -> dict | Response:
+    """DELETE on a job: cancel it if it has not finished (202 and its record: a queued one is
+    cancelled at once, a running one by its worker), else remove it and its files (204). A
+    variant of a sweep is removed only with its sweep."""
+    cancelled = jobs.request_cancel(record["id"])
+    if cancelled is not None:
+        return view(cancelled)
+    if record["sweep"] is not None:
+        raise HTTPException(status_code=409, detail=(
+            f"{what} {record['id']} is a variant of sweep {record['sweep']}: it is removed with its "
+            f"sweep (DELETE /v1/sweeps/{record['sweep']}?purge=true)"))
+    if not jobs.delete(record["id"]):
+        raise UnknownJob(record["id"])  # someone else removed it meanwhile
+    return Response(status_code=204)
 
 
-def cancel_unfinished(jobs: JobStore, record: dict, what: str = "job") -> dict:
-    """Cancel the job of `record` (`cancel`), or answer 409 if it has already finished."""
-    if record["status"] in FINISHED:
-        raise HTTPException(status_code=409,
-                            detail=f"{what} {record['id']} has already finished: it is {record['status']}")
-    return cancel(jobs, record["id"])
+def _cursor(record: dict) -> str:
+    return base64.urlsafe_b64encode(f"{record['created']}|{record['id']}".encode()).decode()
+
+
+def _parse_cursor(cursor: str) -> tuple[datetime, str]:
+    try:
+        created, job_id = base64.urlsafe_b64decode(cursor.encode()).decode().split("|")
+        return datetime.fromisoformat(created), job_id
+    except ValueError:
+        raise CaseError([FieldError(field="query.cursor", message=(
+            "is not a cursor of this list: pass the `next` link of the page before"))]) from None
 
 
 def queue_jobs(jobs: JobStore, queue: JobQueue, job_ids: list[str]) -> None:
@@ -139,7 +153,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     not_ready = {409: {"model": Problem, "description": "the job has not succeeded"}}
 
     def store(request: Request) -> JobStore:
-        return JobStore(settings.results_dir, owner=request.state.owner)
+        return JobStore(settings, owner=request.state.owner)
 
     @router.post("", status_code=202, response_model=Job, responses={
         422: {"model": FieldErrors, "description": "the case is invalid or exceeds a limit"},
@@ -156,12 +170,26 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         return view
 
     @router.get("", response_model=JobList, responses={422: {"model": FieldErrors}})
-    def list_jobs(request: Request, offset: Annotated[int, Query(ge=0)] = 0,
-                  limit: Annotated[int, Query(ge=1, le=500)] = 50) -> dict:
-        """Recent jobs, newest first."""
-        total, records = store(request).list(offset, limit)
+    def list_jobs(request: Request, offset: Annotated[int, Query(ge=0, le=10**9)] = 0,
+                  limit: Annotated[int, Query(ge=1, le=500)] = 50,
+                  status: Annotated[Status | None, Query(description="only jobs of this status")] = None,
+                  name: Annotated[str | None, Query(description="only jobs of cases of this name")] = None,
+                  sweep: Annotated[str | None, Query(description="only the variants of this sweep")] = None,
+                  cursor: Annotated[str | None, Query(
+                      description="the page after the one whose `next` link gave it")] = None) -> dict:
+        """Recent jobs, newest first, a page at a time: `next` links the page after (by creation
+        time, as fast at the thousandth page as at the first); `total` counts the jobs that match."""
+        before = None if cursor is None else _parse_cursor(cursor)
+        total, records = store(request).list(offset, limit, status=status, name=name, sweep=sweep,
+                                             before=before)
+        following = None
+        if len(records) == limit:
+            query = {"limit": limit, "status": status, "name": name, "sweep": sweep,
+                     "cursor": _cursor(records[-1])}
+            following = request.app.url_path_for("list_jobs") + "?" + urlencode(
+                {k: v for k, v in query.items() if v is not None})
         return {"total": total, "offset": offset, "limit": limit,
-                "jobs": [_view(request, r) for r in records]}
+                "jobs": [_view(request, r) for r in records], "next": following}
 
     @router.get("/{job_id}", response_model=Job, responses=not_found)
     def get_job(request: Request, job_id: str) -> dict:
@@ -245,10 +273,24 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         return FileResponse(kept, media_type=FORMATS[fmt])
 
     @router.delete("/{job_id}", status_code=202, response_model=Job, responses=not_found | {
+        204: {"description": "the job had finished: it and its files are removed"},
+        409: {"model": Problem, "description": "a finished variant of a sweep: removed with its sweep"}})
+    def delete_job(request: Request, job_id: str):
+        """Cancel a job that has not finished (202): a queued one at once, a running one between
+        two chunks of its run. A finished job is removed with its files (204; then 404)."""
+        jobs = store(request)
+        return cancel_or_delete(jobs, jobs.get(job_id), lambda record: _view(request, record))
+
+    @router.post("/{job_id}/cancel", status_code=202, response_model=Job, responses=not_found | {
         409: {"model": Problem, "description": "the job has already finished"}})
     def cancel_job(request: Request, job_id: str) -> dict:
-        """Cancel a job: a queued one at once, a running one between two chunks of its run."""
+        """Cancel a job (or a study) that has not finished, as DELETE does, but never remove one
+        that has: 409 then. For a client that must not lose a result finished meanwhile."""
         jobs = store(request)
-        return _view(request, cancel_unfinished(jobs, jobs.get(job_id)))
+        cancelled = jobs.request_cancel(job_id)
+        if cancelled is None:
+            raise HTTPException(status_code=409, detail=f"job {job_id} has already finished: it is "
+                                                        f"{jobs.get(job_id)['status']}")
+        return _view(request, cancelled)
 
     return router

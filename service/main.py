@@ -20,7 +20,7 @@ import time
 import uvicorn
 
 from percussim.worker.settings import Settings, settings
-from percussim.worker.store import FAILED, QUEUED, RUNNING, JobStore, now
+from percussim.worker.store import FAILED, QUEUED, RUNNING, JobStore
 
 from .queue import JobQueue
 
@@ -44,17 +44,16 @@ def _back_to_queue(jobs: JobStore, worker: str, death: str) -> list[str]:
     """Record as queued again the jobs the dead `worker` was running (`death` says how it died), or
     as failed those it died under MAX_ATTEMPTS times: a case that kills its worker must not kill
     every worker in turn. Returns the ids queued again."""
-    lost = [r for r in jobs.records() if r["status"] == RUNNING and r["worker"] == worker]
     again = []
-    for record in lost:
-        if record["attempts"] >= MAX_ATTEMPTS:
-            jobs.update(record["id"], status=FAILED, finished=now(), error=(
-                f"its worker died {record['attempts']} times while running it (the last time: {death}): "
+    for job_id in jobs.ids(RUNNING, worker=worker):
+        attempts = jobs.get(job_id)["attempts"]
+        if attempts >= MAX_ATTEMPTS:
+            jobs.finish(job_id, FAILED, error=(
+                f"its worker died {attempts} times while running it (the last time: {death}): "
                 "a case that needs more memory than the machine has, or a crash; try a coarser grid "
                 "or fewer outputs"))
-        else:
-            jobs.update(record["id"], status=QUEUED, progress=0.0)
-            again.append(record["id"])
+        elif jobs.requeue(job_id, worker):
+            again.append(job_id)
     return again
 
 
@@ -66,7 +65,7 @@ def _say_queued_again(again: list[str], worker: str, death: str) -> None:
 def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
     """Queue again the jobs the dead `worker` was running (`_back_to_queue`); returns their ids,
     none if the broker could not take them (they are then failed, saying why)."""
-    jobs = JobStore(settings.results_dir)
+    jobs = JobStore(settings)
     again = _back_to_queue(jobs, worker, death)
     if again and JobQueue(settings).enqueue_or_fail(
             jobs, again, "its worker died and the job could not be queued again") is not None:
@@ -82,13 +81,12 @@ def restore_queue(settings: Settings, workers: list[str]) -> list[str]:
     folder's own dropped first, oldest job first. So a job whose message was lost another way (the
     service stopped between recording the job and publishing it, a message file removed by hand)
     runs too, and none runs twice. Returns the ids of the queued jobs."""
-    jobs = JobStore(settings.results_dir)
+    jobs = JobStore(settings)
     death = "the service stopped while it ran"
     cut_off = {name: _back_to_queue(jobs, name, death) for name in workers}
     queue = JobQueue(settings)
     queue.purge()
-    waiting = [r["id"] for r in sorted((r for r in jobs.records() if r["status"] == QUEUED),
-                                        key=lambda r: r["created"])]
+    waiting = jobs.ids(QUEUED)
     if waiting and queue.enqueue_or_fail(jobs, waiting, "the job could not be queued again when "
                                                         "the service started") is not None:
         return []

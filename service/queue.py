@@ -18,7 +18,7 @@ from kombu.utils.url import maybe_sanitize_url
 
 from percussim.worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
 from percussim.worker.settings import Settings
-from percussim.worker.store import FAILED, JobStore, now
+from percussim.worker.store import FAILED, JobStore
 
 # What publishing raises when the broker cannot be reached (kombu wraps most of them).
 BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError,
@@ -69,9 +69,16 @@ class JobQueue:
             self.enqueue(*job_ids)
         except BROKER_ERRORS as error:
             for job_id in job_ids:
-                jobs.update(job_id, status=FAILED, finished=now(), error=f"{failure}: {error}")
+                jobs.finish(job_id, FAILED, error=f"{failure}: {error}")
             return error
         return None
+
+    def depth(self) -> int:
+        """Messages waiting in the queue for a worker."""
+        self._folder_made()
+        with self.app.connection_for_read() as connection:
+            return connection.default_channel.queue_declare(
+                self.app.conf.task_default_queue, passive=True).message_count
 
     def problem(self) -> str | None:
         """Why the broker cannot be reached now, or None if it can."""

@@ -20,7 +20,7 @@ from percussim.worker.settings import Settings
 from percussim.worker.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
 
 from .errors import FieldErrors, Problem
-from .jobs import cancel_unfinished, not_ready_error, queue_jobs
+from .jobs import cancel_or_delete, not_ready_error, queue_jobs
 from .queue import JobQueue
 
 
@@ -69,7 +69,7 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     not_found = {404: {"model": Problem, "description": f"no {kind} with this id"}}
 
     def store(request: Request) -> JobStore:
-        return JobStore(settings.results_dir, owner=request.state.owner)
+        return JobStore(settings, owner=request.state.owner)
 
     def record_of(request: Request, study_id: str) -> dict:
         record = store(request).get(study_id)
@@ -123,10 +123,12 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     get_plot.__doc__ = ("The record against the fitted model, and the residual." if kind == CALIBRATION
                         else "Every evaluation of the objective, and the best so far.")
 
-    @router.delete("/{study_id}", status_code=202, response_model=Study, name=f"cancel_{kind}",
-                   responses=not_found | {409: {"model": Problem, "description": "already finished"}})
-    def cancel_study(request: Request, study_id: str) -> dict:
-        return view(request, cancel_unfinished(store(request), record_of(request, study_id), kind))
+    @router.delete("/{study_id}", status_code=202, response_model=Study, name=f"delete_{kind}",
+                   responses=not_found | {204: {"description": "it had finished: it and its files are removed"}})
+    def delete_study(request: Request, study_id: str):
+        return cancel_or_delete(store(request), record_of(request, study_id),
+                                lambda record: view(request, record), kind)
 
-    cancel_study.__doc__ = f"Cancel the {kind}: a queued one at once, a running one between two batches."
+    delete_study.__doc__ = (f"Cancel the {kind} if it has not finished (202): a queued one at once, a running "
+                            "one between two batches. A finished one is removed with its files (204).")
     return router

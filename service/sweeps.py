@@ -7,7 +7,7 @@ which job has which parameter values, and the table is read from the jobs' summa
 from collections import Counter
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, Request, Response
+from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
 from pydantic import BaseModel
 
 from percussim.solver.presets import preset_json, preset_names
@@ -16,7 +16,7 @@ from percussim.worker.settings import Settings
 from percussim.worker.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
 
 from .errors import FieldErrors, Problem
-from .jobs import cancel, queue_jobs
+from .jobs import queue_jobs
 from .queue import JobQueue
 
 
@@ -61,14 +61,16 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
     not_found = {404: {"model": Problem, "description": "no sweep with this id"}}
 
     def stores(request: Request) -> tuple[JobStore, SweepStore]:
-        owner = request.state.owner
-        return JobStore(settings.results_dir, owner=owner), SweepStore(settings.results_dir, owner=owner)
+        jobs = JobStore(settings, owner=request.state.owner)
+        return jobs, SweepStore(jobs)
 
     def view(request: Request, record: dict) -> dict:
         jobs, _ = stores(request)
+        _, records = jobs.list(limit=len(record["variants"]), sweep=record["id"])
+        of = {job["id"]: job for job in records}
         rows, counts, progress = [], Counter(), 0.0
         for variant in record["variants"]:
-            job = jobs.get(variant["job"])
+            job = of[variant["job"]]
             counts[job["status"]] += 1
             progress += 1.0 if job["status"] in FINISHED else job["progress"]
             row = {"job": job["id"], "values": variant["values"], "status": job["status"]}
@@ -93,11 +95,9 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
         variant refuses the sweep, naming the parameter value it came from."""
         found = variants(sweep, max_variants=settings.max_sweep_variants, limits=settings.limits())
         jobs, sweeps = stores(request)
-        ids = [jobs.create(case.model_dump(mode="json", exclude_none=True))["id"] for _, case in found]
-        record = sweeps.create(
-            sweep.case.name, list(sweep.parameters),
-            [{"values": values, "job": job_id} for (values, _), job_id in zip(found, ids)])
-        queue_jobs(jobs, queue, ids)
+        record = sweeps.create(sweep.case.name, list(sweep.parameters),
+                               [(values, case.model_dump(mode="json", exclude_none=True)) for values, case in found])
+        queue_jobs(jobs, queue, [variant["job"] for variant in record["variants"]])
         response.headers["Location"] = request.app.url_path_for("get_sweep", sweep_id=record["id"])
         return view(request, record)
 
@@ -106,14 +106,25 @@ def sweeps_router(settings: Settings, queue: JobQueue) -> APIRouter:
         """The sweep's progress and its table: a row per variant, filled in as its job succeeds."""
         return view(request, stores(request)[1].get(sweep_id))
 
-    @router.delete("/{sweep_id}", status_code=202, response_model=SweepView, responses=not_found)
-    def cancel_sweep(request: Request, sweep_id: str) -> dict:
-        """Cancel every variant that has not finished."""
+    @router.delete("/{sweep_id}", status_code=202, response_model=SweepView, responses=not_found | {
+        204: {"description": "purged: the sweep and its jobs are removed"},
+        409: {"model": Problem, "description": "purge asked while some variants have not finished"}})
+    def delete_sweep(request: Request, sweep_id: str,
+                     purge: Annotated[bool, Query(description="remove the finished sweep and its jobs")] = False):
+        """Cancel every variant that has not finished (202); with `purge=true`, remove a sweep
+        whose variants have all finished, with their jobs and files (204; then 404)."""
         jobs, sweeps = stores(request)
         record = sweeps.get(sweep_id)
+        if purge:
+            if not sweeps.purge(sweep_id):
+                unfinished = sum(1 for job in jobs.list(limit=len(record["variants"]), sweep=sweep_id)[1]
+                                 if job["status"] not in FINISHED)
+                raise HTTPException(status_code=409, detail=(
+                    f"sweep {sweep_id} has {unfinished} variant(s) not finished: cancel them "
+                    "(DELETE without purge) or wait, then purge"))
+            return Response(status_code=204)
         for variant in record["variants"]:
-            if jobs.get(variant["job"])["status"] not in FINISHED:
-                cancel(jobs, variant["job"])
+            jobs.request_cancel(variant["job"])
         return view(request, record)
 
     return router

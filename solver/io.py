@@ -178,9 +178,14 @@ class ResultWriter:
         self._tmp = self.path.with_name(f".{self.path.name}.{secrets.token_hex(8)}{PARTIAL}")
         return self
 
-    def __exit__(self, *exc) -> None:
+    def __exit__(self, kind, error, trace) -> None:
         try:
             self._close()
+        except (OSError, RuntimeError):
+            # Closing a file whose write failed (a full disk) fails too: the write's error is
+            # the one to tell, and the file goes anyway.
+            if error is None:
+                raise
         finally:
             if self._tmp is not None:
                 self._tmp.unlink(missing_ok=True)

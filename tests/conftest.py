@@ -51,3 +51,23 @@ def duration_only(name: str) -> dict:
     case["numerics"] = {"duration": case["numerics"]["duration"]}
     case.pop("outputs", None)
     return case
+
+
+@pytest.fixture(scope="session")
+def postgres():
+    """One real PostgreSQL server for the session (the system's package); each test that wants a
+    database asks it for a new one (`postgres.database()`)."""
+    from live_stack import postgres_server
+
+    with postgres_server() as server:
+        yield server
+
+
+@pytest.fixture(params=["sqlite", "postgresql"])
+def records(request, tmp_path):
+    """Settings on each database the service runs on: the embedded SQLite file in the results
+    folder, and a new database on a real PostgreSQL server."""
+    from percussim.worker.settings import Settings
+
+    url = request.getfixturevalue("postgres").database() if request.param == "postgresql" else None
+    return Settings(results_dir=tmp_path / "results", database_url=url)

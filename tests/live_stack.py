@@ -1,16 +1,21 @@
-"""Starts the real thing for the live tests: redis-server, `percussim worker`s, `percussim serve`.
+"""Starts the real thing for the live tests: redis-server, PostgreSQL, `percussim worker`s,
+`percussim serve`.
 
 Every process runs in its own process group on loopback ports, and is stopped with its children.
 """
 
 from __future__ import annotations
 
+import glob
 import os
+import pwd
+import secrets
 import shutil
 import signal
 import socket
 import subprocess
 import sys
+import tempfile
 import time
 from contextlib import contextmanager
 from pathlib import Path
@@ -104,6 +109,71 @@ def redis_server(folder: Path):
         yield server.url
     finally:
         server.stop()
+
+
+class PostgresServer:
+    """A real PostgreSQL server (the system's package: initdb and pg_ctl) on a loopback port, its
+    data in a folder of its own; trust authentication on loopback. As root the server runs as the
+    package's `postgres` user, since PostgreSQL refuses to run as root. `database()` makes a new,
+    empty database and returns its URL."""
+
+    def __init__(self):
+        found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"),
+                       key=lambda path: int(Path(path).parts[-3]))
+        if not found:
+            raise RuntimeError("PostgreSQL is not installed: run the tests with scripts/test")
+        self.bin = Path(found[-1]).parent
+        self.folder = Path(tempfile.mkdtemp(prefix="percussim-postgres-"))  # not under a private tmp
+        self.as_user: list[str] = []
+        if os.geteuid() == 0:
+            user = pwd.getpwnam("postgres")
+            os.chown(self.folder, user.pw_uid, user.pw_gid)
+            self.as_user = ["runuser", "-u", "postgres", "--"]
+        self.data = self.folder / "data"
+        self.port = free_port()
+        self._run("initdb", "-D", str(self.data), "-U", "postgres", "-A", "trust", "-E", "UTF8", "--no-sync")
+
+    def _run(self, program: str, *args: str) -> None:
+        subprocess.run([*self.as_user, str(self.bin / program), *args], check=True, capture_output=True)
+
+    def url(self, database: str = "postgres") -> str:
+        return f"postgresql+psycopg://postgres@127.0.0.1:{self.port}/{database}"
+
+    def start(self) -> None:
+        options = f"-p {self.port} -k {self.folder} -c listen_addresses=127.0.0.1 -c fsync=off"
+        self._run("pg_ctl", "-D", str(self.data), "-o", options, "-l", str(self.folder / "postgres.log"),
+                  "-w", "start")
+
+    def stop(self, mode: str = "fast") -> None:
+        """`fast`: connections cut, a clean shutdown; `immediate`: as a crash, recovered at the next start."""
+        self._run("pg_ctl", "-D", str(self.data), "-m", mode, "-w", "stop")
+
+    def database(self) -> str:
+        import psycopg
+
+        name = f"percussim_{secrets.token_hex(4)}"
+        with psycopg.connect(f"host=127.0.0.1 port={self.port} user=postgres dbname=postgres",
+                             autocommit=True) as connection:
+            connection.execute(f"CREATE DATABASE {name}")
+        return self.url(name)
+
+    def remove(self) -> None:
+        try:
+            self.stop()
+        except subprocess.CalledProcessError:
+            pass  # already stopped
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+@contextmanager
+def postgres_server():
+    """A running `PostgresServer` for the block, removed afterwards."""
+    server = PostgresServer()
+    server.start()
+    try:
+        yield server
+    finally:
+        server.remove()
 
 
 class Stack:

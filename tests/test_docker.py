@@ -273,10 +273,22 @@ def healthcheck_test(service: dict) -> list[str]:
 
 def check_stack(config: dict) -> None:
     services = config["services"]
-    assert {"redis", "api", "worker"} <= set(services)
+    assert {"redis", "postgres", "api", "worker", "flower"} <= set(services)
     redis, api, worker = services["redis"], services["api"], services["worker"]
     declared = set(config.get("volumes") or {})
-    assert {"results", "redis-data"} <= declared
+    assert {"results", "redis-data", "postgres-data"} <= declared
+
+    # PostgreSQL: the job records, in a named volume, health-checked.
+    postgres = services["postgres"]
+    assert str(postgres["image"]).startswith("postgres:")
+    assert mounts(postgres).get("/var/lib/postgresql/data") == "postgres-data"
+    assert "pg_isready" in " ".join(healthcheck_test(postgres))
+    database = environment(postgres)["POSTGRES_DB"]
+
+    # Flower, for the Celery side, on the same broker.
+    flower = services["flower"]
+    assert "flower" in str(flower["image"]) and ("5555", "5555") in published(flower)
+    assert str(environment(flower)["CELERY_BROKER_URL"]).startswith("redis://redis:6379/")
 
     # Redis: persistent (append-only file in a named volume) and health-checked.
     assert str(redis["image"]).startswith("redis:7")
@@ -307,8 +319,11 @@ def check_stack(config: dict) -> None:
         service = services[name]
         assert service.get("build"), f"{name} builds the image"
         assert depends(service).get("redis") == "service_healthy", f"{name} waits for a healthy redis"
+        assert depends(service).get("postgres") == "service_healthy", f"{name} waits for a healthy postgres"
         assert service.get("restart") in ("unless-stopped", "always", "on-failure"), f"{name}.restart"
         env = environment(service)
+        url = str(env.get("PERCUSSIM_DATABASE_URL", ""))
+        assert url.startswith("postgresql+psycopg://") and url.endswith(f"@postgres:5432/{database}"), name
         assert str(env.get("PERCUSSIM_BROKER_URL", "")).startswith("redis://redis:6379/"), name
         assert env.get("PERCUSSIM_RESULTS_DIR", "/data") == "/data", name
         assert mounts(service).get("/data") == "results", f"{name} mounts the results volume at /data"

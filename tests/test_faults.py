@@ -1,11 +1,14 @@
-"""Faults against the live stack (real redis-server, real workers, the real API): a worker killed
-mid-job, Redis restarted during a burst, the API restarted, a numerical failure, a burst of 1000.
+"""Faults against the live stack (real redis-server, PostgreSQL, workers and API): a worker killed
+mid-job, Redis restarted during a burst, PostgreSQL stopped during a burst, the API restarted, a
+results store that cannot write (a real file size limit), a numerical failure, a burst of 1000.
 Each test prints the counts it saw."""
 
 from __future__ import annotations
 
 import os
+import resource
 import signal
+import threading
 import time
 
 import h5py
@@ -67,7 +70,7 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         assert record["status"] == "succeeded", (record, s.logs())
         assert record["worker"] != victim and record["attempts"] == 2
         folder = tmp_path / "results" / "jobs" / job["id"]
-        assert sorted(p.name for p in folder.iterdir()) == ["case.json", "job.json", "result.h5", "summary.json"]
+        assert sorted(p.name for p in folder.iterdir()) == ["case.json", "result.h5", "summary.json"]
         with h5py.File(folder / "result.h5") as f:
             assert f.attrs["format"] == "percussim-result" and len(f["contact/force"]) > 0
     finally:
@@ -139,6 +142,98 @@ def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_
         report(capsys, f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
               f"5 accepted after; outcomes {counts}")
         assert counts == {"succeeded": len(accepted) + 5}, s.logs()
+    finally:
+        s.stop()
+
+
+def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(
+        redis, postgres, tmp_path, capsys):
+    s = Stack(tmp_path, redis.url, workers=2, env={"PERCUSSIM_DATABASE_URL": postgres.database()})
+    answers, done = [], threading.Event()
+
+    def burst():
+        while not done.is_set():
+            try:
+                answers.append(s.client.post("/v1/jobs", json=preset_json("fig3")))
+            except Exception as error:  # noqa: BLE001 - a dropped connection is a failure, shown
+                answers.append(error)
+            time.sleep(0.01)
+
+    client = threading.Thread(target=burst)
+    try:
+        client.start()
+        wait_for(lambda: len(answers) >= 40, 60, "40 submissions")
+        postgres.stop()
+        during = len(answers)
+        time.sleep(2.0)
+        postgres.start()
+        restarted = len(answers)
+        wait_for(lambda: len(answers) >= restarted + 40, 60, "40 submissions after the restart")
+        done.set()
+        client.join()
+        codes = [a.status_code if hasattr(a, "status_code") else repr(a) for a in answers]
+        assert set(codes) <= {202, 503}, [c for c in codes if c not in (202, 503)][:5]
+        refused = [a for a in answers if a.status_code == 503]
+        assert refused and all(a.headers["retry-after"].isdigit() and "database" in a.json()["detail"]
+                               for a in refused), [a.text[:200] for a in refused[:3]]
+        assert codes[-20:] == [202] * 20, "the API recovers without a restart"
+        accepted = [a.json()["id"] for a in answers if a.status_code == 202]
+        counts = wait_all_finished(s, accepted, timeout=180)
+        report(capsys, f"\nPostgreSQL stopped for 2 s during a burst: {len(answers)} submissions, {len(accepted)} "
+                       f"accepted ({during} answered before it was down), {len(refused)} refused with 503 and Retry-After, "
+                       f"none answered otherwise; the accepted ones {counts}")
+        assert counts == {"succeeded": len(accepted)}, s.logs()
+        assert s.client.get("/v1/jobs?limit=1").json()["total"] == len(accepted), "no refused job was kept"
+    finally:
+        done.set()
+        client.join()
+        try:
+            postgres.start()
+        except Exception:  # noqa: BLE001 - already running again
+            pass
+        s.stop()
+
+
+def _limit_file_size(pid: int, limit: int) -> None:
+    """Set RLIMIT_FSIZE (bytes; the hard limit kept) on `pid` and every process it started."""
+    _, hard = resource.prlimit(pid, resource.RLIMIT_FSIZE)
+    resource.prlimit(pid, resource.RLIMIT_FSIZE, (limit, hard))
+    for child in children(pid):
+        _limit_file_size(child, limit)
+
+
+def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_recovers(redis, tmp_path, capsys):
+    """A real limit, the file size limit (RLIMIT_FSIZE): on the worker, a job whose result is
+    larger ends failed with the reason and nothing half-written, and the worker goes on; on the
+    API, nothing can be written, new jobs get 507 while the rest of the API answers."""
+    s = Stack(tmp_path, redis.url, workers=1)
+    big = merge(preset_json("fig3"), {"outputs": {"fields": True, "field_stride": 1}})  # 6.9 MB of result
+    try:
+        [worker] = s.workers.values()
+        _limit_file_size(worker.popen.pid, 3_000_000)
+        failed = s.client.post("/v1/jobs", json=big).json()
+        record = s.wait_status(failed["id"], FINISHED, timeout=60)
+        assert record["status"] == "failed", record
+        assert record["error"].startswith("its results could not be written: ") and "File too large" in record["error"]
+        folder = tmp_path / "results" / "jobs" / failed["id"]
+        assert sorted(p.name for p in folder.iterdir()) == ["case.json"], "nothing half-written is left"
+        small = s.client.post("/v1/jobs", json=preset_json("fig3")).json()  # 0.9 MB: under the limit
+        assert s.wait_status(small["id"], FINISHED, timeout=60)["status"] == "succeeded", "the worker goes on"
+
+        api = s.processes[0].popen.pid
+        _limit_file_size(api, 0)
+        refused = s.client.post("/v1/jobs", json=preset_json("fig3"))
+        assert refused.status_code == 507, refused.text
+        assert "cannot write" in refused.json()["detail"] and "File too large" in refused.json()["detail"]
+        assert s.client.get(f"/v1/jobs/{small['id']}/summary").status_code == 200, "reading goes on"
+        assert s.client.get("/healthz").status_code == 200
+        assert s.client.get("/v1/jobs").json()["total"] == 2, "the refused job left no record"
+        _limit_file_size(api, resource.RLIM_INFINITY)
+        again = s.client.post("/v1/jobs", json=preset_json("fig3"))
+        assert again.status_code == 202 and s.wait_status(again.json()["id"], FINISHED)["status"] == "succeeded"
+        report(capsys, f"\nfile size limit: on the worker (3 MB) the 6.9-MB job {record['status']}: "
+                       f"{record['error']!r}, only its case left; on the API (0 bytes) a new job got "
+                       f"{refused.status_code}: {refused.json()['detail']!r}; limit lifted: the next job succeeded")
     finally:
         s.stop()
 

@@ -28,7 +28,7 @@ from percussim.solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot,
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
 from percussim.worker.settings import Settings
-from percussim.worker.store import SUCCEEDED, JobStore, now
+from percussim.worker.store import SUCCEEDED, JobStore
 from closed_forms import MEDIUM_FINE, drilling, soil_case
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
@@ -386,7 +386,7 @@ def store(tmp_path, monkeypatch) -> tuple[TestClient, JobStore]:
     for name in list(os.environ):
         if name.startswith("PERCUSSIM_"):
             monkeypatch.delenv(name)
-    return TestClient(create_app(Settings(results_dir=tmp_path))), JobStore(tmp_path)
+    return TestClient(create_app(Settings(results_dir=tmp_path))), JobStore(Settings(results_dir=tmp_path))
 
 
 def _succeeded(client: TestClient, jobs: JobStore, result: str) -> str:
@@ -397,7 +397,8 @@ def _succeeded(client: TestClient, jobs: JobStore, result: str) -> str:
     shutil.copy(result, jobs.result_path(job_id))
     with h5py.File(result) as f:
         jobs.write_summary(job_id, f["summary"][()].decode())
-    jobs.update(job_id, status=SUCCEEDED, progress=1.0, finished=now())
+    jobs.start(job_id, "w1@x")
+    jobs.finish(job_id, SUCCEEDED, progress=1.0)
     return job_id
 
 
@@ -495,9 +496,10 @@ def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(re
     for path in ("plots", "plots/force.png"):
         answer = client.get(f"/v1/jobs/{job_id}/{path}", headers=alice)
         assert answer.status_code == 409 and "queued" in answer.json()["detail"]
-    jobs = JobStore(tmp_path)
+    jobs = JobStore(Settings(results_dir=tmp_path))
     shutil.copy(results["full"], jobs.result_path(job_id))
-    jobs.update(job_id, status=SUCCEEDED, finished=now())
+    jobs.start(job_id, "w1@x")
+    jobs.finish(job_id, SUCCEEDED)
     assert client.get(f"/v1/jobs/{job_id}/plots/force.png", headers=alice).status_code == 200
     for path in ("plots", "plots/force.png"):
         assert client.get(f"/v1/jobs/{job_id}/{path}", headers=bob).status_code == 404

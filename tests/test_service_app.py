@@ -21,7 +21,7 @@ from percussim.solver.presets import PRESETS_ENV, preset_json, preset_names
 from percussim.solver.simulate import simulate
 from percussim.worker.broker import queue_folder
 from percussim.worker.settings import Settings
-from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry, now
+from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 
 
 @pytest.fixture(autouse=True)
@@ -123,7 +123,7 @@ def test_a_submitted_job_is_queued_with_its_links_and_published(client, tmp_path
                             "plots": f"/v1/jobs/{job['id']}/plots"}
     assert answer.headers["location"] == job["links"]["self"]
     assert client.get(job["links"]["self"]).json() == job
-    stored = JobStore(tmp_path).case(job["id"])
+    stored = JobStore(Settings(results_dir=tmp_path)).case(job["id"])
     assert stored["striker"] == BASE_CASE["striker"] and stored["numerics"]["gamma"] == 0.5
     messages = list((tmp_path / "broker" / "queue").glob("*.msg"))
     assert len(messages) == 1 and job["id"] in messages[0].read_text()
@@ -139,7 +139,7 @@ def test_summary_and_result_are_409_until_the_job_succeeds(client):
 
 def test_a_failed_job_names_its_error_in_the_409(client, tmp_path):
     job = _submit(client)
-    JobStore(tmp_path).update(job["id"], status=FAILED, finished=now(), error="the kernel diverged")
+    JobStore(Settings(results_dir=tmp_path)).finish(job["id"], FAILED, error="the kernel diverged")
     answer = client.get(f"/v1/jobs/{job['id']}/summary")
     assert answer.status_code == 409
     assert "failed" in answer.json()["detail"] and "the kernel diverged" in answer.json()["detail"]
@@ -147,11 +147,11 @@ def test_a_failed_job_names_its_error_in_the_409(client, tmp_path):
 
 def test_a_succeeded_job_serves_its_summary_and_hdf5_file(client, tmp_path):
     job = _submit(client, merge(BASE_CASE, {"name": "my rod/2"}))
-    store = JobStore(tmp_path)
+    store = JobStore(Settings(results_dir=tmp_path))
     summary = simulate(BASE_CASE).summary
     store.write_summary(job["id"], json.dumps(summary))
     store.result_path(job["id"]).write_bytes(b"\x89HDF\r\n\x1a\n fake")
-    store.update(job["id"], status=SUCCEEDED, progress=1.0, finished=now())
+    assert store.start(job["id"], "w1@x") and store.finish(job["id"], SUCCEEDED, progress=1.0)
     assert client.get(f"/v1/jobs/{job['id']}/summary").json() == summary
     download = client.get(f"/v1/jobs/{job['id']}/result.h5")
     assert download.status_code == 200
@@ -160,24 +160,36 @@ def test_a_succeeded_job_serves_its_summary_and_hdf5_file(client, tmp_path):
     assert download.content == b"\x89HDF\r\n\x1a\n fake"
 
 
-def test_delete_cancels_a_queued_job_and_409s_a_finished_one(client, tmp_path):
+def test_delete_cancels_a_queued_job_then_removes_it_once_finished(client, tmp_path):
     job = _submit(client)
     answer = client.delete(f"/v1/jobs/{job['id']}")
     assert answer.status_code == 202
     assert answer.json()["status"] == "cancelled" and answer.json()["finished"] is not None
     assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"
-    assert JobStore(tmp_path).cancel_requested(job["id"]), "a worker taking it later must skip it"
+    store = JobStore(Settings(results_dir=tmp_path))
+    assert store.cancel_requested(job["id"]) and not store.start(job["id"], "w1@x"), \
+        "a worker taking it later must skip it"
+    refused = client.post(f"/v1/jobs/{job['id']}/cancel")
+    assert refused.status_code == 409 and "cancelled" in refused.json()["detail"]
+    assert (tmp_path / "jobs" / job["id"] / "case.json").is_file(), "a cancel removes nothing"
     again = client.delete(f"/v1/jobs/{job['id']}")
-    assert again.status_code == 409 and "cancelled" in again.json()["detail"]
+    assert again.status_code == 204 and again.content == b""
+    assert client.get(f"/v1/jobs/{job['id']}").status_code == 404
+    assert not (tmp_path / "jobs" / job["id"]).exists(), "its files go with it"
+    assert client.delete(f"/v1/jobs/{job['id']}").status_code == 404
+    assert client.get("/v1/jobs").json()["total"] == 0
 
 
 def test_delete_of_a_running_job_asks_the_worker_to_stop(client, tmp_path):
     job = _submit(client)
-    store = JobStore(tmp_path)
-    store.update(job["id"], status="running", started=now())
-    answer = client.delete(f"/v1/jobs/{job['id']}")
+    store = JobStore(Settings(results_dir=tmp_path))
+    assert store.start(job["id"], "w1@x")
+    answer = client.post(f"/v1/jobs/{job['id']}/cancel")
     assert answer.status_code == 202 and answer.json()["status"] == "running"
-    assert store.cancel_requested(job["id"])
+    assert answer.json()["cancel_requested"] and store.cancel_requested(job["id"])
+    assert not store.finish(job["id"], SUCCEEDED), "a finish after the cancel does not win"
+    assert store.finish(job["id"], "cancelled") and not store.finish(job["id"], FAILED, error="late")
+    assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled", "a finished record never changes"
 
 
 @pytest.mark.parametrize("job_id", ["AAAAAAAAAAAAAAAAAAAAAA", "short", "A" * 23, "a.b"])
@@ -286,7 +298,7 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
     assert sweep["total"] == 6 and sweep["counts"] == {"queued": 6} and not sweep["finished"]
     assert [r["values"] for r in sweep["rows"]][:2] == [
         {"striker.velocity": 3.0, "contact.stiffness": 4e11}, {"striker.velocity": 3.0, "contact.stiffness": 8e11}]
-    jobs = JobStore(tmp_path)
+    jobs = JobStore(Settings(results_dir=tmp_path))
     assert jobs.case(sweep["rows"][5]["job"])["striker"]["velocity"] == 7.0
     assert len(list((tmp_path / "broker" / "queue").iterdir())) == 6, "one message a variant"
     # A variant that succeeded fills its row from its summary.
@@ -296,7 +308,7 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
         "max_tensile_stress": {"value": 1e7}, "striker_rebound_velocity": -0.4,
         "energy": {"to_medium": 1.7, "transfer_efficiency": 0.2}, "contacts_total": 5,
         "error_estimate": {"peak_contact_force": 3e-3, "worst": 4e-3}, "warnings": []}))
-    jobs.update(first, status=SUCCEEDED, progress=1.0, finished=now())
+    assert jobs.start(first, "w1@x") and jobs.finish(first, SUCCEEDED, progress=1.0)
     row = client.get(f"/v1/sweeps/{sweep['id']}").json()["rows"][0]
     assert row["status"] == "succeeded" and row["peak_contact_force"] == 4e5 and row["contacts"] == 5
     assert row["estimated_error"] == 4e-3 and row["transfer_efficiency"] == 0.2
@@ -376,11 +388,13 @@ def test_an_oversized_body_is_refused_with_413_naming_the_limit(tmp_path):
 def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_often(tmp_path):
     """What `percussim serve` does when one of its embedded workers dies: the filesystem broker
     lost the messages of the jobs it was running."""
-    settings, jobs = Settings(results_dir=tmp_path), JobStore(tmp_path)
+    settings, jobs = Settings(results_dir=tmp_path), JobStore(Settings(results_dir=tmp_path))
 
     def running(worker: str, attempts: int) -> str:
         job_id = jobs.create(BASE_CASE)["id"]
-        jobs.update(job_id, status="running", worker=worker, attempts=attempts, progress=0.4)
+        for _ in range(attempts):  # started again after each death
+            assert jobs.start(job_id, worker)
+        jobs.set_progress(job_id, 0.4)
         return job_id
 
     lost, doomed, elsewhere = running("w1@x", 1), running("w1@x", MAX_ATTEMPTS), running("w2@x", 1)
@@ -396,18 +410,19 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
 def test_an_embedded_service_starting_again_gives_every_queued_job_one_message(tmp_path):
     """What `percussim serve` does before its embedded workers start: the queue made again from
     the records, whatever messages the folder held."""
-    settings, jobs = Settings(results_dir=tmp_path), JobStore(tmp_path)
+    settings, jobs = Settings(results_dir=tmp_path), JobStore(Settings(results_dir=tmp_path))
     queue = JobQueue(settings)
     published = jobs.create(BASE_CASE)["id"]
     queue.enqueue(published)
     lost = jobs.create(BASE_CASE)["id"]  # recorded, its message never written (or removed)
     cut_off = jobs.create(BASE_CASE)["id"]
-    jobs.update(cut_off, status="running", worker="w1@x", attempts=1)
+    jobs.start(cut_off, "w1@x")
     elsewhere = jobs.create(BASE_CASE)["id"]
-    jobs.update(elsewhere, status="running", worker="w2@x", attempts=1)
+    jobs.start(elsewhere, "w2@x")
     done = jobs.create(BASE_CASE)["id"]
     queue.enqueue(done)
-    jobs.update(done, status=SUCCEEDED)
+    jobs.start(done, "w2@x")
+    jobs.finish(done, SUCCEEDED)
 
     assert restore_queue(settings, ["w1@x"]) == [published, lost, cut_off]  # oldest first
     with queue.app.connection_for_read() as connection:
@@ -421,9 +436,9 @@ def test_an_embedded_service_starting_again_gives_every_queued_job_one_message(t
 
 def test_a_dead_workers_job_that_cannot_be_queued_again_ends_failed_saying_why(tmp_path):
     settings = Settings(results_dir=tmp_path, broker_url="redis://127.0.0.1:1/0")  # nothing listens
-    jobs = JobStore(tmp_path)
+    jobs = JobStore(Settings(results_dir=tmp_path))
     job_id = jobs.create(BASE_CASE)["id"]
-    jobs.update(job_id, status="running", worker="w1@x", attempts=1)
+    jobs.start(job_id, "w1@x")
     assert queue_again(settings, "w1@x", "exit status -9") == []
     record = jobs.get(job_id)
     assert record["status"] == FAILED

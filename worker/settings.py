@@ -1,8 +1,10 @@
-"""Configuration of the queue, the results store and the limits, from `PERCUSSIM_*` variables.
+"""Configuration of the queue, the records, the results store and the limits, from `PERCUSSIM_*`
+variables.
 
 With no broker URL the queue is embedded: Celery's filesystem transport under the results
-folder, so one machine needs no external server. The same code runs against Redis when
-`PERCUSSIM_BROKER_URL` is set; the difference is only this configuration.
+folder, and with no database URL the records are an SQLite file there too, so one machine needs
+no external server. The same code runs against Redis when `PERCUSSIM_BROKER_URL` is set and
+PostgreSQL when `PERCUSSIM_DATABASE_URL` is; the difference is only this configuration.
 """
 
 from __future__ import annotations
@@ -20,7 +22,13 @@ class Settings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="PERCUSSIM_")
 
     broker_url: str | None = Field(default=None, description="e.g. redis://redis:6379/0; none: embedded")
+    database_url: str | None = Field(
+        default=None, description="the job records, e.g. postgresql+psycopg://user:password@db/percussim; "
+                                  "none: an SQLite file in the results folder")
     results_dir: Path = Field(default=Path("percussim-data"), description="the shared results store")
+    result_ttl: float | None = Field(
+        default=None, gt=0, description="seconds after which a finished job (or a finished sweep) and its "
+                                        "files are deleted; none: kept until deleted")
     job_time_limit: float = Field(default=900.0, gt=0, description="seconds a job may run")
     redelivery_seconds: float | None = Field(
         default=None, gt=0, description="seconds after which a job whose worker died is delivered "

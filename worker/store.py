@@ -1,6 +1,6 @@
-"""The results store: one folder a job under the results folder, readable by any process.
+"""The results store: each job's record in the database (`worker.database`), its files in a folder
+of its own under the results folder, readable by any process.
 
-    jobs/<id>/job.json      status, progress, timestamps, error, kind (rewritten atomically)
     jobs/<id>/case.json     the case as submitted
     jobs/<id>/request.json  a calibration's or an optimisation's request (kind 'calibration',
                             'optimization'; a run's kind is 'run')
@@ -8,39 +8,97 @@
     jobs/<id>/batches/      their batches of runs while they are spread over the workers
     jobs/<id>/summary.json  the pulse summary, once succeeded
     jobs/<id>/result.h5     the HDF5 result, once succeeded
-    jobs/<id>/cancel        present once a cancel was asked for
     jobs/<id>/plots/        plots of the result as rendered for the API: <name>.<png|svg>
-    sweeps/<id>.json        a sweep: its parameters and, per variant, the values and the job id
 
-Every write goes to a temporary name and is renamed, so a reader never sees half a file and a
+A record changes only by conditional updates, each one statement: a job goes queued → running →
+succeeded, failed or cancelled, and of a cancel and a finish racing only one wins (a finish does
+not win once a cancel was asked). A finished job's record never changes again; it can only be
+deleted, with its folder. A sweep's record lists its variants' values and jobs.
+
+Every file is written to a temporary name and renamed, so a reader never sees half a file and a
 job delivered twice writes the same files again instead of twice. Job ids are random and
-checked against their pattern before any path is built from them.
+checked against their pattern before any path is built from them. A store that cannot write
+(a full disk, a file size limit) raises `StoreFull`; a database that cannot be reached,
+`StoreUnavailable`.
 """
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import re
 import secrets
+import shutil
 import tempfile
+from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
 from typing import Iterator
 
+from sqlalchemy import and_, delete, func, insert, or_, select, true, tuple_, update
+from sqlalchemy.engine import Connection
+from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
+
+from .database import database, jobs as JOBS, sweeps as SWEEPS
+from .settings import Settings
+
 QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
 FINISHED = (SUCCEEDED, FAILED, CANCELLED)
+STATUSES = (QUEUED, RUNNING, *FINISHED)
 RUN, CALIBRATION, OPTIMIZATION = "run", "calibration", "optimization"  # a job's kind
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
+
+
+# What the disk or the database answers when nothing more can be written.
+_FULL_ERRNOS = (errno.ENOSPC, errno.EFBIG, errno.EDQUOT)
+_FULL_MESSAGES = ("database or disk is full", "disk i/o error", "could not extend file", "no space left")
 
 
 class UnknownJob(KeyError):
     """No job has this id."""
 
 
-def now() -> str:
-    return datetime.now(timezone.utc).isoformat()
+class StoreFull(OSError):
+    """The results store cannot write: its disk is full or a file size limit is reached."""
+
+
+class StoreUnavailable(Exception):
+    """The database of records cannot be reached."""
+
+
+def now() -> datetime:
+    return datetime.now(timezone.utc)
+
+
+def new_id() -> str:
+    return secrets.token_urlsafe(16)  # 22 characters, 128 random bits
+
+
+def _store_error(error: BaseException) -> BaseException:
+    """The store's own error for what the disk or the database raised (else `error` itself)."""
+    if isinstance(error, OSError) and error.errno in _FULL_ERRNOS:
+        return StoreFull(error.errno, f"the results store cannot write: {error.strerror}")
+    if isinstance(error, DBAPIError):
+        reason = str(error.orig).strip().splitlines()[0] if error.orig else str(error)
+        if any(m in reason.lower() for m in _FULL_MESSAGES) or getattr(error.orig, "sqlstate", "") == "53100":
+            return StoreFull(errno.ENOSPC, f"the database cannot write: {reason}")
+        if isinstance(error, (OperationalError, InterfaceError)) or error.connection_invalidated:
+            return StoreUnavailable(f"the database is unavailable: {reason}")
+    return error
+
+
+@contextmanager
+def translated() -> Iterator[None]:
+    """Raise what the disk or the database raises in the block as `StoreFull` or `StoreUnavailable`."""
+    try:
+        yield
+    except (OSError, DBAPIError) as error:
+        mapped = _store_error(error)
+        if mapped is error:
+            raise
+        raise mapped from error
 
 
 def write_atomic(path: Path, data: bytes) -> None:
@@ -57,47 +115,134 @@ def write_atomic(path: Path, data: bytes) -> None:
 class JobStore:
     """The jobs; with an `owner` (an API key's id), only that owner's: others' are unknown."""
 
-    def __init__(self, root: Path, owner: str | None = None):
-        self.jobs = Path(root) / "jobs"
-        self.jobs.mkdir(parents=True, exist_ok=True)
+    def __init__(self, settings: Settings, owner: str | None = None):
+        self.settings = settings
+        self.jobs = settings.results_dir / "jobs"
         self.owner = owner
+
+    @contextmanager
+    def _connection(self, write: bool = False) -> Iterator[Connection]:
+        """A connection to the records (a transaction committed at the end, to `write`)."""
+        with translated():
+            engine = database(self.settings)
+            with (engine.begin() if write else engine.connect()) as connection:
+                yield connection
+
+    def _mine(self, condition):
+        return condition if self.owner is None else and_(condition, JOBS.c.owner == self.owner)
 
     def folder(self, job_id: str) -> Path:
         if not isinstance(job_id, str) or not _ID.fullmatch(job_id):
             raise UnknownJob(job_id)
+        return self.jobs / job_id
+
+    def _new(self, case: dict, kind: str, request: dict | None, sweep: str | None) -> dict:
+        """A new queued job's folder, written, and its record (not yet in the database)."""
+        job_id = new_id()
         folder = self.jobs / job_id
-        if not (folder / "job.json").is_file():
-            raise UnknownJob(job_id)
-        return folder
+        with translated():
+            folder.mkdir(parents=True)
+            write_atomic(folder / "case.json", json.dumps(case).encode())
+            if request is not None:
+                write_atomic(folder / "request.json", json.dumps(request).encode())
+        return {"id": job_id, "owner": self.owner, "name": case.get("name"), "kind": kind,
+                "status": QUEUED, "progress": 0.0, "created": now(), "started": None, "finished": None,
+                "error": None, "attempts": 0, "worker": None, "sweep": sweep, "cancel_requested": False,
+                "result_bytes": None}
+
+    def _insert(self, rows: list[dict], more=None) -> None:
+        """Record the new jobs `rows` (and whatever `more(connection)` adds) in one transaction;
+        if it fails, their folders go too."""
+        try:
+            with self._connection(write=True) as connection:
+                connection.execute(insert(JOBS), rows)
+                if more is not None:
+                    more(connection)
+        except BaseException:
+            for row in rows:
+                shutil.rmtree(self.jobs / row["id"], ignore_errors=True)
+            raise
 
     def create(self, case: dict, kind: str = RUN, request: dict | None = None) -> dict:
         """A new queued job for `case` (validated JSON), of `kind` with its `request` (a
         calibration's or an optimisation's, which holds the case too); returns its record."""
-        job_id = secrets.token_urlsafe(16)  # 22 characters, 128 random bits
-        folder = self.jobs / job_id
-        folder.mkdir()
-        write_atomic(folder / "case.json", json.dumps(case).encode())
-        if request is not None:
-            write_atomic(folder / "request.json", json.dumps(request).encode())
-        record = {"id": job_id, "name": case.get("name"), "kind": kind, "status": QUEUED,
-                  "progress": 0.0, "created": now(), "started": None, "finished": None,
-                  "error": None, "attempts": 0, "worker": None, "owner": self.owner}
-        write_atomic(folder / "job.json", json.dumps(record).encode())
-        return record
+        row = self._new(case, kind, request, None)
+        self._insert([row])
+        return _record(row)
 
     def get(self, job_id: str) -> dict:
-        record = json.loads((self.folder(job_id) / "job.json").read_text())
-        if not self._sees(record):
+        self.folder(job_id)  # the id's pattern
+        with self._connection() as connection:
+            row = connection.execute(select(JOBS).where(self._mine(JOBS.c.id == job_id))).first()
+        if row is None:
             raise UnknownJob(job_id)
-        return record
+        return _record(row._mapping)
 
-    def _sees(self, record: dict) -> bool:
-        return self.owner is None or record.get("owner") == self.owner
+    def _change(self, job_id: str, condition, **values) -> bool:
+        """Set `values` on the job if `condition` holds for it, in one statement: True if it did."""
+        with self._connection(write=True) as connection:
+            return connection.execute(update(JOBS).where(JOBS.c.id == job_id, condition)
+                                      .values(**values)).rowcount == 1
 
-    def update(self, job_id: str, **changes) -> dict:
-        record = self.get(job_id) | changes
-        write_atomic(self.folder(job_id) / "job.json", json.dumps(record).encode())
-        return record
+    def start(self, job_id: str, worker: str) -> bool:
+        """Queued (or running on a worker that died) → running on `worker`, unless cancelled."""
+        return self._change(job_id, and_(JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested),
+                            status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker,
+                            progress=0.0)
+
+    def set_progress(self, job_id: str, fraction: float) -> bool:
+        return self._change(job_id, JOBS.c.status == RUNNING, progress=fraction)
+
+    def finish(self, job_id: str, status: str, error: str | None = None, **values) -> bool:
+        """An unfinished job → `status` (with `error`): True if this call finished it. Success
+        needs a running job with no cancel asked; a failure or a cancel, any unfinished job."""
+        if status == SUCCEEDED:
+            condition = and_(JOBS.c.status == RUNNING, ~JOBS.c.cancel_requested)
+        else:
+            condition = JOBS.c.status.in_((QUEUED, RUNNING))
+        return self._change(job_id, condition, status=status, error=error, finished=now(), **values)
+
+    def complete(self, job_id: str, status: str, error: str | None = None, **values) -> str:
+        """A worker's end of a job: `finish` it as `status`; a success that lost to a cancel asked
+        meanwhile removes what it wrote and ends cancelled. Returns the job's final status."""
+        if self.finish(job_id, status, error, **values):
+            return status
+        record = self.get(job_id)
+        if record["cancel_requested"] and record["status"] not in FINISHED:
+            self.remove_results(job_id)
+            self.finish(job_id, CANCELLED)
+            return CANCELLED
+        return record["status"]
+
+    def requeue(self, job_id: str, worker: str) -> bool:
+        """Running on `worker`, which died → queued again."""
+        return self._change(job_id, and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker),
+                            status=QUEUED, progress=0.0)
+
+    def request_cancel(self, job_id: str) -> dict | None:
+        """Cancel the job if it has not finished: a queued one at once, a running one by its
+        worker, which is asked to (`cancel_requested`). Returns the record as it then is, or
+        None if the job had already finished."""
+        self.get(job_id)  # known, and this owner's
+        if (self._change(job_id, JOBS.c.status == QUEUED, status=CANCELLED, finished=now(),
+                         cancel_requested=True)
+                or self._change(job_id, JOBS.c.status == RUNNING, cancel_requested=True)):
+            return self.get(job_id)
+        return None
+
+    def cancel_requested(self, job_id: str) -> bool:
+        with self._connection() as connection:
+            return bool(connection.scalar(select(JOBS.c.cancel_requested).where(JOBS.c.id == job_id)))
+
+    def delete(self, job_id: str) -> bool:
+        """Remove a finished job, its record and its folder: True if this call removed it."""
+        self.folder(job_id)
+        with self._connection(write=True) as connection:
+            gone = connection.execute(delete(JOBS).where(
+                self._mine(and_(JOBS.c.id == job_id, JOBS.c.status.in_(FINISHED))))).rowcount == 1
+        if gone:
+            shutil.rmtree(self.jobs / job_id, ignore_errors=True)
+        return gone
 
     def case(self, job_id: str) -> dict:
         return json.loads((self.folder(job_id) / "case.json").read_text())
@@ -137,26 +282,71 @@ class JobStore:
         write_atomic(path, data)
         return path
 
-    def request_cancel(self, job_id: str) -> None:
-        write_atomic(self.folder(job_id) / "cancel", b"")
+    def remove_results(self, job_id: str) -> None:
+        """Remove what a run or a study wrote (a job whose finish lost to a cancel)."""
+        folder = self.folder(job_id)
+        for name in ("summary.json", "answer.json", "result.h5"):
+            (folder / name).unlink(missing_ok=True)
+        shutil.rmtree(folder / "plots", ignore_errors=True)
 
-    def cancel_requested(self, job_id: str) -> bool:
-        return (self.folder(job_id) / "cancel").exists()
+    def size(self, job_id: str) -> int:
+        """Bytes in the job's folder."""
+        return sum(f.stat().st_size for f in self.folder(job_id).rglob("*") if f.is_file())
 
-    def records(self) -> Iterator[dict]:
-        """Every job's record, in no order."""
-        for folder in self.jobs.iterdir():
-            try:
-                record = json.loads((folder / "job.json").read_text())
-            except (OSError, ValueError):
-                continue  # a folder being created
-            if self._sees(record):
-                yield record
+    def list(self, offset: int = 0, limit: int = 50, status: str | None = None, name: str | None = None,
+             sweep: str | None = None, before: tuple[datetime, str] | None = None) -> tuple[int, list[dict]]:
+        """(how many match, a page of them newest first): `offset` into them, or those created
+        `before` (created, id) — the last of the page before, which does not grow with the
+        number of jobs as an offset does."""
+        condition = self._mine(and_(true(), *(column == value for column, value in (
+            (JOBS.c.status, status), (JOBS.c.name, name), (JOBS.c.sweep, sweep)) if value is not None)))
+        page = condition if before is None else and_(
+            condition, tuple_(JOBS.c.created, JOBS.c.id) < tuple_(*before))
+        with self._connection() as connection:
+            total = connection.scalar(select(func.count()).select_from(JOBS).where(condition))
+            rows = connection.execute(select(JOBS).where(page).order_by(
+                JOBS.c.created.desc(), JOBS.c.id.desc()).offset(offset).limit(limit))
+            return total, [_record(row._mapping) for row in rows]
 
-    def list(self, offset: int = 0, limit: int = 50) -> tuple[int, list[dict]]:
-        """(total, records) newest first."""
-        records = sorted(self.records(), key=lambda r: r["created"], reverse=True)
-        return len(records), records[offset:offset + limit]
+    def ids(self, status: str, worker: str | None = None) -> list[str]:
+        """The jobs of `status` (on `worker`), oldest first."""
+        condition = JOBS.c.status == status
+        if worker is not None:
+            condition = and_(condition, JOBS.c.worker == worker)
+        with self._connection() as connection:
+            return list(connection.scalars(select(JOBS.c.id).where(self._mine(condition))
+                                           .order_by(JOBS.c.created, JOBS.c.id)))
+
+    def counts(self) -> dict[str, int]:
+        """How many jobs of each status."""
+        with self._connection() as connection:
+            return dict(connection.execute(select(JOBS.c.status, func.count()).group_by(JOBS.c.status)).all())
+
+    def expired(self, finished_before: datetime, limit: int) -> list[str]:
+        """Up to `limit` finished jobs, not of a sweep, finished before then, oldest first."""
+        with self._connection() as connection:
+            return list(connection.scalars(select(JOBS.c.id).where(
+                JOBS.c.status.in_(FINISHED), JOBS.c.sweep.is_(None), JOBS.c.finished < finished_before)
+                .order_by(JOBS.c.finished).limit(limit)))
+
+    def result_bytes(self) -> int:
+        with self._connection() as connection:
+            return int(connection.scalar(select(func.coalesce(func.sum(JOBS.c.result_bytes), 0))))
+
+
+def _utc(value: datetime | None) -> str | None:
+    """A time as ISO 8601 in UTC (SQLite gives it back without its zone)."""
+    if value is None:
+        return None
+    return (value if value.tzinfo else value.replace(tzinfo=timezone.utc)).isoformat()
+
+
+def _record(row) -> dict:
+    """A job's record as the API and the workers see it: times in ISO 8601."""
+    record = dict(row)
+    for key in ("created", "started", "finished"):
+        record[key] = _utc(record[key])
+    return record
 
 
 class UnknownSweep(KeyError):
@@ -167,28 +357,69 @@ class SweepStore:
     """Sweeps: each variant is an ordinary job; the sweep record says which job has which values.
     With an `owner`, only that owner's sweeps are known."""
 
-    def __init__(self, root: Path, owner: str | None = None):
-        self.folder = Path(root) / "sweeps"
-        self.folder.mkdir(parents=True, exist_ok=True)
-        self.owner = owner
+    def __init__(self, jobs: JobStore):
+        self.jobs = jobs
 
-    def create(self, name: str | None, parameters: list[str], variants: list[dict]) -> dict:
-        """A new sweep of `variants` (each `{"values": {...}, "job": id}`); returns its record."""
-        record = {"id": secrets.token_urlsafe(16), "name": name, "created": now(),
-                  "parameters": parameters, "variants": variants, "owner": self.owner}
-        write_atomic(self.folder / f"{record['id']}.json", json.dumps(record).encode())
-        return record
+    def _mine(self, condition):
+        owner = self.jobs.owner
+        return condition if owner is None else and_(condition, SWEEPS.c.owner == owner)
+
+    def create(self, name: str | None, parameters: list[str], variants: list[tuple[dict, dict]]) -> dict:
+        """A new sweep of `variants` (each (values, case JSON)), each a new queued job, all
+        recorded in one transaction; returns the sweep's record."""
+        sweep_id = new_id()
+        rows = []
+        try:
+            for _, case in variants:
+                rows.append(self.jobs._new(case, RUN, None, sweep_id))
+        except BaseException:
+            for row in rows:
+                shutil.rmtree(self.jobs.jobs / row["id"], ignore_errors=True)
+            raise
+        record = {"id": sweep_id, "owner": self.jobs.owner, "name": name, "created": now(),
+                  "parameters": parameters,
+                  "variants": [{"values": values, "job": row["id"]} for (values, _), row in zip(variants, rows)]}
+        self.jobs._insert(rows, lambda connection: connection.execute(insert(SWEEPS), [record]))
+        return _sweep_record(record)
 
     def get(self, sweep_id: str) -> dict:
         if not isinstance(sweep_id, str) or not _ID.fullmatch(sweep_id):
             raise UnknownSweep(sweep_id)
-        try:
-            record = json.loads((self.folder / f"{sweep_id}.json").read_text())
-        except FileNotFoundError:
-            raise UnknownSweep(sweep_id) from None
-        if self.owner is not None and record.get("owner") != self.owner:
+        with self.jobs._connection() as connection:
+            row = connection.execute(select(SWEEPS).where(self._mine(SWEEPS.c.id == sweep_id))).first()
+        if row is None:
             raise UnknownSweep(sweep_id)
-        return record
+        return _sweep_record(row._mapping)
+
+    def purge(self, sweep_id: str) -> bool:
+        """Remove a sweep whose jobs have all finished, with its jobs: True if this call did."""
+        self.get(sweep_id)
+        with self.jobs._connection(write=True) as connection:
+            # One statement per table, each conditional on the sweep having finished.
+            unfinished = select(JOBS.c.id).where(JOBS.c.sweep == sweep_id, JOBS.c.status.notin_(FINISHED))
+            gone = connection.execute(delete(SWEEPS).where(
+                SWEEPS.c.id == sweep_id, ~unfinished.exists())).rowcount == 1
+            if gone:
+                ids = list(connection.scalars(delete(JOBS).where(JOBS.c.sweep == sweep_id).returning(JOBS.c.id)))
+        if gone:
+            for job_id in ids:
+                shutil.rmtree(self.jobs.jobs / job_id, ignore_errors=True)
+        return gone
+
+    def expired(self, finished_before: datetime, limit: int) -> list[str]:
+        """Up to `limit` sweeps whose jobs all finished before then."""
+        later = select(JOBS.c.id).where(JOBS.c.sweep == SWEEPS.c.id, or_(
+            JOBS.c.status.notin_(FINISHED), JOBS.c.finished >= finished_before))
+        with self.jobs._connection() as connection:
+            return list(connection.scalars(select(SWEEPS.c.id).where(~later.exists(),
+                                                                      SWEEPS.c.created < finished_before)
+                                           .order_by(SWEEPS.c.created).limit(limit)))
+
+
+def _sweep_record(row) -> dict:
+    record = dict(row)
+    record["created"] = _utc(record["created"])
+    return record
 
 
 class WorkerRegistry:

@@ -8,9 +8,12 @@ succeeded, failed or cancelled, with progress, cancel and the time limit.
 
 from __future__ import annotations
 
+import os
 import socket
 import time
-from typing import Callable
+from typing import Callable, TypeVar
+
+from celery.exceptions import Reject
 
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
@@ -23,11 +26,16 @@ from percussim.solver.study_plots import render_study
 from .app import app
 from .broker import EVALUATE_PART, RUN_JOB
 from .fanout import QueueEvaluator, take_part
+from .metrics import Counters
 from .settings import settings
-from .store import (CALIBRATION, CANCELLED, FAILED, FINISHED, OPTIMIZATION, RUN, RUNNING,
-                    SUCCEEDED, JobStore, UnknownJob, WorkerRegistry, now)
+from .store import (CALIBRATION, CANCELLED, FAILED, OPTIMIZATION, RUN, SUCCEEDED, JobStore,
+                    StoreUnavailable, UnknownJob, WorkerRegistry)
+
+T = TypeVar("T")
 
 PROGRESS_SECONDS = 0.25  # how often a running job's progress is written
+CANCEL_POLL_SECONDS = 0.1  # how often a running job asks whether it was cancelled
+STORE_RETRY_SECONDS = 60.0  # how long a job's end waits for a database that went away
 ALIVE_WITHIN = 15.0  # s: workers whose heartbeat is this recent may take a study's parts
 STUDIES = {CALIBRATION: (calibrate, "fit"), OPTIMIZATION: (optimize, "convergence")}
 
@@ -36,63 +44,108 @@ class TimeLimitExceeded(Exception):
     pass
 
 
+def _stored(action: Callable[[], T]) -> T:
+    """`action` on the records, tried again while the database is away; after
+    STORE_RETRY_SECONDS the job's message goes back to the queue, to run again later."""
+    deadline, pause = time.monotonic() + STORE_RETRY_SECONDS, 0.1
+    while True:
+        try:
+            return action()
+        except StoreUnavailable as error:
+            if time.monotonic() > deadline:
+                raise Reject(str(error), requeue=True) from error
+            time.sleep(pause)
+            pause = min(2 * pause, 5.0)
+
+
 @app.task(name=RUN_JOB)
 def run_job(job_id: str) -> str:
     """Run job `job_id`. Idempotent: a job delivered again after it finished is left as it is,
     and one delivered again mid-run (its worker died) runs again and rewrites the same files."""
     s = settings()
-    store = JobStore(s.results_dir)
-    record = store.get(job_id)
-    if record["status"] in FINISHED:
-        return record["status"]
-    if store.cancel_requested(job_id):
-        store.update(job_id, status=CANCELLED, finished=now())
-        return CANCELLED
-    store.update(job_id, status=RUNNING, started=now(), attempts=record["attempts"] + 1,
-                 worker=run_job.request.hostname or socket.gethostname(), progress=0.0)
-    start = last_write = time.monotonic()  # a job shorter than PROGRESS_SECONDS writes none
+    store = JobStore(s)
+    worker = run_job.request.hostname or socket.gethostname()
+    try:
+        if not _stored(lambda: store.start(job_id, worker)):
+            # Finished already, or a cancel was asked while it ran on a worker that died.
+            _stored(lambda: store.finish(job_id, CANCELLED))
+            return store.get(job_id)["status"]
+        kind = store.get(job_id)["kind"]
+    except UnknownJob:
+        return "deleted"
+    start = last_write = last_poll = time.monotonic()  # a job shorter than PROGRESS_SECONDS writes none
 
     def progress(fraction: float) -> None:
         nonlocal last_write
         if time.monotonic() - last_write >= PROGRESS_SECONDS:
-            store.update(job_id, progress=round(fraction, 4))
             last_write = time.monotonic()
+            try:
+                store.set_progress(job_id, round(fraction, 4))
+            except StoreUnavailable:
+                pass  # progress is for show; the job's end waits for the database
 
     def cancelled() -> bool:
+        nonlocal last_poll
         if time.monotonic() - start > s.job_time_limit:
             raise TimeLimitExceeded
-        return store.cancel_requested(job_id)
+        if time.monotonic() - last_poll < CANCEL_POLL_SECONDS:
+            return False
+        last_poll = time.monotonic()
+        try:
+            return store.cancel_requested(job_id)
+        except StoreUnavailable:
+            return False
 
-    work = _run if record.get("kind", RUN) == RUN else _study
+    work = _run if kind == RUN else _study
     try:
-        work(store, job_id, progress, cancelled)
+        solver_seconds, node_steps = work(store, job_id, progress, cancelled)
     except Cancelled:
-        store.update(job_id, status=CANCELLED, finished=now())
-        return CANCELLED
+        return _end(store, job_id, CANCELLED)
     except TimeLimitExceeded:
-        return _fail(store, job_id, f"the job ran past its time limit of {s.job_time_limit:g} s "
-                                    "(PERCUSSIM_JOB_TIME_LIMIT): use a coarser grid or a shorter duration")
+        return _end(store, job_id, FAILED, f"the job ran past its time limit of {s.job_time_limit:g} s "
+                                           "(PERCUSSIM_JOB_TIME_LIMIT): use a coarser grid or a shorter duration")
     except CaseError as error:
-        return _fail(store, job_id, "the solver refused the case: " + str(error))
+        return _end(store, job_id, FAILED, "the solver refused the case: " + str(error))
     except NumericalFailure as error:
-        return _fail(store, job_id, str(error))
-    store.update(job_id, status=SUCCEEDED, progress=1.0, finished=now())
-    return SUCCEEDED
+        return _end(store, job_id, FAILED, str(error))
+    except OSError as error:  # the disk is full, a file size limit is reached
+        store.remove_results(job_id)
+        remove_partial(store.result_path(job_id))
+        return _end(store, job_id, FAILED, f"its results could not be written: {_reason(error)}; "
+                                           "nothing of them was kept")
+    status = _end(store, job_id, SUCCEEDED, progress=1.0, result_bytes=store.size(job_id))
+    if status == SUCCEEDED:
+        Counters(s).observe_job(time.monotonic() - start, solver_seconds, node_steps)
+    return status
+
+
+def _reason(error: OSError) -> str:
+    # h5py's own text names its temporary file and buffers: the system's words say it all.
+    return os.strerror(error.errno) if error.errno else str(error)
+
+
+def _end(store: JobStore, job_id: str, status: str, error: str | None = None, **values) -> str:
+    """Finish the job as `status` (`JobStore.complete`), waiting for the database if it is away."""
+    return _stored(lambda: store.complete(job_id, status, error, **values))
 
 
 def _run(store: JobStore, job_id: str, progress: Callable[[float], None],
-         cancelled: Callable[[], bool]) -> None:
-    """A run: the solver on the job's case, its result streamed to the job's folder."""
+         cancelled: Callable[[], bool]) -> tuple[float, float]:
+    """A run: the solver on the job's case, its result streamed to the job's folder. Returns the
+    solver's seconds and node-steps."""
     # A run streams its result to a temporary file renamed when complete; one whose worker died
     # left its temporary file behind.
     remove_partial(store.result_path(job_id))
+    start = time.monotonic()
     result = simulate(parse_case(store.case(job_id)), progress=progress, cancelled=cancelled,
                       limits=settings().limits(), result_path=store.result_path(job_id))
+    seconds = time.monotonic() - start
     store.write_summary(job_id, result.summary_json)
+    return seconds, sum((run["cells"] + 1) * run["steps"] for run in result.summary["runs"])
 
 
 def _study(store: JobStore, job_id: str, progress: Callable[[float], None],
-           cancelled: Callable[[], bool]) -> None:
+           cancelled: Callable[[], bool]) -> tuple[float, float]:
     """A calibration or an optimisation: its batches spread over the live workers."""
     s = settings()
     solve, plot = STUDIES[store.get(job_id)["kind"]]
@@ -109,6 +162,7 @@ def _study(store: JobStore, job_id: str, progress: Callable[[float], None],
     name = store.case(job_id).get("name") or "case"
     for fmt in ("png", "svg"):
         store.write_plot(job_id, plot, fmt, render_study(answer, plot, fmt, name=name))
+    return 0.0, 0.0  # its runs are spread over workers: not one solver's time
 
 
 @app.task(name=EVALUATE_PART)
@@ -116,12 +170,9 @@ def evaluate_part(job_id: str, batch: int, index: int) -> bool:
     """Run part `index` of batch `batch` of study `job_id`, unless the study or another worker
     has, or the study is over."""
     try:
-        folder = JobStore(settings().results_dir).batches(job_id)
+        folder = JobStore(settings()).batches(job_id)
     except UnknownJob:
         return False
     return take_part(folder / str(int(batch)), int(index))
 
 
-def _fail(store: JobStore, job_id: str, reason: str) -> str:
-    store.update(job_id, status=FAILED, finished=now(), error=reason)
-    return FAILED

@@ -307,7 +307,8 @@ function showJobError(message) {
 
 async function cancelJob() {
   try {
-    await api(`/v1/jobs/${shown.id}`, { method: "DELETE" });
+    // POST …/cancel, not DELETE: a job that finished meanwhile is kept, not removed.
+    await api(`/v1/jobs/${shown.id}/cancel`, { method: "POST" });
   } catch (error) {
     // 409: it finished meanwhile, which the next poll shows.
     if (error.status !== 409) showJobError(`Cancel failed: ${describe(error)}`);
