@@ -1,10 +1,11 @@
 """The service under load: jobs per second sustained and latency, through Redis with 2 workers, and
 what writing the HDF5 result costs a job.
 
-    .venv/bin/python bench/load.py [--latency-jobs 50] [--burst-jobs 500]
+    .venv/bin/python bench/load.py [--latency-jobs 50] [--burst-jobs 500] [--postgresql]
 
 Starts a real redis-server, `percussim serve --no-worker` and two `percussim worker` processes on
-loopback, all on this machine (the client too). Small case: the Fig. 3 preset (100 cells, 4820
+loopback, all on this machine (the client too); the job records in the SQLite file of the results
+folder, or with --postgresql in a real PostgreSQL server started here. Small case: the Fig. 3 preset (100 cells, 4820
 steps, a history row every step and 4 probes in its HDF5 result).
 
 - Latency, one job at a time: from the POST to the first GET that shows it succeeded (polled
@@ -23,13 +24,14 @@ import statistics
 import sys
 import tempfile
 import time
+from contextlib import nullcontext
 from datetime import datetime
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
-from live_stack import Stack, redis_server  # noqa: E402
+from live_stack import Stack, postgres_server, redis_server  # noqa: E402
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.presets import load_preset, preset_json  # noqa: E402
 from percussim.solver.simulate import simulate  # noqa: E402
@@ -76,12 +78,16 @@ def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--latency-jobs", type=int, default=50)
     parser.add_argument("--burst-jobs", type=int, default=500)
+    parser.add_argument("--postgresql", action="store_true", help="the job records in PostgreSQL")
     args = parser.parse_args()
     warm_up()
     job_parts()
     case = preset_json("fig3")
-    with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
-        stack = Stack(Path(tmp), url, workers=2)
+    with (tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url,
+          postgres_server() if args.postgresql else nullcontext() as postgres):
+        env = {"PERCUSSIM_DATABASE_URL": postgres.database()} if postgres else {}
+        print(f"job records in {'PostgreSQL' if postgres else 'SQLite'}")
+        stack = Stack(Path(tmp), url, workers=2, env=env)
         try:
             latencies = []
             for _ in range(args.latency_jobs):

@@ -5,6 +5,7 @@ replica answers the same."""
 
 from __future__ import annotations
 
+import math
 import shutil
 
 from fastapi import APIRouter
@@ -17,7 +18,7 @@ from percussim.worker.metrics import Counters
 from percussim.worker.settings import Settings
 from percussim.worker.store import STATUSES, JobStore
 
-from .queue import JobQueue
+from .queue import BROKER_ERRORS, JobQueue
 
 HISTOGRAMS = {
     "job_seconds": ("percussim_job_duration_seconds", "time a succeeded job ran in its worker"),
@@ -36,8 +37,12 @@ class _Service(Collector):
         for status in STATUSES:
             jobs.add_metric([status], counts.get(status, 0))
         yield jobs
+        try:
+            depth = self.queue.depth()
+        except BROKER_ERRORS:
+            depth = math.nan  # the broker is away: /readyz says so; the other metrics still count
         yield GaugeMetricFamily("percussim_queue_depth", "messages waiting in the broker for a worker",
-                                value=self.queue.depth())
+                                value=depth)
         counters = Counters(self.settings)
         for key, (name, documentation) in HISTOGRAMS.items():
             buckets, total = counters.histogram(key)

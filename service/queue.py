@@ -77,8 +77,8 @@ class JobQueue:
         """Messages waiting in the queue for a worker."""
         self._folder_made()
         with self.app.connection_for_read() as connection:
-            return connection.default_channel.queue_declare(
-                self.app.conf.task_default_queue, passive=True).message_count
+            # Declared, not only looked up: before the first message there is no queue yet.
+            return connection.default_channel.queue_declare(self.app.conf.task_default_queue).message_count
 
     def problem(self) -> str | None:
         """Why the broker cannot be reached now, or None if it can."""

@@ -184,6 +184,14 @@ def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_
                        f"none answered otherwise; the accepted ones {counts}")
         assert counts == {"succeeded": len(accepted)}, s.logs()
         assert s.client.get("/v1/jobs?limit=1").json()["total"] == len(accepted), "no refused job was kept"
+        # What the workers counted, through the metrics.
+        metrics = dict(line.rsplit(" ", 1) for line in s.client.get("/metrics").text.splitlines()
+                       if not line.startswith("#"))
+        assert float(metrics['percussim_jobs{status="succeeded"}']) == len(accepted)
+        assert float(metrics["percussim_job_duration_seconds_count"]) == len(accepted)
+        assert float(metrics["percussim_solver_seconds_per_node_step_count"]) == len(accepted)
+        assert float(metrics["percussim_results_bytes"]) > 0.8e6 * len(accepted)  # 0.9 MB each
+        assert float(metrics["percussim_queue_depth"]) == 0
     finally:
         done.set()
         client.join()

@@ -130,6 +130,15 @@ def test_progress_rises_and_cancel_stops_running_and_queued_jobs(stack):
     assert stack.wait_status(after["id"], ("succeeded", "failed"))["status"] == "succeeded"
     assert stack.client.get(f"/v1/jobs/{queued['id']}").json()["started"] is None
     assert stack.client.get(f"/v1/jobs/{running['id']}/summary").status_code == 409
+    cancelled = stack.client.get("/v1/jobs?status=cancelled").json()
+    assert {j["id"] for j in cancelled["jobs"]} == {queued["id"], running["id"]} == {
+        j["id"] for j in stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["jobs"]
+        + stack.client.get(stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["next"]).json()["jobs"]}
+    # A finished job is removed with its files: 204, then 404.
+    folder = stack.folder / "results" / "jobs" / after["id"]
+    assert (folder / "result.h5").is_file()
+    assert stack.client.delete(f"/v1/jobs/{after['id']}").status_code == 204
+    assert stack.client.get(f"/v1/jobs/{after['id']}").status_code == 404 and not folder.exists()
 
 
 def test_a_case_the_solver_refuses_ends_failed_with_the_reason(redis_url, tmp_path):

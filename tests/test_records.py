@@ -19,7 +19,7 @@ from percussim.service.app import create_app
 from percussim.service.retention import delete_expired
 from percussim.solver.simulate import simulate
 from percussim.worker.database import _open, database
-from percussim.worker.metrics import Counters
+from percussim.worker.metrics import job_observations
 from percussim.worker.settings import Settings
 from percussim.worker.store import (CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDED, JobStore, SweepStore,
                                     UnknownJob)
@@ -193,14 +193,18 @@ def test_metrics_count_jobs_and_add_every_workers_histograms(records):
     jobs = JobStore(records)
     running_job(jobs)
     jobs.create(BASE_CASE)
-    counters = Counters(records)
     for seconds in (0.02, 0.05, 2.0, 5000.0):
-        counters.observe_job(seconds, solver_seconds=seconds / 10, node_steps=1e7)
+        job_id = running_job(jobs)
+        jobs.complete(job_id, SUCCEEDED, then=job_observations(seconds, solver_seconds=seconds / 10, node_steps=1e7))
+    lost = running_job(jobs)
+    jobs.request_cancel(lost)
+    assert jobs.complete(lost, SUCCEEDED, then=job_observations(1.0, 0.1, 1e7)) == CANCELLED, "not counted"
     text = TestClient(create_app(records)).get("/metrics").text
     lines = dict(line.rsplit(" ", 1) for line in text.splitlines() if not line.startswith("#"))
     assert float(lines['percussim_jobs{status="running"}']) == 1
     assert float(lines['percussim_jobs{status="queued"}']) == 1
-    assert float(lines['percussim_jobs{status="succeeded"}']) == 0
+    assert float(lines['percussim_jobs{status="succeeded"}']) == 4
+    assert float(lines['percussim_jobs{status="cancelled"}']) == 1
     assert float(lines["percussim_queue_depth"]) == 0, "created in the store, never published"
     assert float(lines['percussim_job_duration_seconds_bucket{le="0.03"}']) == 1
     assert float(lines['percussim_job_duration_seconds_bucket{le="0.1"}']) == 2

@@ -99,9 +99,12 @@ def _open(url: str, results_dir: Path) -> Engine:
 
 
 def _sqlite_pragmas(connection, _record) -> None:
-    # Readers do not wait for writers (the workers write progress while the API lists).
+    # Readers do not wait for writers (the workers write progress while the API lists). A commit
+    # is written, not synced: safe from a crashed process, and as safe from a power cut as the
+    # results' own files (a sync a commit cost 1.2 ms of a submission's 1.5 ms in the store).
     cursor = connection.cursor()
     cursor.execute("PRAGMA journal_mode=WAL")
+    cursor.execute("PRAGMA synchronous=NORMAL")
     cursor.close()
 
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import bisect
 import math
+from typing import Callable
 
 from sqlalchemy import select
+from sqlalchemy.engine import Connection
 from sqlalchemy.dialects import postgresql, sqlite
 
 from .database import counters, database
@@ -25,26 +27,35 @@ HISTOGRAMS = {
 }
 
 
+def job_observations(seconds: float, solver_seconds: float, node_steps: float) -> Callable[[Connection], None]:
+    """What a succeeded job adds to the counters (its time in the worker and, for a run, the
+    solver's time per node-step), to write in the transaction that records its success: counted
+    once, with it."""
+
+    def write(connection: Connection) -> None:
+        observe(connection, "job_seconds", seconds)
+        if node_steps > 0:
+            observe(connection, "solver_seconds_per_node_step", solver_seconds / node_steps)
+
+    return write
+
+
+def observe(connection: Connection, name: str, value: float) -> None:
+    bounds = HISTOGRAMS[name]
+    index = bisect.bisect_left(bounds, value)
+    bucket = str(bounds[index]) if index < len(bounds) else "+Inf"
+    insert = (postgresql if connection.dialect.name == "postgresql" else sqlite).insert
+    for key, amount in ((bucket, 1.0), ("sum", value), ("count", 1.0)):
+        statement = insert(counters).values(name=name, key=key, value=amount)
+        connection.execute(statement.on_conflict_do_update(
+            index_elements=["name", "key"], set_={"value": counters.c.value + amount}))
+
+
 class Counters:
+    """The counters as the API reads them."""
+
     def __init__(self, settings: Settings):
         self.settings = settings
-
-    def observe_job(self, seconds: float, solver_seconds: float, node_steps: float) -> None:
-        """A succeeded job: its time in the worker and, for a run, the solver's time per node-step."""
-        self.observe("job_seconds", seconds)
-        if node_steps > 0:
-            self.observe("solver_seconds_per_node_step", solver_seconds / node_steps)
-
-    def observe(self, name: str, value: float) -> None:
-        bounds = HISTOGRAMS[name]
-        index = bisect.bisect_left(bounds, value)
-        bucket = str(bounds[index]) if index < len(bounds) else "+Inf"
-        with translated(), database(self.settings).begin() as connection:
-            insert = (postgresql if connection.dialect.name == "postgresql" else sqlite).insert
-            for key, amount in ((bucket, 1.0), ("sum", value), ("count", 1.0)):
-                statement = insert(counters).values(name=name, key=key, value=amount)
-                connection.execute(statement.on_conflict_do_update(
-                    index_elements=["name", "key"], set_={"value": counters.c.value + amount}))
 
     def histogram(self, name: str) -> tuple[list[tuple[str, float]], float]:
         """([(upper bound, cumulative count)] ending with +Inf, sum)."""

@@ -34,9 +34,9 @@ import tempfile
 from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Iterator
+from typing import Callable, Iterator
 
-from sqlalchemy import and_, delete, func, insert, or_, select, true, tuple_, update
+from sqlalchemy import and_, delete, func, insert, or_, select, tuple_, update
 from sqlalchemy.engine import Connection
 from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
@@ -178,34 +178,47 @@ class JobStore:
             raise UnknownJob(job_id)
         return _record(row._mapping)
 
-    def _change(self, job_id: str, condition, **values) -> bool:
-        """Set `values` on the job if `condition` holds for it, in one statement: True if it did."""
+    def _change(self, job_id: str, condition, then: Callable[[Connection], None] | None = None,
+                **values) -> bool:
+        """Set `values` on the job if `condition` holds for it, in one statement: True if it did;
+        then `then(connection)` in the same transaction, if it did."""
         with self._connection(write=True) as connection:
-            return connection.execute(update(JOBS).where(JOBS.c.id == job_id, condition)
+            done = connection.execute(update(JOBS).where(JOBS.c.id == job_id, condition)
                                       .values(**values)).rowcount == 1
+            if done and then is not None:
+                then(connection)
+            return done
 
-    def start(self, job_id: str, worker: str) -> bool:
-        """Queued (or running on a worker that died) → running on `worker`, unless cancelled."""
-        return self._change(job_id, and_(JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested),
-                            status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker,
-                            progress=0.0)
+    def start(self, job_id: str, worker: str) -> dict | None:
+        """Queued (or running on a worker that died) → running on `worker`, unless cancelled:
+        the record then, or None if it was not started."""
+        with self._connection(write=True) as connection:
+            row = connection.execute(update(JOBS).where(
+                JOBS.c.id == job_id, JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested)
+                .values(status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker,
+                        progress=0.0).returning(*JOBS.c)).first()
+        return None if row is None else _record(row._mapping)
 
     def set_progress(self, job_id: str, fraction: float) -> bool:
         return self._change(job_id, JOBS.c.status == RUNNING, progress=fraction)
 
-    def finish(self, job_id: str, status: str, error: str | None = None, **values) -> bool:
-        """An unfinished job → `status` (with `error`): True if this call finished it. Success
-        needs a running job with no cancel asked; a failure or a cancel, any unfinished job."""
+    def finish(self, job_id: str, status: str, error: str | None = None,
+               then: Callable[[Connection], None] | None = None, **values) -> bool:
+        """An unfinished job → `status` (with `error`): True if this call finished it, and then
+        `then(connection)` in the same transaction. Success needs a running job with no cancel
+        asked; a failure or a cancel, any unfinished job."""
         if status == SUCCEEDED:
             condition = and_(JOBS.c.status == RUNNING, ~JOBS.c.cancel_requested)
         else:
             condition = JOBS.c.status.in_((QUEUED, RUNNING))
-        return self._change(job_id, condition, status=status, error=error, finished=now(), **values)
+        return self._change(job_id, condition, then, status=status, error=error, finished=now(), **values)
 
-    def complete(self, job_id: str, status: str, error: str | None = None, **values) -> str:
-        """A worker's end of a job: `finish` it as `status`; a success that lost to a cancel asked
-        meanwhile removes what it wrote and ends cancelled. Returns the job's final status."""
-        if self.finish(job_id, status, error, **values):
+    def complete(self, job_id: str, status: str, error: str | None = None,
+                 then: Callable[[Connection], None] | None = None, **values) -> str:
+        """A worker's end of a job: `finish` it as `status` (and `then`); a success that lost to a
+        cancel asked meanwhile removes what it wrote and ends cancelled. Returns the job's final
+        status."""
+        if self.finish(job_id, status, error, then, **values):
             return status
         record = self.get(job_id)
         if record["cancel_requested"] and record["status"] not in FINISHED:
@@ -298,13 +311,15 @@ class JobStore:
         """(how many match, a page of them newest first): `offset` into them, or those created
         `before` (created, id) — the last of the page before, which does not grow with the
         number of jobs as an offset does."""
-        condition = self._mine(and_(true(), *(column == value for column, value in (
-            (JOBS.c.status, status), (JOBS.c.name, name), (JOBS.c.sweep, sweep)) if value is not None)))
-        page = condition if before is None else and_(
-            condition, tuple_(JOBS.c.created, JOBS.c.id) < tuple_(*before))
+        conditions = [column == value for column, value in (
+            (JOBS.c.owner, self.owner), (JOBS.c.status, status), (JOBS.c.name, name),
+            (JOBS.c.sweep, sweep)) if value is not None]
+        page = conditions if before is None else [
+            *conditions, tuple_(JOBS.c.created, JOBS.c.id) < tuple_(*before)]
         with self._connection() as connection:
-            total = connection.scalar(select(func.count()).select_from(JOBS).where(condition))
-            rows = connection.execute(select(JOBS).where(page).order_by(
+            # No condition at all when none is asked: SQLite then counts the table at once.
+            total = connection.scalar(select(func.count()).select_from(JOBS).where(*conditions))
+            rows = connection.execute(select(JOBS).where(*page).order_by(
                 JOBS.c.created.desc(), JOBS.c.id.desc()).offset(offset).limit(limit))
             return total, [_record(row._mapping) for row in rows]
 

@@ -26,7 +26,7 @@ from percussim.solver.study_plots import render_study
 from .app import app
 from .broker import EVALUATE_PART, RUN_JOB
 from .fanout import QueueEvaluator, take_part
-from .metrics import Counters
+from .metrics import job_observations
 from .settings import settings
 from .store import (CALIBRATION, CANCELLED, FAILED, OPTIMIZATION, RUN, SUCCEEDED, JobStore,
                     StoreUnavailable, UnknownJob, WorkerRegistry)
@@ -65,14 +65,11 @@ def run_job(job_id: str) -> str:
     s = settings()
     store = JobStore(s)
     worker = run_job.request.hostname or socket.gethostname()
-    try:
-        if not _stored(lambda: store.start(job_id, worker)):
-            # Finished already, or a cancel was asked while it ran on a worker that died.
-            _stored(lambda: store.finish(job_id, CANCELLED))
-            return store.get(job_id)["status"]
-        kind = store.get(job_id)["kind"]
-    except UnknownJob:
-        return "deleted"
+    record = _stored(lambda: store.start(job_id, worker))
+    if record is None:
+        # Finished already (or removed), or a cancel was asked while it ran on a worker that died.
+        _stored(lambda: store.finish(job_id, CANCELLED))
+        return "not started"
     start = last_write = last_poll = time.monotonic()  # a job shorter than PROGRESS_SECONDS writes none
 
     def progress(fraction: float) -> None:
@@ -96,7 +93,7 @@ def run_job(job_id: str) -> str:
         except StoreUnavailable:
             return False
 
-    work = _run if kind == RUN else _study
+    work = _run if record["kind"] == RUN else _study
     try:
         solver_seconds, node_steps = work(store, job_id, progress, cancelled)
     except Cancelled:
@@ -113,10 +110,8 @@ def run_job(job_id: str) -> str:
         remove_partial(store.result_path(job_id))
         return _end(store, job_id, FAILED, f"its results could not be written: {_reason(error)}; "
                                            "nothing of them was kept")
-    status = _end(store, job_id, SUCCEEDED, progress=1.0, result_bytes=store.size(job_id))
-    if status == SUCCEEDED:
-        Counters(s).observe_job(time.monotonic() - start, solver_seconds, node_steps)
-    return status
+    return _end(store, job_id, SUCCEEDED, progress=1.0, result_bytes=store.size(job_id),
+                then=job_observations(time.monotonic() - start, solver_seconds, node_steps))
 
 
 def _reason(error: OSError) -> str:
@@ -148,7 +143,7 @@ def _study(store: JobStore, job_id: str, progress: Callable[[float], None],
            cancelled: Callable[[], bool]) -> tuple[float, float]:
     """A calibration or an optimisation: its batches spread over the live workers."""
     s = settings()
-    solve, plot = STUDIES[store.get(job_id)["kind"]]
+    solve, plot = STUDIES[_stored(lambda: store.get(job_id))["kind"]]
     workers = len(WorkerRegistry(s.results_dir).alive(within=ALIVE_WITHIN)) or 1
     evaluator = QueueEvaluator(store.batches(job_id), lambda batch, index: evaluate_part.apply_async(
         args=[job_id, batch, index], ignore_result=True), workers)
