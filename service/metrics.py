@@ -32,11 +32,12 @@ class _Service(Collector):
         self.settings, self.queue = settings, queue
 
     def collect(self):
-        counts = JobStore(self.settings).counts()
-        jobs = GaugeMetricFamily("percussim_jobs", "jobs in the database, by status", labels=["status"])
+        jobs = JobStore(self.settings)
+        counts = jobs.counts()
+        by_status = GaugeMetricFamily("percussim_jobs", "jobs in the database, by status", labels=["status"])
         for status in STATUSES:
-            jobs.add_metric([status], counts.get(status, 0))
-        yield jobs
+            by_status.add_metric([status], counts.get(status, 0))
+        yield by_status
         try:
             depth = self.queue.depth()
         except BROKER_ERRORS:
@@ -48,7 +49,7 @@ class _Service(Collector):
             buckets, total = counters.histogram(key)
             yield HistogramMetricFamily(name, documentation, buckets=buckets, sum_value=total)
         yield GaugeMetricFamily("percussim_results_bytes", "bytes of the finished jobs' files in the results store",
-                                value=JobStore(self.settings).result_bytes())
+                                value=jobs.result_bytes())
         yield GaugeMetricFamily("percussim_results_disk_free_bytes", "free bytes on the results store's disk",
                                 value=shutil.disk_usage(self.settings.results_dir).free)
 

@@ -14,7 +14,7 @@ import time
 import h5py
 import pytest
 
-from conftest import CHATTERS, merge
+from conftest import CHATTERS, merge, report
 from live_stack import RedisServer, Stack, children, command_line, wait_for
 from percussim.solver.presets import preset_json
 
@@ -33,11 +33,6 @@ def redis(tmp_path):
     yield server
     server.stop()
 
-
-def report(capsys, text: str) -> None:
-    """Print what a test saw past pytest's capture: the suite's output carries the counts."""
-    with capsys.disabled():
-        print(text)
 
 
 def statuses(stack: Stack, ids: list[str]) -> dict[str, int]:

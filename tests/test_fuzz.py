@@ -16,7 +16,7 @@ import schemathesis
 from hypothesis import HealthCheck, given, settings, strategies as st
 from hypothesis.errors import Unsatisfiable
 
-from conftest import BASE_CASE
+from conftest import BASE_CASE, report
 from live_stack import Stack
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
@@ -108,8 +108,7 @@ def test_print_the_counts(stack, capsys):
     total = sum(STATUSES.values())
     jobs = stack.client.get("/v1/jobs", params={"limit": 500}).json()
     outcomes = Counter(j["status"] for j in jobs["jobs"])
-    with capsys.disabled():
-        print(f"\nfuzzing the live API: {total} requests, statuses {dict(sorted(STATUSES.items()))}; "
-              f"{jobs['total']} jobs accepted, the last {len(jobs['jobs'])} {dict(outcomes)}")
+    report(capsys, f"\nfuzzing the live API: {total} requests, statuses {dict(sorted(STATUSES.items()))}; "
+                   f"{jobs['total']} jobs accepted, the last {len(jobs['jobs'])} {dict(outcomes)}")
     assert total >= 1000  # each answer was checked as it came
     assert all(j["error"] for j in jobs["jobs"] if j["status"] == "failed")

@@ -14,7 +14,7 @@ import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import text
 
-from conftest import BASE_CASE, merge
+from conftest import BASE_CASE, merge, report
 from percussim.service.app import create_app
 from percussim.service.retention import delete_expired
 from percussim.solver.simulate import simulate
@@ -25,12 +25,6 @@ from percussim.worker.store import (CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDE
                                     UnknownJob)
 
 SUMMARY = json.dumps({"peak_contact_force": {"value": 1.0}})
-
-
-def report(capsys, text: str) -> None:
-    """Print past pytest's capture: the suite's output carries the counts."""
-    with capsys.disabled():
-        print(text)
 
 
 def running_job(jobs: JobStore, case: dict = BASE_CASE) -> str:

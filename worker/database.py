@@ -73,20 +73,17 @@ counters = Table(
 )
 
 
-def database_url(settings: Settings) -> str:
-    """The configured database, else an SQLite file in the results folder."""
-    if settings.database_url:
-        return settings.database_url
-    return f"sqlite:///{(settings.results_dir / 'percussim.db').resolve()}"
-
-
 def database(settings: Settings) -> Engine:
     """The engine of the settings' database, opened (and migrated) once per process."""
-    return _open(database_url(settings), settings.results_dir.resolve())
+    # Looked up on every read and write of a record: by the settings as given, nothing resolved.
+    return _open(settings.database_url, settings.results_dir)
 
 
 @lru_cache
-def _open(url: str, results_dir: Path) -> Engine:
+def _open(configured: str | None, results_dir: Path) -> Engine:
+    """The configured database, else an SQLite file in the results folder."""
+    results_dir = results_dir.resolve()
+    url = configured or f"sqlite:///{results_dir / 'percussim.db'}"
     if url.startswith("sqlite"):
         results_dir.mkdir(parents=True, exist_ok=True)
         engine = create_engine(url, connect_args={"timeout": SQLITE_BUSY_SECONDS})

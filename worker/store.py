@@ -34,7 +34,7 @@ import tempfile
 from contextlib import contextmanager
 from datetime import datetime, timezone
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Callable, Iterable, Iterator
 
 from sqlalchemy import and_, delete, func, insert, or_, select, tuple_, update
 from sqlalchemy.engine import Connection
@@ -136,9 +136,8 @@ class JobStore:
             raise UnknownJob(job_id)
         return self.jobs / job_id
 
-    def _new(self, case: dict, kind: str, request: dict | None, sweep: str | None) -> dict:
+    def _new(self, job_id: str, case: dict, kind: str, request: dict | None, sweep: str | None) -> dict:
         """A new queued job's folder, written, and its record (not yet in the database)."""
-        job_id = new_id()
         folder = self.jobs / job_id
         with translated():
             folder.mkdir(parents=True)
@@ -150,25 +149,30 @@ class JobStore:
                 "error": None, "attempts": 0, "worker": None, "sweep": sweep, "cancel_requested": False,
                 "result_bytes": None}
 
-    def _insert(self, rows: list[dict], more=None) -> None:
-        """Record the new jobs `rows` (and whatever `more(connection)` adds) in one transaction;
-        if it fails, their folders go too."""
+    def _create(self, new: list[tuple[str, dict, str, dict | None]], sweep: str | None = None,
+                more: Callable[[Connection], None] | None = None) -> list[dict]:
+        """New queued jobs, each (id, case, kind, request): their folders written, then their
+        records (and whatever `more(connection)` adds) in one transaction. If anything fails,
+        none of their folders is left."""
         try:
+            rows = [self._new(*job, sweep) for job in new]
             with self._connection(write=True) as connection:
                 connection.execute(insert(JOBS), rows)
                 if more is not None:
                     more(connection)
         except BaseException:
-            for row in rows:
-                shutil.rmtree(self.jobs / row["id"], ignore_errors=True)
+            self._remove_folders(job_id for job_id, *_ in new)
             raise
+        return rows
+
+    def _remove_folders(self, job_ids: Iterable[str]) -> None:
+        for job_id in job_ids:
+            shutil.rmtree(self.jobs / job_id, ignore_errors=True)
 
     def create(self, case: dict, kind: str = RUN, request: dict | None = None) -> dict:
         """A new queued job for `case` (validated JSON), of `kind` with its `request` (a
         calibration's or an optimisation's, which holds the case too); returns its record."""
-        row = self._new(case, kind, request, None)
-        self._insert([row])
-        return _record(row)
+        return _record(self._create([(new_id(), case, kind, request)])[0])
 
     def get(self, job_id: str) -> dict:
         self.folder(job_id)  # the id's pattern
@@ -254,7 +258,7 @@ class JobStore:
             gone = connection.execute(delete(JOBS).where(
                 self._mine(and_(JOBS.c.id == job_id, JOBS.c.status.in_(FINISHED))))).rowcount == 1
         if gone:
-            shutil.rmtree(self.jobs / job_id, ignore_errors=True)
+            self._remove_folders([job_id])
         return gone
 
     def case(self, job_id: str) -> dict:
@@ -382,19 +386,12 @@ class SweepStore:
     def create(self, name: str | None, parameters: list[str], variants: list[tuple[dict, dict]]) -> dict:
         """A new sweep of `variants` (each (values, case JSON)), each a new queued job, all
         recorded in one transaction; returns the sweep's record."""
-        sweep_id = new_id()
-        rows = []
-        try:
-            for _, case in variants:
-                rows.append(self.jobs._new(case, RUN, None, sweep_id))
-        except BaseException:
-            for row in rows:
-                shutil.rmtree(self.jobs.jobs / row["id"], ignore_errors=True)
-            raise
+        sweep_id, job_ids = new_id(), [new_id() for _ in variants]
         record = {"id": sweep_id, "owner": self.jobs.owner, "name": name, "created": now(),
                   "parameters": parameters,
-                  "variants": [{"values": values, "job": row["id"]} for (values, _), row in zip(variants, rows)]}
-        self.jobs._insert(rows, lambda connection: connection.execute(insert(SWEEPS), [record]))
+                  "variants": [{"values": values, "job": job_id} for (values, _), job_id in zip(variants, job_ids)]}
+        self.jobs._create([(job_id, case, RUN, None) for job_id, (_, case) in zip(job_ids, variants)], sweep_id,
+                          lambda connection: connection.execute(insert(SWEEPS), [record]))
         return _sweep_record(record)
 
     def get(self, sweep_id: str) -> dict:
@@ -417,8 +414,7 @@ class SweepStore:
             if gone:
                 ids = list(connection.scalars(delete(JOBS).where(JOBS.c.sweep == sweep_id).returning(JOBS.c.id)))
         if gone:
-            for job_id in ids:
-                shutil.rmtree(self.jobs.jobs / job_id, ignore_errors=True)
+            self.jobs._remove_folders(ids)
         return gone
 
     def expired(self, finished_before: datetime, limit: int) -> list[str]:
