@@ -15,6 +15,7 @@ from percussim.worker.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
 
 from . import errors, page, presets, retention
 from .auth import authenticate
+from .cases import cases_router
 from .jobs import jobs_router
 from .limits import BodySizeLimit
 from .metrics import metrics_router
@@ -46,6 +47,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                            expose_headers=["Location", "Retry-After"])
     keyed = [Depends(authenticate(settings))]
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
+    app.include_router(cases_router(settings), dependencies=keyed)
     app.include_router(sweeps_router(settings, queue), dependencies=keyed)
     for kind in (CALIBRATION, OPTIMIZATION):
         app.include_router(studies_router(settings, queue, kind), dependencies=keyed)

@@ -1,4 +1,5 @@
-"""`/v1/jobs`: submit a case, follow its job, fetch its summary, result and plots, cancel it.
+"""`/v1/jobs`: submit a case, follow its job, fetch its summary, result, plots and the plots' data
+(series), cancel it.
 
 The routes only validate, publish and read the results store the workers write. No
 `from __future__ import annotations` here: FastAPI must see the request examples, a local of
@@ -8,13 +9,15 @@ The routes only validate, publish and read the results store the workers write. 
 import base64
 import re
 from datetime import datetime
+from pathlib import Path
 from typing import Annotated, Any, Literal
 from urllib.parse import urlencode
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
-from fastapi.responses import FileResponse
-from pydantic import BaseModel, ConfigDict
+from fastapi.responses import FileResponse, StreamingResponse
+from pydantic import BaseModel, ConfigDict, Field
 
+from percussim.solver import series
 from percussim.solver.case import Case, CaseError, FieldError
 from percussim.solver.limits import check_case
 from percussim.solver.summary import Summary
@@ -101,10 +104,29 @@ class PlotList(BaseModel):
     plots: list[Plot]
 
 
-def _download_name(record: dict) -> str:
-    """`<name>-<id>.h5`, the name reduced to characters safe in any file system."""
+class SeriesLinks(BaseModel):
+    json_: str = Field(alias="json")  # not `json`, which BaseModel has
+    csv: str
+
+
+class Series(BaseModel):
+    """The data of an interactive plot: whether this result can give it, and if not, what to change."""
+
+    name: str
+    title: str
+    available: bool
+    reason: str | None
+    links: SeriesLinks
+
+
+class SeriesList(BaseModel):
+    series: list[Series]
+
+
+def _download_name(record: dict, suffix: str = ".h5") -> str:
+    """`<name>-<id><suffix>`, the name reduced to characters safe in any file system."""
     name = re.sub(r"[^A-Za-z0-9_.-]+", "_", record.get("name") or "case").strip("._") or "case"
-    return f"{name}-{record['id']}.h5"
+    return f"{name}-{record['id']}{suffix}"
 
 
 def cancel_or_delete(jobs: JobStore, record: dict, view, what: str = "job") -> dict | Response:
@@ -196,6 +218,14 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         """A job's status, progress (0..1), timestamps and error."""
         return _view(request, store(request).get(job_id))
 
+    @router.get("/{job_id}/case", responses=not_found)
+    def get_case(request: Request, job_id: str) -> dict:
+        """The case as the job runs it (defaults spelled out), whatever its status: to edit it
+        again, or to see how two jobs differ."""
+        jobs = store(request)
+        jobs.get(job_id)  # 404 for an unknown job, or another owner's
+        return jobs.case(job_id)
+
     @router.get("/{job_id}/summary", response_model=Summary, responses=not_found | not_ready)
     def get_summary(request: Request, job_id: str) -> dict:
         """The pulse summary of a succeeded job."""
@@ -271,6 +301,79 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
             # Times that are not numbers, or outside the run's fields.
             raise CaseError([FieldError(field="query.times", message=str(error))]) from None
         return FileResponse(kept, media_type=FORMATS[fmt])
+
+    @router.get("/{job_id}/series", response_model=SeriesList, responses=not_found | not_ready)
+    def list_series(request: Request, job_id: str) -> dict:
+        """The data of the job page's interactive plots: which this result can give, why not the
+        others, and where to get each as JSON (downsampled for a screen) or CSV (every sample)."""
+        jobs = store(request)
+        record = jobs.get(job_id)
+        if record["status"] != SUCCEEDED:
+            raise not_ready_error(record, "series")
+        reasons = series.problems(jobs.result_path(job_id))
+        return {"series": [{
+            "name": name, "title": title, "available": reasons[name] is None, "reason": reasons[name],
+            "links": {"json": request.app.url_path_for("get_series", job_id=job_id, name=name),
+                      "csv": request.app.url_path_for("get_series_csv", job_id=job_id, name=name)},
+        } for name, title in series.SERIES.items()]}
+
+    def series_result(request: Request, job_id: str, name: str) -> tuple[dict, Path]:
+        """The job's record and result, once it is known to have series `name`."""
+        jobs = store(request)
+        record = jobs.get(job_id)
+        if name not in series.SERIES:
+            raise HTTPException(status_code=404, detail=(
+                f"no series named {name!r}; the series are: {', '.join(series.SERIES)}"))
+        if record["status"] != SUCCEEDED:
+            raise not_ready_error(record, "series")
+        result = jobs.result_path(job_id)
+        reason = series.problems(result)[name]
+        if reason:
+            raise HTTPException(status_code=404, detail=f"job {job_id} has no {name} series: {reason}")
+        return record, result
+
+    no_series = {404: {"model": Problem, "description": "no job with this id, no series with this name, or "
+                                                       "one this result cannot give (the reason says why)"}}
+
+    # Before /series/{name}, which would take "force.csv" for a name.
+    @router.get("/{job_id}/series/{name}.csv", response_class=StreamingResponse, responses=no_series | {
+        200: {"content": {"text/csv": {}}, "description": "every sample, a header of names and units"},
+    } | not_ready)
+    def get_series_csv(request: Request, job_id: str, name: str) -> StreamingResponse:
+        """A series of a succeeded job's result as CSV, every sample: a row a sample (a frame, for
+        the fields), a column a curve (a station); streamed as it is read."""
+        record, result = series_result(request, job_id, name)
+        filename = _download_name(record, f"-{name}.csv")
+        return StreamingResponse(series.csv_chunks(result, name), media_type="text/csv; charset=utf-8",
+                                 headers={"Content-Disposition": f'attachment; filename="{filename}"'})
+
+    @router.get("/{job_id}/series/{name}", responses=no_series | {
+        200: {"content": {"application/json": {}}, "description": "the series, SI units"},
+        422: {"model": FieldErrors, "description": "a count out of range, or one the series does not take"},
+    } | not_ready)
+    def get_series(request: Request, job_id: str, name: str,
+                   points: Annotated[int | None, Query(ge=0, le=10**7, description=(
+                       f"a curve's samples, about (default {series.DEFAULT_POINTS}; 0: every one, up "
+                       f"to {series.MAX_POINTS}); min–max decimated, so every peak is kept"))] = None,
+                   times: Annotated[int | None, Query(ge=0, le=10**7, description=(
+                       f"fields only: frames (default {series.DEFAULT_TIMES}; 0: all, up to "
+                       f"{series.MAX_FIELD_SIDE})"))] = None,
+                   stations: Annotated[int | None, Query(ge=0, le=10**7, description=(
+                       f"fields only: stations along the tool (default {series.DEFAULT_STATIONS}; "
+                       f"0: all, up to {series.MAX_FIELD_SIDE})"))] = None) -> Response:
+        """A series of a succeeded job's result (the names are in `/series`), downsampled for a
+        screen: the curves of a plot, each its own x and y, or the stress field σ(x, t)."""
+        _, result = series_result(request, job_id, name)
+        counts = {"points": points, "times": times, "stations": stations}
+        taken = ("times", "stations") if name == series.FIELDS else ("points",)
+        refused = [FieldError(field=f"query.{query}",
+                              message=f"the {name} series takes {' and '.join(taken)}, not {query}")
+                   for query, value in counts.items() if value is not None and query not in taken]
+        if refused:
+            raise CaseError(refused)
+        data = series.series(result, name, **{query: value for query, value in counts.items()
+                                              if value is not None})
+        return Response(series.dumps(data), media_type="application/json")
 
     @router.delete("/{job_id}", status_code=202, response_model=Job, responses=not_found | {
         204: {"description": "the job had finished: it and its files are removed"},

@@ -5,6 +5,9 @@ Each plot is one drawing function in `_TABLE`, with what it needs from the resul
 Figures are `matplotlib.figure.Figure` on the Agg canvas, never pyplot, whose global figure
 registry is no place for a server's threads. Large datasets are read with strides, so that a
 plot reads a bounded number of values however much the run kept.
+
+What a plot shows of a result (`forces`, `displacements`, `energy_budget`, ...) and why a result
+cannot make it (`problem`) are also what the interactive plots' data shows (`series`).
 """
 
 from __future__ import annotations
@@ -64,8 +67,23 @@ def _in_unit(t: float, scale: float, unit: str) -> str:
     return f"{np.format_float_positional(t * scale, precision=3, fractional=False, trim='-')} {unit}"
 
 
+def strides(rows: int, most: int) -> list[slice]:
+    """Every k-th of `rows` rows, k = ⌈rows / most⌉, and the last when the stride misses it, so
+    that a curve ends where the run does: one selection, or two. Stepped slices, not lists of
+    rows: h5py reads each as one hyperslab, about 10× faster."""
+    step = max(1, math.ceil(rows / most))
+    every = slice(None, None, step)
+    return [every] if (rows - 1) % step == 0 else [every, slice(rows - 1, rows)]
+
+
+def take(dataset: h5py.Dataset, selections: list[slice]) -> np.ndarray:
+    """The rows of `dataset` that `selections` (`strides`) select, in order."""
+    parts = [dataset[rows] for rows in selections]
+    return parts[0] if len(parts) == 1 else np.concatenate(parts)
+
+
 @dataclass
-class _Source:
+class Source:
     """An open result: its datasets, case and summary, and the time unit of its axes."""
 
     h5: h5py.File
@@ -80,13 +98,7 @@ class _Source:
     def history(self, path: str, points: int | None = None) -> np.ndarray:
         """A history read with the stride that keeps about `points` (MAX_CURVE_POINTS) samples,
         the last one always among them, so that a curve ends where the run does."""
-        points = points or MAX_CURVE_POINTS
-        if self.rows <= points:
-            return self.h5[path][()]
-        # A stepped slice, not a list of rows: h5py reads it as one hyperslab, about 10× faster.
-        step = math.ceil(self.rows / points)
-        data = self.h5[path][::step]
-        return data if (self.rows - 1) % step == 0 else np.concatenate([data, self.h5[path][-1:]])
+        return take(self.h5[path], strides(self.rows, points or MAX_CURVE_POINTS))
 
     def time(self, points: int | None = None) -> np.ndarray:
         return self.history("time", points) * self.t_scale
@@ -99,7 +111,8 @@ class _Source:
 
 
 @contextmanager
-def _open(path: str | Path) -> Iterator[_Source]:
+def open_result(path: str | Path) -> Iterator[Source]:
+    """The result at `path`, open; `NotAResult` if it is not one."""
     try:
         h5 = h5py.File(path, "r")
     except FileNotFoundError:
@@ -110,7 +123,7 @@ def _open(path: str | Path) -> Iterator[_Source]:
         if h5.attrs.get("format") != FORMAT:
             raise NotAResult(f"{path} is not a percussim result: an HDF5 file without "
                              f"format = {FORMAT!r}")
-        yield _Source(h5, json.loads(h5.attrs["case"]), json.loads(h5["summary"][()]))
+        yield Source(h5, json.loads(h5.attrs["case"]), json.loads(h5["summary"][()]))
 
 
 def decorate(ax: Axes, xlabel: str, ylabel: str) -> None:
@@ -120,16 +133,27 @@ def decorate(ax: Axes, xlabel: str, ylabel: str) -> None:
     ax.margins(x=0)
 
 
-def _force(fig: Figure, src: _Source, times) -> None:
+def forces(case: dict) -> list[tuple[str, str, str]]:
+    """(key, dataset, label) of the forces a result of `case` shows: the contact force F_c(t), the
+    medium's force if it has a medium, the external force R(t) on the striker if it has one."""
+    shown = [("contact_force", "contact/force", "contact force")]
+    if case.get("medium"):
+        shown.append(("medium_force", "medium/force", "medium force"))
+    if case.get("force"):
+        shown.append(("external_force", "external/force", "external force on the striker"))
+    return shown
+
+
+_FORCE_STYLES = {"contact_force": {"color": "C0", "lw": 1.4}, "medium_force": {"color": "C1", "lw": 1.1},
+                 "external_force": {"color": "C2", "lw": 1.1, "ls": "--"}}
+
+
+def _force(fig: Figure, src: Source, times) -> None:
     """Contact force F_c(t), medium force and external force R(t), contact intervals shaded."""
     ax = fig.subplots()
     t = src.time()
-    ax.plot(t, src.history("contact/force") / 1e3, color="C0", lw=1.4, label="contact force")
-    if src.case.get("medium"):
-        ax.plot(t, src.history("medium/force") / 1e3, color="C1", lw=1.1, label="medium force")
-    if src.case.get("force"):
-        ax.plot(t, src.history("external/force") / 1e3, color="C2", lw=1.1, ls="--",
-                label="external force on the striker")
+    for key, path, label in forces(src.case):
+        ax.plot(t, src.history(path) / 1e3, label=label, **_FORCE_STYLES[key])
     spans = [(c["start"] * src.t_scale, ((c["end"] if c["end"] is not None else src.end) - c["start"])
               * src.t_scale) for c in src.summary["contacts"]]
     if spans:
@@ -147,27 +171,38 @@ def _force(fig: Figure, src: _Source, times) -> None:
     ax.legend(loc="upper right", fontsize=9)
 
 
-def _displacements(fig: Figure, src: _Source, times) -> None:
+def displacements(case: dict) -> list[tuple[str, str, str]]:
+    """(key, dataset, label) of the displacements: the striker's y(t), the struck end's u_0(t) and
+    the working end's u_N(t)."""
+    # an elastic striker's recorded displacement is its impact face's
+    striker = "striker's impact face" if case["striker"].get("length") else "striker"
+    return [("striker", "striker/displacement", striker),
+            ("struck_end", "tool/struck_end_displacement", "struck end of the tool"),
+            ("working_end", "tool/working_end_displacement", "working end of the tool")]
+
+
+def _displacements(fig: Figure, src: Source, times) -> None:
     """Displacements of the striker y(t), the struck end u_0(t) and the working end u_N(t)."""
     ax = fig.subplots()
     t = src.time()
-    # an elastic striker's recorded displacement is its impact face's
-    striker = "striker's impact face" if src.case["striker"].get("length") else "striker"
-    for path, label, style in (("striker/displacement", striker, "-"),
-                               ("tool/struck_end_displacement", "struck end of the tool", "--"),
-                               ("tool/working_end_displacement", "working end of the tool", "-.")):
+    for (_, path, label), style in zip(displacements(src.case), ("-", "--", "-.")):
         ax.plot(t, src.history(path) * 1e3, ls=style, lw=1.3, label=label)
     decorate(ax, src.t_label(), "displacement (mm), toward the medium > 0")
     ax.legend(fontsize=9)
 
 
-def _probes(fig: Figure, src: _Source, times) -> None:
+def probe_label(x: float) -> str:
+    """The probe at `x` (m), as its curve is named."""
+    return f"x = {x:.4g} m"
+
+
+def _probes(fig: Figure, src: Source, times) -> None:
     """Stress σ(x_k, t) at each probe station x_k."""
     ax = fig.subplots()
     t = src.time()
     stress = src.history("probes/stress") / 1e6
     for k, x in enumerate(src.h5["probes/x"][()]):
-        ax.plot(t, stress[:, k], lw=1.1, label=f"x = {x:.4g} m")
+        ax.plot(t, stress[:, k], lw=1.1, label=probe_label(x))
     ax.axhline(0, color="0.5", lw=0.6)
     decorate(ax, src.t_label(), "stress σ (MPa), compression < 0")
     ax.legend(title="probe", fontsize=9)
@@ -178,7 +213,7 @@ def _nearest(frame_times: np.ndarray, times) -> list[int]:
     return sorted({int(np.abs(frame_times - t).argmin()) for t in times})
 
 
-def _default_frames(src: _Source, frame_times: np.ndarray) -> list[int]:
+def _default_frames(src: Source, frame_times: np.ndarray) -> list[int]:
     """Frames spread over the first contact and the wave's transit L/a, a = √(E/ρ).
 
     The frame at the contact's start is left out (the tool is still at rest then). When the
@@ -213,7 +248,7 @@ def parse_times(text: str) -> list[float]:
     return times
 
 
-def _frames(src: _Source, times: Sequence[float] | None) -> list[int]:
+def _frames(src: Source, times: Sequence[float] | None) -> list[int]:
     """The stored field frames to draw: nearest `times` (s), or spread over the first wave."""
     frame_times = src.h5["fields/time"][()]
     if times is None:
@@ -225,7 +260,7 @@ def _frames(src: _Source, times: Sequence[float] | None) -> list[int]:
     return _nearest(frame_times, times)
 
 
-def _stress_along(fig: Figure, src: _Source, times) -> None:
+def _stress_along(fig: Figure, src: Source, times) -> None:
     """Stress σ(x, t_j) along the tool at chosen times t_j."""
     ax = fig.subplots()
     x = src.h5["fields/x"][()]
@@ -241,7 +276,7 @@ def _stress_along(fig: Figure, src: _Source, times) -> None:
     ax.legend(fontsize=9)
 
 
-def _spacetime(fig: Figure, src: _Source, times) -> None:
+def _spacetime(fig: Figure, src: Source, times) -> None:
     """Stress σ(x, t) over the tool and the run, on a colour scale centred on zero."""
     ax = fig.subplots()
     stress = src.h5["fields/stress"]
@@ -273,28 +308,50 @@ ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked (thos
 }
 
 
-def _energy(fig: Figure, src: _Source, times) -> None:
+INPUT = "input: initial + external work"
+NUMERICAL = "lost by the scheme (numerical)"
+
+
+def energy_terms(h5: h5py.File) -> dict[str, str]:
+    """The terms of ENERGY_TERMS this result (an open file) has: name -> label."""
+    return {name: label for name, label in ENERGY_TERMS.items() if f"energy/{name}" in h5}
+
+
+@dataclass(frozen=True)
+class EnergyBudget:
+    """The energy audit at some samples: each term of `energy_terms`, the input (½·m1·W1² + the
+    external work) and what is left of it, the scheme's own dissipation (`numerical`)."""
+
+    terms: list[np.ndarray]
+    supplied: np.ndarray
+    numerical: np.ndarray
+
+
+def energy_budget(src: Source, read: Callable[[str], np.ndarray]) -> EnergyBudget:
+    """The energy audit at the samples `read(dataset)` reads."""
+    # The summary's, so that an elastic striker's mass ρ∫S dx is not computed again here; blow
+    # after blow, the strikers launched after the first bring theirs as they are launched.
+    supplied = src.summary["energy"]["initial"] + read("energy/external_work")
+    if "energy/launched" in src.h5:
+        supplied += read("energy/launched") - src.h5["energy/launched"][-1]
+    terms = [read(f"energy/{name}") for name in energy_terms(src.h5)]
+    return EnergyBudget(terms, supplied, supplied - np.sum(terms, axis=0))
+
+
+def _energy(fig: Figure, src: Source, times) -> None:
     """The energy audit over time: stored and dissipated terms stacked against the input
     ½·m1·W1² + the external work; what is left is the scheme's own dissipation."""
     ax = fig.subplots()
     t = src.time(MAX_FILL_POINTS)
-    # The summary's, so that an elastic striker's mass ρ∫S dx is not computed again here; blow
-    # after blow, the strikers launched after the first bring theirs as they are launched.
-    supplied = (src.summary["energy"]["initial"]
-                + src.history("energy/external_work", MAX_FILL_POINTS))
-    if "energy/launched" in src.h5:
-        launched = src.history("energy/launched", MAX_FILL_POINTS)
-        supplied += launched - src.h5["energy/launched"][-1]
-    labels = {name: label for name, label in ENERGY_TERMS.items() if f"energy/{name}" in src.h5}
-    terms = [src.history(f"energy/{name}", MAX_FILL_POINTS) for name in labels]
-    numerical = supplied - np.sum(terms, axis=0)
+    budget = energy_budget(src, lambda path: src.history(path, MAX_FILL_POINTS))
+    terms, supplied, numerical = budget.terms, budget.supplied, budget.numerical
     lost = numerical[-1] / supplied[-1] if supplied[-1] > 0 else 0.0
     bands = ax.stackplot(t, *terms, numerical,
-                         labels=[*labels.values(), "lost by the scheme (numerical)"],
+                         labels=[*energy_terms(src.h5).values(), NUMERICAL],
                          colors=[f"C{k}" for k in range(len(terms))] + ["0.75"], alpha=0.85, lw=0)
     bands[-1].set_hatch("////")  # what the scheme lost stands apart from the physics
     bands[-1].set_edgecolor("firebrick")
-    ax.plot(t, supplied, color="black", lw=1.4, ls="--", label="input: initial + external work")
+    ax.plot(t, supplied, color="black", lw=1.4, ls="--", label=INPUT)
     ax.annotate(f"the scheme {'lost' if lost >= 0 else 'created'} {abs(100 * lost):.2g}% of the input",
                 xy=(t[-1], supplied[-1] - 0.5 * numerical[-1]), xytext=(-8, 0),
                 textcoords="offset points", ha="right", va="center", fontsize=9,
@@ -304,14 +361,18 @@ def _energy(fig: Figure, src: _Source, times) -> None:
     fig.legend(loc="outside right upper", fontsize=9, frameon=False)
 
 
-def _force_penetration(fig: Figure, src: _Source, times) -> None:
+def penetration_path(h5: h5py.File) -> str:
+    """The dataset of the working end's penetration u_N: a medium that yields records its own; a
+    linear one's is the working end's displacement."""
+    return "medium/penetration" if "medium/penetration" in h5 else "tool/working_end_displacement"
+
+
+def _force_penetration(fig: Figure, src: Source, times) -> None:
     """The medium's force against the working end's penetration u_N: a loop whose area, once the
     medium is unloaded, is the net work on it; the permanent penetration marked."""
     ax = fig.subplots()
-    # A medium that yields records its penetration; a linear one's is the working end's u_N.
-    path = "medium/penetration" if "medium/penetration" in src.h5 else "tool/working_end_displacement"
-    ax.plot(src.history(path) * 1e3, src.history("medium/force") / 1e3, color="C1", lw=1.3,
-            label="medium force")
+    ax.plot(src.history(penetration_path(src.h5)) * 1e3, src.history("medium/force") / 1e3, color="C1",
+            lw=1.3, label="medium force")
     penetration = src.summary["medium_penetration"]
     permanent = penetration["permanent"] * 1e3
     ax.axvline(permanent, color="C3", lw=0.9, ls="--")
@@ -338,7 +399,7 @@ BLOW_COLUMNS = {  # the summary's blows table: column -> (panel title, unit, sca
 }
 
 
-def _blows(fig: Figure, src: _Source, times) -> None:
+def _blows(fig: Figure, src: Source, times) -> None:
     """The summary's blows table, a panel a column, against the blow number."""
     from matplotlib.ticker import MaxNLocator
 
@@ -358,7 +419,7 @@ def _blows(fig: Figure, src: _Source, times) -> None:
 class _Plot:
     title: str
     needs: tuple[str, ...]  # what beyond the histories: keys of _NEEDS
-    draw: Callable[[Figure, _Source, Sequence[float] | None], None]
+    draw: Callable[[Figure, Source, Sequence[float] | None], None]
 
 
 _TABLE = {
@@ -425,11 +486,11 @@ def problem(h5: h5py.File, name: str) -> str | None:
 
 def problems(path: str | Path) -> dict[str, str | None]:
     """Every plot's `problem` for the result at `path`."""
-    with _open(path) as src:
+    with open_result(path) as src:
         return {name: problem(src.h5, name) for name in PLOTS}
 
 
-def _figure(src: _Source, name: str, times: Sequence[float] | None) -> Figure:
+def _figure(src: Source, name: str, times: Sequence[float] | None) -> Figure:
     plot = _plot(name)
     reason = problem(src.h5, name)
     if reason:
@@ -448,7 +509,7 @@ def _figure(src: _Source, name: str, times: Sequence[float] | None) -> Figure:
 
 def figure(path: str | Path, name: str, times: Sequence[float] | None = None) -> Figure:
     """Plot `name` of the result at `path`; `times` (s) only for `stress_along`."""
-    with _open(path) as src:
+    with open_result(path) as src:
         return _figure(src, name, times)
 
 
@@ -486,7 +547,7 @@ def write_plots(path: str | Path, out_dir: str | Path, formats: Sequence[str] = 
         _check_format(fmt)
     out_dir = Path(out_dir)
     written, skipped = [], {}
-    with _open(path) as src:
+    with open_result(path) as src:
         for name in names:
             reason = problem(src.h5, name)
             if reason:

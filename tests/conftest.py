@@ -9,6 +9,8 @@ import pytest
 from percussim.solver.presets import preset_json
 from percussim.solver.reference import LinearImpact
 
+pytest_plugins = ["browser"]  # the job page's fixtures (stack, browser, open_page, page)
+
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
 
 

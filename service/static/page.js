@@ -30,6 +30,12 @@ function fmt(value, digits = 4) {
   return value.toFixed(Math.max(decimals, 0));
 }
 
+// A number as typed, or the text itself when it is not one, for the service to name.
+function typed(text) {
+  const value = Number(text);
+  return text !== "" && Number.isFinite(value) ? value : text;
+}
+
 const clock = (iso) => (iso ? new Date(iso).toLocaleTimeString("en-GB") : "");
 
 function seconds(fromIso, toIso) {
@@ -121,11 +127,19 @@ async function choosePreset() {
     $("preset-description").textContent = preset.description || "";
     // The description last: the physics is what one reads and edits.
     const { description, ...physics } = preset;
-    $("case-json").value = JSON.stringify({ ...physics, description }, null, 2);
+    setCaseText(JSON.stringify({ ...physics, description }, null, 2));
     showProblems($("case-errors"), null);
   } catch (error) {
     showProblems($("case-errors"), `Preset ${name} could not be loaded: ${describe(error)}`);
   }
+}
+
+// The case editor's text replaced whole (a preset, a fitted case): an "input" event, as when the
+// user types, so that the form follows.
+function setCaseText(text) {
+  const area = $("case-json");
+  area.value = text;
+  area.dispatchEvent(new Event("input"));
 }
 
 // A box of problems under a form: a title, then a table of each field (or place) and its problem;
@@ -172,21 +186,24 @@ function editedCase(box) {
   }
 }
 
-// POST `body` (JSON text) to `path` from the form whose submit button is `button`, then open the
-// new job; a refusal is shown in `box`, each field with its problem (`where` maps a field to where
-// the user finds it).
-async function send(path, body, { button, box, what, where = (field) => field }) {
+// POST `body` (JSON text) to `path` from the form whose submit button is `button`, then open what
+// it made (`open`, a job by default); a refusal is shown in `box`, each field with its problem
+// (`where` maps a field to where the user finds it), and handed to `refused`.
+async function send(path, body, { button, box, what, where = (field) => field,
+                                  open = (job) => openJob(job.id), refused = () => {} }) {
   button.disabled = true;
   try {
-    const job = await getJSON(path, { method: "POST", headers: { "Content-Type": "application/json" }, body });
+    const made = await getJSON(path, { method: "POST", headers: { "Content-Type": "application/json" }, body });
     showProblems(box, null);
-    openJob(job.id);
+    refused([]);
+    open(made);
     refreshJobs();
   } catch (error) {
     if (Array.isArray(error.detail)) {
       const n = error.detail.length;
       showProblems(box, `The service refused the ${what}: ${n} problem${n === 1 ? "" : "s"}.`,
                    error.detail.map((d) => ({ ...d, field: where(d.field) })));
+      refused(error.detail);
     } else {
       showProblems(box, `The ${what} was not submitted: ${describe(error)}`);
     }
@@ -199,21 +216,44 @@ async function submitCase(event) {
   event.preventDefault();
   const box = $("case-errors");
   // The text as typed: the service reads it and names what is wrong.
-  if (editedCase(box)) await send("/v1/jobs", $("case-json").value, { button: $("submit"), box, what: "case" });
+  if (editedCase(box)) {
+    await send("/v1/jobs", $("case-json").value, { button: $("submit"), box, what: "case", refused: showFieldProblems });
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
-// Recent jobs.
+// Recent jobs, each finished run with a box to pick it for a comparison.
+
+const COMPARE_MIN = 2;
+const COMPARE_MAX = 8;
+const picked = new Set(); // the jobs ticked for a comparison, kept across refreshes
+
+function pickBox(job) {
+  if (job.status !== "succeeded" || isStudy(job)) return h("span", { class: "pick" });
+  return h("input", { type: "checkbox", class: "pick", "data-pick": job.id, checked: picked.has(job.id),
+                      "aria-label": `compare ${job.name || job.id}`,
+                      onchange: (event) => { event.target.checked ? picked.add(job.id) : picked.delete(job.id); pickedChanged(); } });
+}
+
+function pickedChanged() {
+  const n = picked.size;
+  $("compare").disabled = n < COMPARE_MIN || n > COMPARE_MAX;
+  $("compare").textContent = n ? `Compare ${n}` : "Compare";
+  $("compare-hint").textContent = n > COMPARE_MAX ? `at most ${COMPARE_MAX} jobs: untick ${n - COMPARE_MAX}`
+    : n < COMPARE_MIN ? `tick ${COMPARE_MIN} to ${COMPARE_MAX} finished jobs to compare them` : "";
+}
 
 async function refreshJobs() {
   try {
     const { jobs } = await getJSON(`/v1/jobs?limit=${RECENT}`);
     $("jobs").replaceChildren(...jobs.map((job) => h("li", {},
+      pickBox(job),
       h("button", { type: "button", class: "job-link", "data-job": job.id,
                     "aria-current": shown && shown.id === job.id ? "true" : null,
                     onclick: () => openJob(job.id) },
         h("span", { class: "job-name" }, job.name || "(unnamed)",
-          job.kind && job.kind !== "run" ? h("span", { class: "kind" }, job.kind) : null),
+          job.kind && job.kind !== "run" ? h("span", { class: "kind" }, job.kind) : null,
+          job.sweep ? h("span", { class: "kind" }, "sweep") : null),
         h("span", { class: `badge ${job.status}` }, job.status),
         h("span", { class: "muted small" }, clock(job.created))))));
     if (!jobs.length) $("jobs").replaceChildren(h("li", { class: "muted" }, "none yet"));
@@ -227,17 +267,31 @@ async function refreshJobs() {
 
 let shown = null; // the job on view: {id, timer, urls}; replaced whole when another is opened
 
+// The right-hand panel shows one view: a job, a comparison or a sweep; `hash` links to it.
+const VIEWS = ["job", "comparison", "sweep-view"];
+
+function showView(name, hash) {
+  if (name !== "job") closeJob();
+  history.replaceState(null, "", hash);
+  $("no-job").hidden = true;
+  for (const view of VIEWS) $(view).hidden = view !== name;
+  // One column: the view is under the whole form, where nobody would see it arrive.
+  if (matchMedia("(max-width: 900px)").matches) $("job-panel").scrollIntoView({ block: "start" });
+}
+
+function closeJob() {
+  if (!shown) return;
+  clearTimeout(shown.timer);
+  shown.urls.forEach((url) => URL.revokeObjectURL(url));
+  shown = null;
+}
+
 function openJob(id) {
-  if (shown) {
-    clearTimeout(shown.timer);
-    shown.urls.forEach((url) => URL.revokeObjectURL(url));
-  }
+  closeJob();
   shown = { id, timer: null, urls: [] };
-  history.replaceState(null, "", `#job=${id}`);
+  showView("job", `#job=${id}`);
   document.querySelectorAll(".job-link").forEach((b) =>
     b.toggleAttribute("aria-current", b.dataset.job === id));
-  $("no-job").hidden = true;
-  $("job").hidden = false;
   $("job-title").textContent = id;
   $("job-error").hidden = true;
   $("summary").replaceChildren();
@@ -268,8 +322,8 @@ async function poll(view) {
   if (job.status === "succeeded" && isStudy(job)) {
     await showStudy(view, job.kind);
   } else if (job.status === "succeeded") {
-    await showSummary(view);
-    await showPlots(view);
+    const summary = await showSummary(view);
+    if (summary) await showCharts(view, summary);
   }
 }
 
@@ -285,6 +339,7 @@ function renderJob(job) {
   bar.className = job.status;
   bar.textContent = `${percent}%`;
   $("cancel").hidden = FINISHED.includes(job.status);
+  $("edit-case").hidden = isStudy(job);
   $("download").hidden = job.status !== "succeeded" || isStudy(job);
   const ran = seconds(job.started, job.finished);
   $("job-times").textContent = [
@@ -312,6 +367,20 @@ async function cancelJob() {
   } catch (error) {
     // 409: it finished meanwhile, which the next poll shows.
     if (error.status !== 409) showJobError(`Cancel failed: ${describe(error)}`);
+  }
+}
+
+// A case (a job's, a fitted or best one) into the form and the JSON view, to change and run again.
+function loadCase(caseJson) {
+  setCaseText(JSON.stringify(caseJson, null, 2));
+  $("case-fields").scrollIntoView({ block: "start" });
+}
+
+async function editCase() {
+  try {
+    loadCase(await getJSON(`/v1/jobs/${shown.id}/case`));
+  } catch (error) {
+    showJobError(`The case could not be loaded: ${describe(error)}`);
   }
 }
 
@@ -487,38 +556,20 @@ async function showSummary(view) {
     s = await getJSON(`/v1/jobs/${view.id}/summary`);
   } catch (error) {
     if (view === shown) showJobError(`The summary could not be loaded: ${describe(error)}`);
-    return;
+    return null;
   }
-  if (view !== shown) return;
+  if (view !== shown) return null;
   $("summary").replaceChildren(...[
     warningsBanner(s.warnings || []),
     pulseCard(s),
     s.blows && s.blows.length ? blowsCard(s.blows) : null, // null: a case without blows
     h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)),
   ].filter(Boolean));
+  return s;
 }
 
 // ---------------------------------------------------------------------------------------------
-// Plots: each PNG fetched with the key; a click opens the SVG (or the PNG) full size.
-
-async function showPlots(view) {
-  const box = $("plots");
-  let plots;
-  try {
-    ({ plots } = await getJSON(`/v1/jobs/${view.id}/plots`));
-  } catch (error) {
-    const reason = error.status === 404 ? "this service does not draw them" : describe(error);
-    if (view === shown) box.replaceChildren(h("p", { class: "muted" }, `No plots: ${reason}.`));
-    return;
-  }
-  if (view !== shown) return;
-  const figures = plots.map((plot) => h("figure", { class: "plot", "data-plot": plot.name },
-    plot.available ? h("div", { class: "frame loading" }) : h("div", { class: "frame unavailable" }, plot.reason || "not available"),
-    h("figcaption", {}, plot.title || plot.name),
-    plot.available && plot.name === "stress_along" ? timesForm(plot, view) : null));
-  box.replaceChildren(card("Plots", h("div", { class: "plot-grid" }, figures)));
-  await Promise.all(plots.map((plot, i) => plot.available && showImage(figures[i].querySelector(".frame"), plot, view)));
-}
+// A study's plot, drawn by the service: its PNG, a click opens the SVG full size.
 
 // The plot's PNG in `frame`, fetched with the key; a click enlarges it.
 async function showImage(frame, plot, view) {
@@ -531,29 +582,6 @@ async function showImage(frame, plot, view) {
     frame.classList.add("unavailable");
   }
   frame.classList.remove("loading");
-}
-
-// The stress along the tool at times the user chooses (µs here, s in the API).
-function timesForm(plot, view) {
-  const input = h("input", { type: "text", placeholder: "e.g. 50, 100, 150", spellcheck: "false" });
-  const message = h("span", { class: "times-error" });
-  const redraw = async (event) => {
-    event.preventDefault();
-    const micro = input.value.split(/[\s,;]+/).filter(Boolean);
-    const query = micro.length ? `?times=${micro.map((t) => Number(t) * 1e-6).join(",")}` : "";
-    message.textContent = "";
-    try {
-      const url = await objectUrl(`${plot.links.png}${query}`, view.urls);
-      const frame = document.querySelector('[data-plot="stress_along"] .frame');
-      frame.querySelector("img").src = url;
-      plot.chosen = { png: `${plot.links.png}${query}`, svg: `${plot.links.svg}${query}` };
-    } catch (error) {
-      message.textContent = Array.isArray(error.detail)
-        ? error.detail.map((d) => d.message).join("; ") : describe(error);
-    }
-  };
-  return h("form", { class: "times", onsubmit: redraw },
-    h("label", {}, "At times (µs) ", input), h("button", { type: "submit" }, "Redraw"), message);
 }
 
 async function enlarge(plot, view) {
@@ -579,7 +607,9 @@ document.addEventListener("DOMContentLoaded", () => {
   $("preset").addEventListener("change", choosePreset);
   $("case-form").addEventListener("submit", submitCase);
   $("refresh-jobs").addEventListener("click", refreshJobs);
+  $("compare").addEventListener("click", () => openComparison([...picked]));
   $("cancel").addEventListener("click", cancelJob);
+  $("edit-case").addEventListener("click", editCase);
   $("download").addEventListener("click", downloadResult);
   $("lightbox").addEventListener("click", () => { $("lightbox").hidden = true; });
   document.addEventListener("keydown", (event) => {
@@ -587,6 +617,8 @@ document.addEventListener("DOMContentLoaded", () => {
   });
   loadPresets();
   refreshJobs();
-  const linked = /^#job=([\w-]+)$/.exec(location.hash);
-  if (linked) openJob(linked[1]);
+  const [, view, target] = /^#(job|compare|sweep)=([\w,-]+)$/.exec(location.hash) || [];
+  if (view === "job") openJob(target);
+  if (view === "compare") openComparison(target.split(","));
+  if (view === "sweep") openSweep(target);
 });

@@ -11,12 +11,6 @@ const STARTING_ROWS = {
 
 let measured = null; // the record read from the chosen CSV file: {record, lines}, or null
 
-// A number as typed, or the text itself when it is not one, for the service to name.
-function typed(text) {
-  const value = Number(text);
-  return text !== "" && Number.isFinite(value) ? value : text;
-}
-
 function addRow(tableId, [path, second, third] = ["", "", ""]) {
   const limit = tableId === "limits";
   const input = (value, label, className, list) =>
@@ -145,11 +139,6 @@ async function showStudy(view, kind) {
   const figure = card("Plot", h("figure", { class: "plot wide", "data-plot": kind }, frame, h("figcaption", {}, title)));
   $("study").replaceChildren(...(kind === "calibration" ? fitCards(study.fit) : optimumCards(study.optimum)), figure);
   await showImage(frame, plot, view);
-}
-
-function loadCase(caseJson) {
-  $("case-json").value = JSON.stringify(caseJson, null, 2);
-  $("case-json").focus();
 }
 
 function fitCards(fit) {
