@@ -1,11 +1,12 @@
 """Screenshots of the job page, as a designer uses it: the case form with the drawing of the tool,
 a job's interactive plots, a comparison of two jobs and a sweep, at 1280 px and on a 390-px phone.
 
-    .venv/bin/python examples/page_screenshots.py [--out docs/images]
+    .venv/bin/python examples/page_screenshots.py [--out docs/images] [--full-page]
 
 It starts `percussim serve` (embedded worker) on a free port with an empty results folder, runs
 the Fig. 9 case and a faster striker, and a sweep of the striker's velocity, then drives Debian's
-Chromium (playwright) over the page. The README's pictures of the page are this script's output.
+Chromium (playwright) over the page. Each picture is what the window shows (the whole page with
+--full-page). The README's pictures of the page are this script's output.
 """
 
 from __future__ import annotations
@@ -68,15 +69,16 @@ def settle(page: Page) -> None:
     page.wait_for_timeout(300)
 
 
-def shoot(page: Page, out: Path, name: str, width: str) -> None:
+def shoot(page: Page, out: Path, name: str, width: str, full_page: bool) -> None:
     path = out / f"page-{name}-{width}.png"
-    page.screenshot(path=path, full_page=True)
+    page.screenshot(path=path, full_page=full_page)
     print(path)
 
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--out", default="docs/images", help="folder for the PNGs (default docs/images)")
+    parser.add_argument("--full-page", action="store_true", help="the whole page, not only the window")
     args = parser.parse_args()
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -94,25 +96,26 @@ def main() -> None:
                 browser = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
                 for width, viewport in WIDTHS.items():
                     page = browser.new_page(viewport=viewport)
-                    page.goto(url + "/")
-                    page.select_option("#preset", "fig8")  # a stepped tool, drawn to scale
-                    expect(page.locator("#drawing svg")).to_be_visible()
-                    shoot(page, out, "form", width)
+                    # The case form beside a job's summary and plots.
                     page.goto(f"{url}/#job={jobs[0]}")
-                    page.reload()
                     expect(page.locator("[data-quantity=peak_contact_force]")).to_be_visible()
                     settle(page)
-                    shoot(page, out, "job", width)
+                    page.select_option("#preset", "fig8")  # a stepped tool, drawn to scale
+                    expect(page.locator("#drawing svg")).to_be_visible()
+                    page.evaluate("() => document.getElementById('case-panel').scrollIntoView()")
+                    shoot(page, out, "form", width, args.full_page)
+                    page.evaluate("() => document.getElementById('plots').scrollIntoView()")
+                    shoot(page, out, "job", width, args.full_page)
                     page.goto(f"{url}/#compare={','.join(jobs)}")
                     page.reload()
                     expect(page.locator("#comparison table").first).to_be_visible()
                     settle(page)
-                    shoot(page, out, "compare", width)
+                    shoot(page, out, "compare", width, args.full_page)
                     page.goto(f"{url}/#sweep={sweep}")
                     page.reload()
                     expect(page.locator("#sweep-view .sweep-status")).to_have_text("succeeded")
                     settle(page)
-                    shoot(page, out, "sweep", width)
+                    shoot(page, out, "sweep", width, args.full_page)
                     page.close()
                 browser.close()
         finally:

@@ -1,4 +1,6 @@
-"""The job page: `/` and its static files (vanilla HTML, JS and CSS, no external resources).
+"""The job page: `/` and its static files (HTML, JS and CSS without a build step; no resource from
+anywhere else). The plots are drawn by Plotly's cartesian bundle, kept here as it is published
+(`npm pack plotly.js-cartesian-dist-min`, MIT, its licence beside it).
 
 Served without an API key: the page holds no data; it asks for a key and sends it in
 `X-API-Key` with every `/v1` call it makes.

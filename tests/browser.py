@@ -63,8 +63,8 @@ def browser():
 @pytest.fixture
 def open_page(browser, stack):
     """Opens the page in a fresh 1280×800 context, with `key` stored or none; a script error
-    on any page fails the test."""
-    contexts, errors = [], []
+    on any page, or a request anywhere but the service, fails the test."""
+    contexts, errors, elsewhere = [], [], []
 
     def open_(key: str | None) -> Page:
         context = browser.new_context(viewport={"width": 1280, "height": 800}, accept_downloads=True)
@@ -74,6 +74,8 @@ def open_page(browser, stack):
             context.add_init_script(f"localStorage.setItem('percussim.apiKey', {json.dumps(key)})")
         page = context.new_page()
         page.on("pageerror", lambda error: errors.append(error))
+        page.on("request", lambda request: request.url.startswith((stack.url + "/", "data:", "blob:"))
+                or elsewhere.append(request.url))
         page.goto(stack.url + "/")
         return page
 
@@ -81,6 +83,7 @@ def open_page(browser, stack):
     for context in contexts:
         context.close()
     assert not errors, errors
+    assert not elsewhere, elsewhere
 
 
 @pytest.fixture

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import copy
+import os
+import shutil
 
 import pytest
 
@@ -40,6 +42,45 @@ BASE_CASE = {
 # every check made up front and is refused as it runs, once it has chattered.
 CHATTERS = merge(BASE_CASE, {"numerics": {"scheme": "sigma", "cells": 60, "time_step": None},
                              "contact": {"tension_stiffness": 1e12}})
+
+
+@pytest.fixture
+def clean_environment(monkeypatch):
+    """Only what a test sets: no broker URL, limits, keys or presets folder from the caller's shell."""
+    for name in list(os.environ):
+        if name.startswith("PERCUSSIM_"):
+            monkeypatch.delenv(name)
+
+
+@pytest.fixture
+def api_store(tmp_path, clean_environment):
+    """The API in-process on a fresh results folder, and that folder's job store."""
+    from fastapi.testclient import TestClient
+
+    from percussim.service.app import create_app
+    from percussim.worker.settings import Settings
+    from percussim.worker.store import JobStore
+
+    settings = Settings(results_dir=tmp_path)
+    return TestClient(create_app(settings)), JobStore(settings)
+
+
+def succeeded_job(client, jobs, result: str, case: dict | None = None) -> str:
+    """A job submitted through the API, then given the result file `result` as a worker would
+    have written it."""
+    import h5py
+
+    from percussim.worker.store import SUCCEEDED
+
+    answer = client.post("/v1/jobs", json=case or BASE_CASE)
+    assert answer.status_code == 202, answer.text
+    job_id = answer.json()["id"]
+    shutil.copy(result, jobs.result_path(job_id))
+    with h5py.File(result) as f:
+        jobs.write_summary(job_id, f["summary"][()].decode())
+    jobs.start(job_id, "w1@x")
+    jobs.finish(job_id, SUCCEEDED, progress=1.0)
+    return job_id
 
 
 def report(capsys, text: str) -> None:

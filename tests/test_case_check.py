@@ -4,7 +4,6 @@ job made."""
 from __future__ import annotations
 
 import json
-import os
 
 import pytest
 from fastapi.testclient import TestClient
@@ -13,13 +12,10 @@ from conftest import BASE_CASE, merge
 from percussim.service.app import create_app
 from percussim.worker.settings import Settings
 
+# Only what a test sets: nothing from the caller's shell.
+pytestmark = pytest.mark.usefixtures("clean_environment")
 
-@pytest.fixture(autouse=True)
-def clean_environment(monkeypatch):
-    """Only what a test sets: no limits or keys from the caller's shell."""
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
+
 
 
 @pytest.fixture

@@ -10,10 +10,10 @@ import json
 from pathlib import Path
 
 import pytest
-from playwright.sync_api import expect
+from playwright.sync_api import Page, expect
 
 from browser import HDF5_SIGNATURE, KEY, LONG, case_in_page, drawn, fill_json, shown, shown_job
-from conftest import merge
+from conftest import merge, report
 from percussim.solver.presets import preset_json
 from closed_forms import drilling
 
@@ -327,3 +327,99 @@ def test_a_sweep_started_from_the_form_runs_sorts_and_plots(page, stack):
     expect(row.locator(".row-problem")).to_have_text(f"value 2: {problem['message']}")
     assert row.locator("input.values").get_attribute("aria-invalid") == "true"
     assert stack.client.get("/v1/jobs").json()["total"] == before
+
+
+def _unit_select(page: Page, field: str):
+    """The unit select beside the form's input `field` (its id)."""
+    return page.locator(f"#{field}").locator(
+        "xpath=ancestor::*[.//select[contains(@class, 'unit')]][1]//select[contains(@class, 'unit')]")
+
+
+def test_a_case_filled_in_the_form_runs_and_shows_the_apis_numbers(page, stack):
+    """Fig. 9 from its preset, then the striker's velocity and the tool's length typed into the form
+    (the length in mm): the job runs the case as typed, in SI, and the page's pulse table holds the
+    API summary's numbers."""
+    case_in_page(page, "fig9")
+    page.fill("#f-striker-velocity", "6")
+    _unit_select(page, "f-tool-length").select_option("mm")
+    page.fill("#f-tool-length", "1250")
+    page.click("#submit")
+    expect(page.locator("[data-quantity=peak_contact_force]")).to_be_visible()
+    job_id = shown_job(page)
+    case = stack.client.get(f"/v1/jobs/{job_id}/case").json()
+    assert case["striker"]["velocity"] == 6.0
+    assert case["tool"]["length"] == 1.25 and case["tool"]["profile"]["x"][-1] == 1.25
+    summary = stack.client.get(f"/v1/jobs/{job_id}/summary").json()
+    expected = {
+        "co_impact_time": shown(summary["co_impact_time"] * 1e6),
+        "peak_contact_force": shown(summary["peak_contact_force"]["value"] / 1e3),
+        "max_compressive_stress": shown(summary["max_compressive_stress"]["value"] / 1e6),
+        "striker_rebound_velocity": shown(summary["striker_rebound_velocity"]),
+        "energy.to_medium": shown(summary["energy"]["to_medium"]),
+        "energy.transfer_efficiency": shown(100 * summary["energy"]["transfer_efficiency"]),
+    }
+    for quantity, text in expected.items():
+        expect(page.locator(f"[data-quantity='{quantity}'] .value")).to_have_text(text)
+    # The job's case back into the form, to change again.
+    case_in_page(page, "fig3")
+    page.click("#edit-case")
+    expect(page.locator("#f-striker-velocity")).to_have_value("6")
+
+
+def test_results_arrive_without_moving_what_is_on_view(page, stack, capsys):
+    """The summary, the tables and nine charts come in after the run: the layout-shift entries
+    Chromium records while they do (those within 0.5 s of a click aside, as the metric has it)
+    add up to nothing."""
+    case = merge(case_in_page(page, "fig9"), {"outputs": {"fields": True, "field_stride": 16}})
+    fill_json(page, json.dumps(case, indent=2))
+    page.evaluate("""() => {
+        window.shifts = [];
+        new PerformanceObserver((list) => list.getEntries().forEach((e) => e.hadRecentInput || window.shifts.push(
+            {value: e.value, sources: e.sources.map((s) => s.node && (s.node.id || s.node.className || s.node.nodeName))})))
+          .observe({type: "layout-shift"});
+    }""")
+    page.click("#submit")
+    expect(page.locator("figure[data-chart=energy] .main-svg").first).to_be_attached()
+    page.wait_for_function("() => !document.querySelector('.plot-area.loading')")
+    page.wait_for_timeout(500)
+    shifts = page.evaluate("window.shifts")
+    report(capsys, f"layout shifts while the results came in: {shifts}")
+    assert sum(s["value"] for s in shifts) < 0.001, shifts
+    # The observer does see a shift: a line pushed in above the job moves everything under it.
+    page.evaluate("() => document.getElementById('job').prepend(Object.assign("
+                  "document.createElement('p'), {textContent: 'pushed', style: 'height: 80px'}))")
+    page.wait_for_function("() => window.shifts.length > 0")
+
+
+def test_the_page_works_from_the_keyboard(page, stack):
+    """A case run with Enter from the form, a chart zoomed from its toolbar, a sweep's table sorted
+    and two jobs ticked for a comparison, each without the mouse."""
+    case_in_page(page, "fig9")
+    page.focus("#f-striker-velocity")
+    page.keyboard.press("Control+a")
+    page.keyboard.type("5.5")
+    page.keyboard.press("Enter")
+    job_id = shown_job(page)
+    drawn(page, "force")
+    assert stack.client.get(f"/v1/jobs/{job_id}/case").json()["striker"]["velocity"] == 5.5
+    area = page.locator("figure[data-chart=force] .plot-area")
+    before = area.evaluate("el => el.layout.xaxis.range.slice()")
+    page.focus("figure[data-chart=force] [data-action=zoom-in]")
+    page.keyboard.press("Enter")
+    page.wait_for_function("(w) => { const r = document.querySelector('figure[data-chart=force] .plot-area')"
+                           ".layout.xaxis.range; return r[1] - r[0] < 0.75 * w; }", arg=before[1] - before[0])
+    page.keyboard.press("Tab")
+    assert page.evaluate("document.activeElement.dataset.action") == "zoom-out"
+
+    other = stack.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"]
+    stack.wait_status(other, ("succeeded",))
+    page.click("#refresh-jobs")
+    expect(page.locator(f"[data-pick='{other}']")).to_be_attached()
+    boxes = page.locator("#jobs input.pick")
+    for i in range(2):
+        boxes.nth(i).focus()
+        page.keyboard.press("Space")
+    page.focus("#compare")
+    page.keyboard.press("Enter")
+    page.wait_for_url("**/#compare=*")
+    expect(page.locator("#comparison table").first).to_be_visible()

@@ -18,7 +18,7 @@ import pytest
 from fastapi.testclient import TestClient
 
 import percussim.solver.plots as plots
-from conftest import BASE_CASE, merge
+from conftest import BASE_CASE, merge, succeeded_job
 from live_stack import ROOT
 from percussim.service.app import create_app
 from percussim.solver.case import parse_case
@@ -381,30 +381,9 @@ def test_cli_refuses_an_unknown_plot_with_status_2(results, tmp_path, capsys):
     assert not (tmp_path / "p").exists()
 
 
-@pytest.fixture
-def store(tmp_path, monkeypatch) -> tuple[TestClient, JobStore]:
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
-    return TestClient(create_app(Settings(results_dir=tmp_path))), JobStore(Settings(results_dir=tmp_path))
-
-
-def _succeeded(client: TestClient, jobs: JobStore, result: str) -> str:
-    """A job submitted, then given `result` as a worker would have written it."""
-    answer = client.post("/v1/jobs", json=BASE_CASE)
-    assert answer.status_code == 202, answer.text
-    job_id = answer.json()["id"]
-    shutil.copy(result, jobs.result_path(job_id))
-    with h5py.File(result) as f:
-        jobs.write_summary(job_id, f["summary"][()].decode())
-    jobs.start(job_id, "w1@x")
-    jobs.finish(job_id, SUCCEEDED, progress=1.0)
-    return job_id
-
-
-def test_http_lists_the_plots_with_their_links_and_reasons(results, store):
-    client, jobs = store
-    job_id = _succeeded(client, jobs, results["bare"])
+def test_http_lists_the_plots_with_their_links_and_reasons(results, api_store):
+    client, jobs = api_store
+    job_id = succeeded_job(client, jobs, results["bare"])
     assert client.get(f"/v1/jobs/{job_id}").json()["links"]["plots"] == f"/v1/jobs/{job_id}/plots"
     answer = client.get(f"/v1/jobs/{job_id}/plots")
     assert answer.status_code == 200
@@ -417,9 +396,9 @@ def test_http_lists_the_plots_with_their_links_and_reasons(results, store):
     assert "outputs.fields = true" in listed["spacetime"]["reason"]
 
 
-def test_http_serves_a_plot_as_png_and_svg_and_keeps_it(results, store, monkeypatch):
-    client, jobs = store
-    job_id = _succeeded(client, jobs, results["full"])
+def test_http_serves_a_plot_as_png_and_svg_and_keeps_it(results, api_store, monkeypatch):
+    client, jobs = api_store
+    job_id = succeeded_job(client, jobs, results["full"])
     png = client.get(f"/v1/jobs/{job_id}/plots/force.png")
     assert png.status_code == 200 and png.headers["content-type"] == "image/png"
     assert png.content.startswith(PNG_SIGNATURE)
@@ -436,9 +415,9 @@ def test_http_serves_a_plot_as_png_and_svg_and_keeps_it(results, store, monkeypa
     assert again.status_code == 200 and again.content == png.content
 
 
-def test_http_draws_again_a_plot_older_than_its_result(results, store):
-    client, jobs = store
-    job_id = _succeeded(client, jobs, results["full"])
+def test_http_draws_again_a_plot_older_than_its_result(results, api_store):
+    client, jobs = api_store
+    job_id = succeeded_job(client, jobs, results["full"])
     kept = jobs.plot_path(job_id, "force", "png")
     kept.parent.mkdir()
     kept.write_bytes(b"stale")
@@ -448,9 +427,9 @@ def test_http_draws_again_a_plot_older_than_its_result(results, store):
     assert answer.content.startswith(PNG_SIGNATURE) and kept.read_bytes() == answer.content
 
 
-def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_make(results, store):
-    client, jobs = store
-    job_id = _succeeded(client, jobs, results["bare"])
+def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_make(results, api_store):
+    client, jobs = api_store
+    job_id = succeeded_job(client, jobs, results["bare"])
     unknown = client.get(f"/v1/jobs/{job_id}/plots/..%2Fresult.png")
     assert unknown.status_code == 404
     unknown = client.get(f"/v1/jobs/{job_id}/plots/forces.png")
@@ -465,9 +444,9 @@ def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_mak
     assert client.get(f"/v1/jobs/{job_id}/plots/force.pdf").status_code == 422
 
 
-def test_http_draws_stress_along_the_tool_at_chosen_times_and_names_bad_ones(results, store):
-    client, jobs = store
-    job_id = _succeeded(client, jobs, results["full"])
+def test_http_draws_stress_along_the_tool_at_chosen_times_and_names_bad_ones(results, api_store):
+    client, jobs = api_store
+    job_id = succeeded_job(client, jobs, results["full"])
     url = f"/v1/jobs/{job_id}/plots/stress_along"
     chosen = client.get(f"{url}.png", params={"times": "5e-5,1e-4,1.5e-4"})
     assert chosen.status_code == 200 and chosen.headers["content-type"] == "image/png"
@@ -486,10 +465,7 @@ def test_http_draws_stress_along_the_tool_at_chosen_times_and_names_bad_ones(res
         {"field": "query.times", "message": "only the stress_along plot takes times"}]
 
 
-def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(results, tmp_path, monkeypatch):
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
+def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(results, tmp_path, clean_environment):
     client = TestClient(create_app(Settings(results_dir=tmp_path, api_keys="alice-key,bob-key")))
     alice, bob = {"X-API-Key": "alice-key"}, {"X-API-Key": "bob-key"}
     job_id = client.post("/v1/jobs", json=BASE_CASE, headers=alice).json()["id"]

@@ -13,14 +13,12 @@ from percussim.service.app import create_app
 from percussim.solver.presets import preset_json
 from percussim.worker.settings import Settings
 
+# Only what a test sets: nothing from the caller's shell.
+pytestmark = pytest.mark.usefixtures("clean_environment")
+
 ALICE, BOB = "alice-key-0123456789", "bob-key-9876543210"
 
 
-@pytest.fixture(autouse=True)
-def clean_environment(monkeypatch):
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
 
 
 @pytest.fixture

@@ -8,8 +8,6 @@ import csv
 import io
 import json
 import math
-import os
-import shutil
 
 import h5py
 import numpy as np
@@ -18,16 +16,14 @@ from fastapi.testclient import TestClient
 
 import percussim.solver.series as series_module
 from closed_forms import drilling
-from conftest import BASE_CASE, merge
-from percussim.service.app import create_app
+from conftest import BASE_CASE, merge, succeeded_job
 from percussim.solver.case import parse_case
 from percussim.solver.io import write_result
 from percussim.solver.plots import NotAvailable
 from percussim.solver.presets import preset_json
 from percussim.solver.series import SERIES, UnknownSeries, csv_chunks, dumps, problems, series
 from percussim.solver.simulate import simulate
-from percussim.worker.settings import Settings
-from percussim.worker.store import SUCCEEDED, JobStore
+from percussim.worker.store import JobStore
 
 
 def _write(folder, name: str, case: dict) -> str:
@@ -260,33 +256,18 @@ def test_what_a_result_lacks_is_refused_with_the_plots_reasons(results):
 
 # --- over HTTP -------------------------------------------------------------------------------------
 
-@pytest.fixture
-def api(tmp_path, monkeypatch) -> tuple[TestClient, JobStore]:
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
-    settings = Settings(results_dir=tmp_path)
-    return TestClient(create_app(settings)), JobStore(settings)
-
-
 def _job(client: TestClient, case: dict = BASE_CASE) -> str:
     answer = client.post("/v1/jobs", json=case)
     assert answer.status_code == 202, answer.text
     return answer.json()["id"]
 
 
-def _succeeded(client: TestClient, jobs: JobStore, result: str, name: str = "my rod/2") -> str:
-    """A job submitted, then given `result` as a worker would have written it."""
-    job_id = _job(client, merge(BASE_CASE, {"name": name}))
-    shutil.copy(result, jobs.result_path(job_id))
-    jobs.write_summary(job_id, json.dumps(_summary(result)))
-    jobs.start(job_id, "w1@x")
-    jobs.finish(job_id, SUCCEEDED, progress=1.0)
-    return job_id
+def _succeeded(client: TestClient, jobs: JobStore, result: str) -> str:
+    return succeeded_job(client, jobs, result, merge(BASE_CASE, {"name": "my rod/2"}))
 
 
-def test_http_lists_the_series_with_their_links_and_reasons(results, api):
-    client, jobs = api
+def test_http_lists_the_series_with_their_links_and_reasons(results, api_store):
+    client, jobs = api_store
     job_id = _succeeded(client, jobs, results["bare"])
     answer = client.get(f"/v1/jobs/{job_id}/series")
     assert answer.status_code == 200
@@ -298,8 +279,8 @@ def test_http_lists_the_series_with_their_links_and_reasons(results, api):
     assert listed["fields"]["available"] is False and "outputs.fields = true" in listed["fields"]["reason"]
 
 
-def test_http_serves_a_series_as_compact_json_and_every_sample_as_csv(results, api):
-    client, jobs = api
+def test_http_serves_a_series_as_compact_json_and_every_sample_as_csv(results, api_store):
+    client, jobs = api_store
     job_id = _succeeded(client, jobs, results["full"])
     answer = client.get(f"/v1/jobs/{job_id}/series/force", params={"points": 300})
     assert answer.status_code == 200 and answer.headers["content-type"] == "application/json"
@@ -317,8 +298,8 @@ def test_http_serves_a_series_as_compact_json_and_every_sample_as_csv(results, a
     assert len(download.text.splitlines()) == 12802
 
 
-def test_http_refuses_an_unknown_or_unavailable_series_and_bad_counts(results, api):
-    client, jobs = api
+def test_http_refuses_an_unknown_or_unavailable_series_and_bad_counts(results, api_store):
+    client, jobs = api_store
     job_id = _succeeded(client, jobs, results["bare"])
     for suffix in ("", ".csv"):
         unknown = client.get(f"/v1/jobs/{job_id}/series/forces{suffix}")
@@ -344,8 +325,8 @@ def test_http_refuses_an_unknown_or_unavailable_series_and_bad_counts(results, a
                                      "message": "the fields series takes times and stations, not points"}]
 
 
-def test_http_answers_409_until_the_job_has_succeeded(api):
-    client, _ = api
+def test_http_answers_409_until_the_job_has_succeeded(api_store):
+    client, _ = api_store
     job_id = _job(client)
     for path in ("series", "series/force", "series/force.csv", "series/fields"):
         answer = client.get(f"/v1/jobs/{job_id}/{path}")
@@ -353,10 +334,10 @@ def test_http_answers_409_until_the_job_has_succeeded(api):
     assert client.get("/v1/jobs/nope/series/force").status_code == 404
 
 
-def test_http_gives_a_jobs_case_whatever_its_status(api):
+def test_http_gives_a_jobs_case_whatever_its_status(api_store):
     """The case as submitted, with the defaults the service spelled out: what the page compares
     and loads back into its form; an unknown job is 404."""
-    client, _ = api
+    client, _ = api_store
     job_id = _job(client)
     case = client.get(f"/v1/jobs/{job_id}/case")
     assert case.status_code == 200

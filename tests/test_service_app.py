@@ -7,7 +7,6 @@ a submitted job stays queued.
 from __future__ import annotations
 
 import json
-import os
 import time
 
 import pytest
@@ -23,13 +22,10 @@ from percussim.worker.broker import queue_folder
 from percussim.worker.settings import Settings
 from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 
+# Only what a test sets: nothing from the caller's shell.
+pytestmark = pytest.mark.usefixtures("clean_environment")
 
-@pytest.fixture(autouse=True)
-def clean_environment(monkeypatch):
-    """Only what a test sets: no broker URL, limits or presets folder from the caller's shell."""
-    for name in list(os.environ):
-        if name.startswith("PERCUSSIM_"):
-            monkeypatch.delenv(name)
+
 
 
 def _client(tmp_path, **settings) -> TestClient:

@@ -275,7 +275,7 @@ function showView(name, hash) {
   history.replaceState(null, "", hash);
   $("no-job").hidden = true;
   for (const view of VIEWS) $(view).hidden = view !== name;
-  // One column: the view is under the whole form, where nobody would see it arrive.
+  // One column: the view is above the form (page.css), but the form's Run button is far below it.
   if (matchMedia("(max-width: 900px)").matches) $("job-panel").scrollIntoView({ block: "start" });
 }
 
@@ -602,6 +602,7 @@ async function enlarge(plot, view) {
 // ---------------------------------------------------------------------------------------------
 
 document.addEventListener("DOMContentLoaded", () => {
+  history.scrollRestoration = "manual"; // the view linked decides where the page is
   $("api-key").value = localStorage.getItem(KEY_STORAGE) || "";
   $("key-form").addEventListener("submit", saveKey);
   $("preset").addEventListener("change", choosePreset);
