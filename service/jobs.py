@@ -73,16 +73,19 @@ def _view(request: Request, record: dict) -> dict:
     }}
 
 
-def not_ready_error(record: dict, what: str) -> HTTPException:
-    """409 naming the job's status (and its error if it failed)."""
+def succeeded(record: dict, what: str) -> dict:
+    """The record of a job that has succeeded; else 409 naming its status (and its error if it
+    failed) and that it has no `what` yet."""
     status = record["status"]
+    if status == SUCCEEDED:
+        return record
     if status == FAILED:
         detail = f"job {record['id']} failed, so it has no {what}: {record['error']}"
     elif status == CANCELLED:
         detail = f"job {record['id']} was cancelled, so it has no {what}"
     else:
         detail = f"job {record['id']} is {status}: its {what} is ready once it has succeeded"
-    return HTTPException(status_code=409, detail=detail)
+    raise HTTPException(status_code=409, detail=detail)
 
 
 class PlotLinks(BaseModel):
@@ -230,9 +233,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     def get_summary(request: Request, job_id: str) -> dict:
         """The pulse summary of a succeeded job."""
         jobs = store(request)
-        record = jobs.get(job_id)
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "summary")
+        succeeded(jobs.get(job_id), "summary")
         return jobs.summary(job_id)
 
     @router.get("/{job_id}/result.h5", response_class=FileResponse, responses=not_found | not_ready | {
@@ -240,9 +241,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
     def get_result(request: Request, job_id: str) -> FileResponse:
         """The HDF5 result of a succeeded job."""
         jobs = store(request)
-        record = jobs.get(job_id)
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "result")
+        record = succeeded(jobs.get(job_id), "result")
         return FileResponse(jobs.result_path(job_id), media_type="application/x-hdf5",
                             filename=_download_name(record))
 
@@ -251,9 +250,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         """The plots of a succeeded job's result: which this result can make, why not the
         others, and where to get each as PNG or SVG."""
         jobs = store(request)
-        record = jobs.get(job_id)
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "plots")
+        succeeded(jobs.get(job_id), "plots")
         reasons = problems(jobs.result_path(job_id))
         return {"plots": [{
             "name": name, "title": title, "available": reasons[name] is None, "reason": reasons[name],
@@ -284,8 +281,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
                                 detail=f"no plot named {name!r}; the plots are: {', '.join(PLOTS)}")
         if times is not None and name != "stress_along":
             raise CaseError([FieldError(field="query.times", message="only the stress_along plot takes times")])
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "plots")
+        succeeded(record, "plots")
         kept, result = jobs.plot_path(job_id, name, fmt), jobs.result_path(job_id)
         try:
             if times is not None:
@@ -307,9 +303,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         """The data of the job page's interactive plots: which this result can give, why not the
         others, and where to get each as JSON (downsampled for a screen) or CSV (every sample)."""
         jobs = store(request)
-        record = jobs.get(job_id)
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "series")
+        succeeded(jobs.get(job_id), "series")
         reasons = series.problems(jobs.result_path(job_id))
         return {"series": [{
             "name": name, "title": title, "available": reasons[name] is None, "reason": reasons[name],
@@ -324,8 +318,7 @@ def jobs_router(settings: Settings, queue: JobQueue, examples: dict[str, Any] | 
         if name not in series.SERIES:
             raise HTTPException(status_code=404, detail=(
                 f"no series named {name!r}; the series are: {', '.join(series.SERIES)}"))
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "series")
+        succeeded(record, "series")
         result = jobs.result_path(job_id)
         reason = series.problems(result)[name]
         if reason:

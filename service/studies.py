@@ -20,7 +20,7 @@ from percussim.worker.settings import Settings
 from percussim.worker.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
 
 from .errors import FieldErrors, Problem
-from .jobs import cancel_or_delete, not_ready_error, queue_jobs
+from .jobs import cancel_or_delete, queue_jobs, succeeded
 from .queue import JobQueue
 
 
@@ -115,9 +115,7 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     @router.get("/{study_id}/plot.{fmt}", response_class=FileResponse, name=f"get_{kind}_plot",
                 responses=not_found | {409: {"model": Problem, "description": "not succeeded"}})
     def get_plot(request: Request, study_id: str, fmt: Literal["png", "svg"]) -> FileResponse:
-        record = record_of(request, study_id)
-        if record["status"] != SUCCEEDED:
-            raise not_ready_error(record, "plot")
+        succeeded(record_of(request, study_id), "plot")
         return FileResponse(store(request).plot_path(study_id, plot, fmt), media_type=FORMATS[fmt])
 
     get_plot.__doc__ = ("The record against the fitted model, and the residual." if kind == CALIBRATION

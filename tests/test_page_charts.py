@@ -184,5 +184,5 @@ def test_a_comparison_overlays_two_jobs_and_highlights_what_differs(page, stack)
     assert "differs" in velocity.nth(1).get_attribute("class")
 
     # Each column's head opens its job.
-    page.click(f"table.compare th.compare-head button:has-text('fig9-fast')")
+    page.click("table.compare th.compare-head button:has-text('fig9-fast')")
     page.wait_for_url(f"**/#job={fast}")

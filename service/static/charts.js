@@ -2,7 +2,7 @@
 // A succeeded job's plots, drawn here with Plotly from the result's series (GET /v1/jobs/{id}/series):
 // zoom, pan and hover in the browser, PNG and SVG at full resolution, the CSV from the service.
 // The chart frame and its toolbar (chartFigure, drawChart) serve compare.js too.
-// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, save, shown).
+// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, save, download, shown).
 
 const SCREEN_POINTS = 2000; // samples asked of a history for the screen; the service keeps the peaks
 const FIELD_TIMES = 300; // frames and stations of the stress fields for the screen
@@ -297,14 +297,6 @@ async function exportImage(figure, format) {
     Plotly.purge(copy);
     copy.remove();
   }
-}
-
-// A file fetched with the key, named as the service names it (or `fallback`).
-async function download(path, fallback) {
-  const response = await api(path);
-  const disposition = response.headers.get("Content-Disposition") || "";
-  const match = /filename\*=utf-8''([^;]+)/i.exec(disposition) || /filename="?([^";]+)"?/i.exec(disposition);
-  return { blob: await response.blob(), name: match ? decodeURIComponent(match[1]) : fallback };
 }
 
 // CSV text of `rows` (arrays) under `header`; a cell with a comma or a quote is quoted.

@@ -2,8 +2,8 @@
 // Two to eight finished jobs side by side: their contact force and probe stresses overlaid, their
 // summaries in one table with what differs from the first (the reference) highlighted, and the
 // case fields that differ. The charts are charts.js's (chartFigure, drawChart).
-// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, table, showView, openJob) and its
-// COMPARE_MIN and COMPARE_MAX, the picker's bounds.
+// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, table, showView, openJob), its
+// COMPARE_MIN and COMPARE_MAX, the picker's bounds, and PULSE, the quantities of the pulse table.
 
 const AGREEMENT = 0.005; // relative difference taken as real when neither job estimates its error
 
@@ -11,22 +11,6 @@ let comparing = null; // the comparison on view; one opened later replaces it, a
 
 const shortId = (id) => id.slice(0, 6);
 const jobLabel = (job) => `${(job.record && job.record.name) || "(unnamed)"} · ${shortId(job.id)}`;
-const times = (value, scale) => (typeof value === "number" ? value * scale : null);
-
-// The summary's quantities compared: [label, quantity (the summary's key, as in the pulse table), unit, value].
-const COMPARED = [
-  ["Co-impact time", "co_impact_time", "µs", (s) => times(s.co_impact_time, 1e6)],
-  ["Peak contact force", "peak_contact_force", "kN", (s) => times(s.peak_contact_force && s.peak_contact_force.value, 1e-3)],
-  ["Max compressive stress", "max_compressive_stress", "MPa",
-    (s) => times(s.max_compressive_stress && s.max_compressive_stress.value, 1e-6)],
-  ["Max tensile stress", "max_tensile_stress", "MPa", (s) => times(s.max_tensile_stress && s.max_tensile_stress.value, 1e-6)],
-  ["Striker rebound velocity", "striker_rebound_velocity", "m/s", (s) => times(s.striker_rebound_velocity, 1)],
-  ["Energy to the medium", "energy.to_medium", "J", (s) => times(s.energy && s.energy.to_medium, 1)],
-  ["Transfer efficiency", "energy.transfer_efficiency", "%", (s) => times(s.energy && s.energy.transfer_efficiency, 100)],
-  ["Deepest penetration", "medium_penetration.max", "mm", (s) => times(s.medium_penetration && s.medium_penetration.max, 1e3)],
-  ["Permanent penetration", "medium_penetration.permanent", "mm",
-    (s) => times(s.medium_penetration && s.medium_penetration.permanent, 1e3)],
-];
 
 async function openComparison(ids) {
   const token = {};
@@ -247,13 +231,14 @@ function difference(value, reference, errors) {
 
 function summaryTable(jobs) {
   const [reference] = jobs;
-  const rows = COMPARED.filter(([, , , value]) => jobs.some((job) => value(job.summary) !== null))
-    .map(([label, quantity, unit, value]) => {
-      const base = value(reference.summary);
+  const rows = PULSE.filter((q) => jobs.some((job) => pulseValue(q, job.summary) !== null))
+    .map((q) => {
+      const { label, quantity, unit } = q;
+      const base = pulseValue(q, reference.summary);
       return h("tr", { "data-quantity": quantity },
         h("th", {}, label, h("span", { class: "unit" }, unit)),
         jobs.map((job, i) => {
-          const v = value(job.summary);
+          const v = pulseValue(q, job.summary);
           const diff = i === 0 ? { differs: false, text: "" }
             : difference(v, base, [estimated(job.summary, quantity), estimated(reference.summary, quantity)]);
           return h("td", { class: diff.differs ? "num value differs" : "num value", "data-job": job.id,
@@ -296,15 +281,11 @@ function flatten(value, prefix = "", out = {}) {
 }
 
 async function showCaseDifferences(box, jobs, live) {
-  const fetchCase = (job) => getJSON(`/v1/jobs/${job.id}/case`).catch((error) => ({ error }));
-  // The first alone, then the others: a service that gives no case is asked once.
-  const first = await fetchCase(jobs[0]);
-  const cases = first.error ? [first] : [first, ...await Promise.all(jobs.slice(1).map(fetchCase))];
+  const cases = await Promise.all(jobs.map((job) => getJSON(`/v1/jobs/${job.id}/case`).catch((error) => ({ error }))));
   if (!live()) return;
   const missing = cases.find((c) => c.error);
   if (missing) {
-    const reason = missing.error.status === 404 ? "this service does not give a job's case" : describe(missing.error);
-    box.replaceChildren(card("Case fields that differ", h("p", { class: "muted" }, `Not compared: ${reason}.`)));
+    box.replaceChildren(card("Case fields that differ", h("p", { class: "muted" }, `Not compared: ${describe(missing.error)}.`)));
     return;
   }
   const flat = cases.map((c) => flatten(c));

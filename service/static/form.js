@@ -3,7 +3,7 @@
 // symbol; a profile editor; a drawing of the striker, tool and medium to scale; the service's own
 // check as the user types. The case JSON (#case-json) stays the one source of truth: the form
 // reads it on each "input" event of the textarea and rewrites it on each edit of its own.
-// Uses page.js's helpers ($, h, showProblems, KEY_STORAGE).
+// Uses page.js's helpers ($, h, getJSON, ApiError, showProblems).
 
 // ---------------------------------------------------------------------------------------------
 // Units. Every unit offered is a power of ten of the SI one, so converting moves the decimal point
@@ -905,7 +905,6 @@ const caseForm = (() => {
   let checkTimer = null;
   let checkSeq = 0;
   let checkAbort = null;
-  let checkMissing = false; // no check route yet (404, 405): no "checking" flicker meanwhile
 
   function setStatus(kind, message) {
     const status = $("form-status");
@@ -929,30 +928,18 @@ const caseForm = (() => {
   async function check(seq) {
     const controller = new AbortController();
     checkAbort = controller;
-    if (!checkMissing) setStatus("checking", "Checking the case with the service…");
-    const headers = { "Content-Type": "application/json" };
-    const key = localStorage.getItem(KEY_STORAGE);
-    if (key) headers["X-API-Key"] = key;
-    let response;
-    let answer = null;
+    setStatus("checking", "Checking the case with the service…");
+    let problems;
     try {
-      // Not api(): a 401 there asks for the key and takes the focus from the field being typed in.
-      response = await fetch("/v1/cases/check", { method: "POST", headers, body: $("case-json").value,
-                                                  signal: controller.signal });
-      answer = await response.json().catch(() => null);
-    } catch {
-      if (seq === checkSeq) setStatus("", "");
-      return;
+      ({ problems } = await getJSON("/v1/cases/check", {
+        method: "POST", headers: { "Content-Type": "application/json" }, body: $("case-json").value,
+        signal: controller.signal, askKey: false }));
+    } catch (error) {
+      // Text that is not JSON is refused as POST /v1/jobs refuses it, with its problems.
+      if (error instanceof ApiError && error.status === 422 && Array.isArray(error.detail)) problems = error.detail;
+      else if (seq === checkSeq) setStatus("", ""); // no check to be had (no key, the service away): Run still says
     }
-    if (seq !== checkSeq) return; // a later edit supersedes this answer
-    let problems = null;
-    if (response.ok && answer && Array.isArray(answer.problems)) problems = answer.problems;
-    else if (response.status === 422 && answer && Array.isArray(answer.detail)) problems = answer.detail;
-    checkMissing = response.status === 404 || response.status === 405;
-    if (!problems) {
-      setStatus("", ""); // no check to be had (not yet deployed, no key, the service away): Run still says
-      return;
-    }
+    if (seq !== checkSeq || !problems) return; // a later edit supersedes this answer
     const rest = placeProblems(problems);
     const n = problems.length;
     const box = $("case-errors");

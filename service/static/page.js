@@ -54,7 +54,9 @@ class ApiError extends Error {
   }
 }
 
-async function api(path, options = {}) {
+// `askKey: false`: a 401 is only thrown, not asked about (a check while the user types must not
+// take the focus from the field).
+async function api(path, { askKey = true, ...options } = {}) {
   const headers = new Headers(options.headers || {});
   const key = localStorage.getItem(KEY_STORAGE);
   if (key) headers.set("X-API-Key", key);
@@ -63,7 +65,7 @@ async function api(path, options = {}) {
   const text = await response.text();
   let detail = text;
   try { detail = JSON.parse(text).detail ?? text; } catch { /* a plain-text answer */ }
-  if (response.status === 401) askForKey(detail);
+  if (response.status === 401 && askKey) askForKey(detail);
   throw new ApiError(response.status, detail, response.headers.get("Retry-After"));
 }
 
@@ -394,15 +396,21 @@ function save(blob, name) {
   setTimeout(() => URL.revokeObjectURL(url), 60_000); // once the browser has taken the file
 }
 
+// A file fetched with the key, named as the service names it (or `fallback`).
+async function download(path, fallback) {
+  const response = await api(path);
+  const disposition = response.headers.get("Content-Disposition") || "";
+  const match = /filename\*=utf-8''([^;]+)/i.exec(disposition) || /filename="?([^";]+)"?/i.exec(disposition);
+  return { blob: await response.blob(), name: match ? decodeURIComponent(match[1]) : fallback };
+}
+
 async function downloadResult() {
   const button = $("download");
   button.disabled = true;
   button.textContent = "Downloading…";
   try {
-    const response = await api(`/v1/jobs/${shown.id}/result.h5`);
-    const disposition = response.headers.get("Content-Disposition") || "";
-    const match = /filename\*=utf-8''([^;]+)/i.exec(disposition) || /filename="?([^";]+)"?/i.exec(disposition);
-    save(await response.blob(), match ? decodeURIComponent(match[1]) : `${shown.id}.h5`);
+    const { blob, name } = await download(`/v1/jobs/${shown.id}/result.h5`, `${shown.id}.h5`);
+    save(blob, name);
   } catch (error) {
     showJobError(`The HDF5 result could not be downloaded: ${describe(error)}`);
   } finally {
@@ -445,26 +453,44 @@ function pulseRow(s, label, quantity, value, unit, x = "", t = "") {
     errorCell(s, quantity), h("td", { class: "num" }, x), h("td", { class: "num" }, t));
 }
 
+// An extreme's place and time: x (mm) and t (µs), blank without one.
+const placed = (extreme) => (extreme ? [fmt(extreme.x * 1e3), us(extreme.time)] : ["", ""]);
+
+// The pulse's headline quantities, as the pulse table and a comparison show them: `quantity` is the
+// summary's name (its error estimate's too), `read` its SI value, `toUnit` that value in `unit`,
+// `where` its place and time in the pulse table; an `optional` one is listed only when the case
+// has it (a penetration needs a medium).
+const PULSE = [
+  { label: "Co-impact time", quantity: "co_impact_time", unit: "µs", read: (s) => s.co_impact_time, toUnit: (v) => v * 1e6 },
+  { label: "Peak contact force", quantity: "peak_contact_force", unit: "kN", read: (s) => s.peak_contact_force?.value,
+    toUnit: (v) => v / 1e3, where: (s) => ["", us(s.peak_contact_force.time)] },
+  { label: "Max compressive stress", quantity: "max_compressive_stress", unit: "MPa", read: (s) => s.max_compressive_stress?.value,
+    toUnit: (v) => v / 1e6, where: (s) => placed(s.max_compressive_stress) },
+  { label: "Max tensile stress", quantity: "max_tensile_stress", unit: "MPa", read: (s) => s.max_tensile_stress?.value,
+    toUnit: (v) => v / 1e6, where: (s) => placed(s.max_tensile_stress) },
+  { label: "Striker rebound velocity", quantity: "striker_rebound_velocity", unit: "m/s", read: (s) => s.striker_rebound_velocity,
+    toUnit: (v) => v, where: (s) => ["", s.contacts?.length ? us(s.contacts[0].end) : ""] },
+  { label: "Energy to the medium", quantity: "energy.to_medium", unit: "J", read: (s) => s.energy?.to_medium, toUnit: (v) => v },
+  { label: "Transfer efficiency", quantity: "energy.transfer_efficiency", unit: "%", read: (s) => s.energy?.transfer_efficiency,
+    toUnit: (v) => 100 * v },
+  { label: "Deepest penetration", quantity: "medium_penetration.max", unit: "mm", read: (s) => s.medium_penetration?.max,
+    toUnit: (v) => v * 1e3, optional: true },
+  { label: "Permanent penetration", quantity: "medium_penetration.permanent", unit: "mm",
+    read: (s) => s.medium_penetration?.permanent, toUnit: (v) => v * 1e3, optional: true },
+];
+
+// A pulse quantity's value in its unit, or null when the summary has none.
+function pulseValue({ read, toUnit }, s) {
+  const value = read(s);
+  return typeof value === "number" ? toUnit(value) : null;
+}
+
 function pulseCard(s) {
-  const peak = s.peak_contact_force;
-  const stress = (key) => (s[key] ? [fmt(s[key].value / 1e6), "MPa", fmt(s[key].x * 1e3), us(s[key].time)]
-                                   : ["—", "MPa"]);
   const contacts = s.contacts || [];
-  const e = s.energy;
-  const penetration = s.medium_penetration; // null without a medium
   return card("Pulse",
     table("pulse", ["", "value", "unit", "error (est.)", "at x (mm)", "at t (µs)"], [
-      pulseRow(s, "Co-impact time", "co_impact_time", us(s.co_impact_time), "µs"),
-      pulseRow(s, "Peak contact force", "peak_contact_force", fmt(peak.value / 1e3), "kN", "", us(peak.time)),
-      pulseRow(s, "Max compressive stress", "max_compressive_stress", ...stress("max_compressive_stress")),
-      pulseRow(s, "Max tensile stress", "max_tensile_stress", ...stress("max_tensile_stress")),
-      pulseRow(s, "Striker rebound velocity", "striker_rebound_velocity", fmt(s.striker_rebound_velocity), "m/s",
-               "", contacts.length ? us(contacts[0].end) : ""),
-      pulseRow(s, "Energy to the medium", "energy.to_medium", fmt(e.to_medium), "J"),
-      pulseRow(s, "Transfer efficiency", "energy.transfer_efficiency", fmt(100 * e.transfer_efficiency), "%"),
-      penetration && pulseRow(s, "Deepest penetration", "medium_penetration.max", mm(penetration.max), "mm"),
-      penetration && pulseRow(s, "Permanent penetration", "medium_penetration.permanent",
-                              mm(penetration.permanent), "mm"),
+      PULSE.filter((q) => !q.optional || pulseValue(q, s) !== null).map((q) =>
+        pulseRow(s, q.label, q.quantity, fmt(pulseValue(q, s)), q.unit, ...(q.where ? q.where(s) : []))),
       pulseRow(s, "Contacts", "contacts_total", String(s.contacts_total ?? contacts.length), ""),
     ]),
     contacts.length > 1 && h("details", {},
