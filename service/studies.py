@@ -13,7 +13,7 @@ from fastapi.responses import FileResponse
 from pydantic import BaseModel, ConfigDict
 
 from percussim.solver.limits import check_case
-from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization
+from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization, study_case
 from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.plots import FORMATS
 from percussim.worker.settings import Settings
@@ -92,7 +92,7 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
         503: {"model": Problem, "description": "the broker is unreachable; retry later"}})
     def submit(request: Request, response: Response,
                study: Annotated[model, Body(openapi_examples=examples)]) -> dict:
-        check_case(study.case, settings.limits())
+        check_case(study_case(study.case), settings.limits())
         check(study, settings.limits())
         jobs = store(request)
         record = jobs.create(study.case.model_dump(mode="json", exclude_none=True), kind=kind,

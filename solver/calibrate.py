@@ -39,8 +39,9 @@ from .case import Case, CaseError, FieldError
 from .errors import Cancelled
 from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
 from .limits import Limits
-from .record import Record
-from .study import Calibration, check_calibration, parse_calibration
+from .record import Record, record_noise
+from .study import (GRID_REMEDY, OFFSET, Calibration, check_calibration, parse_calibration, run_span,
+                    set_aside, study_case)
 from .result import CancelCheck, ProgressCallback
 
 POINTS_PER_PARAMETER = 8
@@ -59,38 +60,60 @@ SAME_MISFIT = 4.0  # residual variances: starts whose sums of squares differ les
 
 
 class _Problem:
-    """The fit's residual on one grid, each run counted and cancellable."""
+    """The fit's residual on one grid, each run counted and cancellable. The record's
+    time_offset, when fitted, moves the instants the model is read at, not the run: points that
+    differ in it alone share one run."""
 
     def __init__(self, base: dict, space: Space, record: Record, cells: int, evaluator: Evaluator,
                  cancelled: CancelCheck | None):
         self.base, self.space, self.record, self.cells = base, space, record, cells
         self.evaluator, self.cancelled = evaluator, cancelled
-        self.times = np.asarray(record.time)
+        self.case_space = space.without(OFFSET)
+        self.offset_at = space.paths.index(OFFSET) if OFFSET in space.paths else None
+        self.times = record.instants
         self.values = np.asarray(record.values)
         self.scale = float(np.ptp(self.values))
+        self.duration = run_span(record, space)
         self.runs = 0
-        self._cache: dict[bytes, np.ndarray] = {}
+        self._runs: dict[bytes, Any] = {}
+
+    def split(self, u: np.ndarray) -> tuple[np.ndarray, float]:
+        """The case's fields' values and the time_offset at a point of the unit cube."""
+        values = self.space.values(u)
+        if self.offset_at is None:
+            return values, self.record.time_offset or 0.0
+        return np.delete(values, self.offset_at), float(values[self.offset_at])
 
     def model(self, units: list[np.ndarray]) -> list[np.ndarray]:
         """The model's series at the record's instants, per point of the unit cube."""
         if self.cancelled is not None and self.cancelled():
             raise Cancelled
-        wanted = [u for u in units if u.tobytes() not in self._cache]
-        trees = [self.space.tree(self.base, self.space.values(u)) for u in wanted]
-        answers = self.evaluator(Batch(
-            cases=trees, cells=self.cells, duration=float(self.times[-1]),
-            series={"quantity": self.record.quantity, "times": self.record.time},
-            quantities=None)) if trees else []
-        self.runs += len(answers)
-        for u, answer in zip(wanted, answers):
-            if "error" in answer:
-                raise CaseError([FieldError(field="parameters", message=(
-                    f"the model fails at {self.describe(u)}: {answer['error']}"))])
-            self._cache[u.tobytes()] = np.asarray(answer["series"])
-        return [self._cache[u.tobytes()] for u in units]
+        points = [self.split(u) for u in units]
+        keys = [fields.tobytes() for fields, _ in points]
+        wanted = {key: fields for key, (fields, _) in zip(keys, points) if key not in self._runs}
+        fitted = self.offset_at is not None
+        if wanted:
+            answers = self.evaluator(Batch(
+                cases=[self.case_space.tree(self.base, fields) for fields in wanted.values()],
+                cells=self.cells, duration=self.duration,
+                series={"quantity": self.record.quantity,
+                        "times": None if fitted else (self.times + points[0][1]).tolist()},
+                quantities=None))
+            self.runs += len(answers)
+            for (key, fields), answer in zip(wanted.items(), answers):
+                if "error" in answer:
+                    raise CaseError([FieldError(field="parameters", message=(
+                        f"the model fails at {self.describe(fields, self.case_space)}: {answer['error']}"))])
+                self._runs[key] = ((np.asarray(answer["time"]), np.asarray(answer["series"])) if fitted
+                                   else np.asarray(answer["series"]))
+        if not fitted:
+            return [self._runs[key] for key in keys]
+        # before the impact (a record's lead-in) the model is at rest: its first sample
+        return [np.interp(self.times + offset, *self._runs[key]) for key, (_, offset) in zip(keys, points)]
 
-    def describe(self, u: np.ndarray) -> str:
-        return ", ".join(f"{p} = {v:.6g}" for p, v in zip(self.space.paths, self.space.values(u)))
+    def describe(self, values: np.ndarray, space: Space | None = None) -> str:
+        """The fields' `values` (of `space`, by default the fit's) in words."""
+        return ", ".join(f"{p} = {v:.6g}" for p, v in zip((space or self.space).paths, values))
 
     def misfit(self, series: np.ndarray) -> np.ndarray:
         """(model − record) over the record's range, at each sample."""
@@ -138,17 +161,17 @@ def calibrate(calibration: Calibration | dict, evaluator: Evaluator | None = Non
 def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: ProgressCallback | None,
                cancelled: CancelCheck | None, limits: Limits) -> dict:
     started = time.monotonic()
-    case, record = calibration.case, calibration.record
+    case, record = study_case(calibration.case), calibration.record
     space = check_calibration(calibration, limits)
     report = progress or (lambda fraction: None)
 
     own = space.own(case)
     base = case.model_dump(mode="json", exclude_none=True)
     base["outputs"] = record.outputs()
-    own_case = Case.model_validate(space.tree(base, space.values(own)))
-    cells = study_grid(own_case, None, limits)
-    check_grid(own_case, cells, record.time[-1], limits, field="record.time")
-    problem = _Problem(base, space, record, cells, evaluator, cancelled)
+    problem = _Problem(base, space, record, 0, evaluator, cancelled)
+    own_case = Case.model_validate(problem.case_space.tree(base, problem.split(own)[0]))
+    problem.cells = study_grid(own_case, problem.case_space, None, limits)
+    check_grid(own_case, problem.cells, problem.duration, limits, field="record.time", remedy=GRID_REMEDY)
 
     n = len(space.paths)
     noise = record_noise(record)
@@ -174,7 +197,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
     while True:
         finer = _Problem(base, space, record, 2 * problem.cells, evaluator, cancelled)
         try:
-            check_grid(own_case, finer.cells, record.time[-1], limits, field="record.time")
+            check_grid(own_case, finer.cells, finer.duration, limits, field="record.time", remedy=GRID_REMEDY)
         except CaseError:
             break
         finer.runs = problem.runs
@@ -186,7 +209,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
         if moved <= GRID_SHARE or refinements >= MAX_REFINEMENTS:
             break
 
-    warnings = _warnings(space, fit, solutions, problem)
+    warnings = set_aside(calibration.case) + record.notes + _warnings(space, fit, solutions, problem)
     if fit["nrmse"] > MISFIT_RATIO * noise:
         warnings.append(
             f"the misfit (nrmse {fit['nrmse']:.3g}) is {fit['nrmse'] / max(noise, 1e-300):.3g}× the "
@@ -198,9 +221,9 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
             f"the grid is not fine enough for this record: on {problem.cells} cells, twice as fine "
             f"as the last, the values moved by {moved:.2g} of their standard errors (more than "
             f"{GRID_SHARE:.2g}); the uncertainty does not include the grid's error")
-    fitted = case.model_dump(mode="json", exclude_none=True)
     values = space.values(fit["unit"])
-    fitted = space.tree(fitted, values)
+    fields, offset = problem.split(fit["unit"])
+    fitted = problem.case_space.tree(calibration.case.model_dump(mode="json", exclude_none=True), fields)
     model = problem.model([fit["unit"]])[0]
     report(1.0)
     return {
@@ -215,8 +238,8 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
         "confidence": CONFIDENCE,
         "noise": noise,
         "case": fitted,
-        "record": {"quantity": record.quantity, "x": record.x, "unit": record.unit},
-        "series": {"time": record.time, "record": record.values, "model": model.tolist()},
+        "record": {"quantity": record.quantity, "x": record.x, "unit": record.unit, "time_offset": offset},
+        "series": {"time": problem.times.tolist(), "record": record.values, "model": model.tolist()},
         "grid": {"cells": problem.cells, "refinements": refinements, "moved": moved},
         "starts": [{"values": dict(zip(space.paths, space.values(s.x).tolist())),
                     "nrmse": _nrmse(s.cost, record), "stopped": s.message}
@@ -232,16 +255,7 @@ def _finite(value: float) -> float | None:
 
 def _nrmse(cost: float, record: Record) -> float:
     """The normalised RMS misfit of a least-squares cost (half the sum of squared residuals)."""
-    return math.sqrt(2.0 * cost / len(record.time))
-
-
-def record_noise(record: Record) -> float:
-    """The record's noise over its range, from the scatter of its second differences (robust: a
-    median), which a pulse sampled finely enough hardly has: the least misfit a fit can reach."""
-    values = np.asarray(record.values)
-    second = np.diff(values, 2)
-    scatter = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
-    return scatter / float(np.ptp(values))
+    return math.sqrt(2.0 * cost / len(record.values))
 
 
 def _uncertainty(problem: _Problem, u: np.ndarray) -> dict:
@@ -318,6 +332,6 @@ def _warnings(space: Space, fit: dict, solutions: list, problem: _Problem) -> li
     if apart:
         warnings.append(
             "starts ended at different values with the same misfit ("
-            + problem.describe(apart[0].x) + " against " + problem.describe(best.x)
+            + problem.describe(space.values(apart[0].x)) + " against " + problem.describe(space.values(best.x))
             + "): the record has more than one best fit; the fit is not unique")
     return warnings

@@ -18,6 +18,7 @@ an evaluator maps `evaluate_batch` over batches.
 from __future__ import annotations
 
 import copy
+import itertools
 import math
 import os
 import time
@@ -30,8 +31,8 @@ import numpy as np
 
 from .case import Case, CaseError, FieldError, Outputs, parse_case
 from .errors import NumericalFailure
-from .grid import DEFAULT_TOLERANCE, explicit_numerics
-from .limits import Limits, check_limits
+from .grid import DEFAULT_TOLERANCE, explicit_numerics, fewest_cells
+from .limits import Limits, excesses
 from .paths import quantity, set_field, value_at
 from .record import series
 from .sweep import Sweep, variants
@@ -39,7 +40,8 @@ from .sweep import Sweep, variants
 
 class Batch(TypedDict):
     """Runs to make: `cases` (case JSON), each on `cells` cells (explicit, Courant 1) over
-    `duration` s, read for `series` ({quantity, times}) or `quantities` (summary paths)."""
+    `duration` s, read for `series` ({quantity, times}: at `times`, or with times None at the
+    run's own instants, which come back as `time`) or `quantities` (summary paths)."""
 
     cases: list[dict]
     cells: int
@@ -70,6 +72,10 @@ def _evaluate(tree: dict, batch: Batch) -> dict:
         return {"error": str(error)}
     if batch["series"] is not None:
         wanted = batch["series"]
+        if wanted["times"] is None:
+            times = result.history["time"]
+            values = series(wanted["quantity"], result.history, result.probe_stress, times)
+            return {"time": times.tolist(), "series": values.tolist()}
         values = series(wanted["quantity"], result.history, result.probe_stress,
                         np.asarray(wanted["times"]))
         return {"series": values.tolist()}
@@ -195,6 +201,24 @@ class Space:
         values = np.array([v if isinstance(v, float) else m for v, m in zip(found, middle)])
         return self.unit(np.clip(values, self.low, self.high))
 
+    def without(self, path: str) -> "Space":
+        """The space of the other fields."""
+        keep = [k for k, p in enumerate(self.paths) if p != path]
+        return Space(tuple(self.paths[k] for k in keep), self.low[keep], self.high[keep],
+                     self.logarithmic[keep])
+
+    def corners(self, case: Case) -> list[Case]:
+        """The case at every corner of the bounds (validated: `check` refuses a corner first)."""
+        base = case.model_dump(mode="json", exclude_none=True)
+        return [Case.model_validate(self.tree(base, self.values(np.array(corner, dtype=float))))
+                for corner in itertools.product((0.0, 1.0), repeat=len(self.paths))]
+
+    def fewest_cells(self, case: Case) -> int:
+        """The fewest cells every point within the bounds takes (`grid.fewest_cells`, the most of
+        any corner: a striker's transit grows with its length and falls with its wave speed, and
+        the tool's the same way)."""
+        return max(fewest_cells(corner) for corner in self.corners(case))
+
     def tree(self, base: dict, values: Iterable[float]) -> dict:
         """The case JSON `base` with the fields set to `values`."""
         tree = copy.deepcopy(base)
@@ -202,12 +226,13 @@ class Space:
             set_field(tree, path, float(value))
         return tree
 
-    def check(self, case: Case, field: str, limits: Limits) -> None:
+    def check(self, case: Case, field: str) -> None:
         """Refuse a corner of the bounds the case cannot take (naming `field[path][0 or 1]`), and
-        a field that is not a continuous number of the case, before any run."""
+        a field that is not a continuous number of the case, before any run. The limits are the
+        study's grid's to check (`check_grid`): a corner's own grid is never run."""
         corners = Sweep(case=case, parameters={p: [float(lo), float(hi)] for p, lo, hi
                                                in zip(self.paths, self.low, self.high)})
-        _, corner = variants(corners, limits=limits, field=field)[0]
+        _, corner = variants(corners, limits=None, field=field)[0]
         tree = corner.model_dump(mode="json", exclude_none=True)
         errors = [FieldError(field=f"{field}[{path!r}]", message=(
                       f"is {value_at(tree, path)!r} in the case, not a continuous number: only such "
@@ -217,21 +242,23 @@ class Space:
             raise CaseError(errors)
 
 
-def study_grid(case: Case, tolerance: float | None, limits: Limits) -> int:
+def study_grid(case: Case, space: Space, tolerance: float | None, limits: Limits) -> int:
     """The cells the tolerance machinery chooses for `case` (its own tolerance, else `tolerance`,
-    else the default): the one grid every run of a study uses."""
+    else the default), and no fewer than every point of `space` takes: the one grid every run of
+    a study uses."""
     from .adaptive import solve_to_tolerance  # the kernel, loaded when a run needs it
 
     tol = case.numerics.tolerance or tolerance or DEFAULT_TOLERANCE
     plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
-    return solve_to_tolerance(plain, tol, limits=limits).numerics.cells
+    return max(solve_to_tolerance(plain, tol, limits=limits).numerics.cells, space.fewest_cells(case))
 
 
-def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: str) -> None:
-    """Refuse, naming `field`, a study whose runs would exceed the limits."""
+def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: str, remedy: str) -> None:
+    """Refuse, naming `field`, a study whose runs would exceed the limits; `remedy` says what in
+    the request to change (the study chooses its grid: the case's numerics are not the cause)."""
     short = case.model_copy(update={"numerics": case.numerics.model_copy(update={"duration": duration})})
-    try:
-        check_limits(short, explicit_numerics(short, cells), limits)
-    except CaseError as error:
-        raise CaseError([FieldError(field=field, message=f"a run on the study's grid of {cells} cells "
-                                                         f"is beyond the limits: {error}")]) from None
+    found = excesses(short, explicit_numerics(short, cells), limits)
+    if found:
+        raise CaseError([FieldError(field=field, message=(
+            f"a run on the study's grid of {cells} cells over {duration:.4g} s is beyond the limits: "
+            + "; ".join(e.what for e in found) + f": {remedy}"))])

@@ -61,6 +61,19 @@ def striker_cells(striker: Striker, tau: float) -> int:
     return int(math.floor(striker_transit(striker) / tau * (1.0 + 1e-12)))
 
 
+def fewest_cells(case: Case) -> int:
+    """The fewest cells the explicit scheme at Courant number 1 (τ = L/(N·a)) takes the case on:
+    an elastic striker's wave transit must span `MIN_STRIKER_CELLS` time steps, so a striker
+    shorter (in transit time) than the tool needs N ≥ 2·(L/a)/(L_s/a_s)."""
+    if not case.striker.elastic:
+        return MIN_CELLS
+    tool_transit = case.tool.length / wave_speed(case.tool)
+    cells = max(MIN_CELLS, math.ceil(MIN_STRIKER_CELLS * tool_transit / striker_transit(case.striker)))
+    while striker_cells(case.striker, tool_transit / cells) < MIN_STRIKER_CELLS:  # rounding's last step
+        cells += 1
+    return cells
+
+
 def striker_grid(striker: Striker, tau: float) -> tuple["Grid", float]:
     """An elastic striker on its grid (`striker_cells`, cells of `a_s·τ` from its face) and the
     back delay: twice the transit time of its part beyond the last node (< 2τ)."""
@@ -374,8 +387,9 @@ def profile_cells(case: Case) -> int:
 
 
 def first_cells(case: Case, tol: float) -> int:
-    """The coarsest grid of a ladder: `FIRST_POINTS` steps over the contact's time scale, and the
-    tool's profile resolved (`profile_cells`)."""
+    """The coarsest grid of a ladder: `FIRST_POINTS` steps over the contact's time scale, the
+    tool's profile resolved (`profile_cells`), and no fewer cells than the case's ends take
+    (`fewest_cells`)."""
     points = FIRST_POINTS * math.sqrt(1e-2 / tol)
     tau = time_scale(case) / points
     if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
@@ -383,7 +397,7 @@ def first_cells(case: Case, tol: float) -> int:
             field="striker",
             message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.striker.velocity:.3g} "
                     "m/s lasts no time that a grid can resolve: give values of a real striker")])
-    return max(MIN_CELLS, profile_cells(case),
+    return max(fewest_cells(case), profile_cells(case),
                math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
 
 

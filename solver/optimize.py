@@ -27,12 +27,12 @@ from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 from .adaptive import solve_to_tolerance
 from .case import Case, CaseError, FieldError
 from .errors import Cancelled
-from .evaluate import Batch, Evaluator, Space, evaluator_for, study_grid
+from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
 from .grid import DEFAULT_TOLERANCE
 from .limits import Limits
 from .paths import quantity
 from .result import CancelCheck, ProgressCallback
-from .study import Optimization, check_optimization, parse_optimization, quantity_fields
+from .study import DURATION_REMEDY, Optimization, check_optimization, parse_optimization, quantity_fields, set_aside, study_case
 
 POPULATION = 10  # per variable: differential evolution's population
 MIN_POPULATION = 8
@@ -48,7 +48,7 @@ class _Study:
                  evaluator: Evaluator, cancelled: CancelCheck | None):
         self.request, self.space, self.cells, self.tolerance = request, space, cells, tolerance
         self.evaluator, self.cancelled = evaluator, cancelled
-        self.base = request.case.model_dump(mode="json", exclude_none=True)
+        self.base = study_case(request.case).model_dump(mode="json", exclude_none=True)
         self.base["outputs"] = {"history_stride": 2**62}  # the summary is all a design needs
         self.names = [request.objective.quantity, *request.limits]
         self.history: list[dict] = []
@@ -132,14 +132,16 @@ def optimize(optimization: Optimization | dict, evaluator: Evaluator | None = No
 def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCallback | None,
               cancelled: CancelCheck | None, limits: Limits) -> dict:
     started = time.monotonic()
-    case = request.case
+    case = study_case(request.case)
     space = check_optimization(request, limits)
     report = progress or (lambda fraction: None)
     tol = case.numerics.tolerance or DEFAULT_TOLERANCE
     own = space.own(case)
     own_case = Case.model_validate(space.tree(case.model_dump(mode="json", exclude_none=True),
                                               space.values(own)))
-    cells = study_grid(own_case, tol, limits)
+    cells = study_grid(own_case, space, tol, limits)
+    check_grid(own_case, cells, case.numerics.duration, limits, field="case.numerics.duration",
+               remedy=DURATION_REMEDY)
     study = _Study(request, space, cells, tol, evaluator, cancelled)
     _check_quantities(study, own)
 
@@ -188,7 +190,7 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
     answer |= {"values": values, "case": result.case.model_dump(mode="json", exclude_none=True),
                "summary": result.summary,
                "quantities": {name: quantity(result.summary, name) for name in study.names},
-               "warnings": _warnings(study, values)}
+               "warnings": set_aside(request.case) + _warnings(study, values)}
     return answer
 
 
@@ -243,9 +245,7 @@ def _check(study: _Study, case: Case, tol: float, limits: Limits) -> tuple[tuple
     for entry in ranked[:CHECKED]:
         tree = study.space.tree(case.model_dump(mode="json", exclude_none=True),
                                 list(entry["values"].values()))
-        accurate = case.model_validate(tree)
-        accurate = accurate.model_copy(update={"numerics": accurate.numerics.model_copy(
-            update={"tolerance": tol, "cells": None, "time_step": None, "scheme": None})})
+        accurate = study_case(case.model_validate(tree), tol)
         result = solve_to_tolerance(accurate, tol, limits=limits)
         found = {name: quantity(result.summary, name) for name in study.names}
         ok = study.feasible(found)

@@ -3,18 +3,34 @@
 `Record` refuses what no fit can use (times that do not increase, non-finite values, too few
 samples) naming the field; `check_against` refuses what does not fit the case (a gauge off the
 tool, a medium force with no medium, a record longer than the case); `series` reads the same
-quantity from a run at the record's instants. Time 0 is the impact: the first contact's start.
+quantity from a run at the record's instants.
+
+Its times are given as a column (`time`) or, for an evenly sampled record, as `time_start` and
+`sample_rate`. A column whose repeated times come only from rounding an even sampling (a
+recorder that prints three significant digits) is read as that even sampling, with a note that
+says so (`notes`); any other column that does not increase is refused.
+
+The record's clock and the model's: the model's time is from the impact (the first contact's
+start); the record's instant t is the model's t + `time_offset`. A recorder triggered by the
+pulse itself starts where the pulse reaches its gauge, about x/c after the impact (x the gauge's
+station, c the tool's wave speed): its `time_offset` is that delay. Left out, it is 0 when the
+record starts at rest (`starts_at_rest`: time 0 is the impact) and fitted otherwise.
 
 CSV: a header `time,<quantity>`, with the quantity one of `contact_force`, `medium_force`,
 `stress@X` (stress at x = X m in the tool, compression negative), `struck_end_velocity`,
-`working_end_velocity`; then one sample a line.
+`working_end_velocity`; then one sample a line. An evenly sampled record may leave the time
+column out (a header `<quantity>` and one value a line) and say `# sample_rate = 12.5e6` (Hz)
+and `# time_start = 0` (s) in comment lines before the header, where `# time_offset = …` (s)
+may stand too; other comment lines are ignored.
 """
 
 from __future__ import annotations
 
 import csv
 import io
+import math
 import os
+from functools import cached_property
 from pathlib import Path
 from typing import Literal
 
@@ -25,6 +41,9 @@ from .case import INPUT, Case, CaseError, FieldError, field_error, validated
 
 MIN_SAMPLES = 20  # fewer say too little about any parameter's effect on the pulse
 MAX_SAMPLES = 200_000
+REST_NOISE = 4.0  # a first sample within this many noise deviations of 0 is at rest...
+REST_SHARE = 0.02  # ...or within this share of the record's peak
+CLOCK_FIELDS = ("time_start", "sample_rate", "time_offset")  # a CSV's comment lines may give them
 
 # quantity → (its history's path, its unit)
 QUANTITIES = {
@@ -36,32 +55,80 @@ QUANTITIES = {
 }
 
 
+def printed_step(value: float) -> float:
+    """The last printed digit's unit of `value`: the fewest significant digits that give it back
+    (1.23e-05 → 1e-7), so that rounding moved it by at most half of this."""
+    if value == 0.0:
+        return 0.0
+    for digits in range(1, 18):
+        if float(f"{value:.{digits}g}") == value:
+            break
+    return 10.0 ** (math.floor(math.log10(abs(value))) - digits + 1)
+
+
+def even_sampling(time: list[float]) -> np.ndarray | None:
+    """The even sampling that `time` rounds, if every instant lies within its rounding (half its
+    `printed_step`) of it; else None. The line is fitted through every instant, each weighted by
+    its rounding, which averages the rounding out (the two ends alone would leave their
+    rounding over the record's length in the sample rate)."""
+    t = np.asarray(time, dtype=float)
+    if not t[-1] > t[0]:
+        return None
+    k = np.arange(len(t), dtype=float)
+    rounding = 0.5 * np.array([printed_step(v) for v in time])
+    floor = 1e-3 * float(np.median(rounding)) or 1e-15 * float(np.abs(t).max())
+    step, start = np.polyfit(k, t, 1, w=1.0 / np.maximum(rounding, floor))
+    even = start + step * k
+    return even if step > 0.0 and bool(np.all(np.abs(t - even) <= 1.01 * rounding + floor)) else None
+
+
 class Record(BaseModel):
-    """Samples `values` of `quantity` at `time` (s from the impact); `x` (m from the struck end)
-    is the gauge's station for a stress."""
+    """Samples `values` of `quantity` at `time` (s on the record's clock), or evenly from
+    `time_start` at `sample_rate`; `x` (m from the struck end) is the gauge's station for a
+    stress; `time_offset` the model's time (from the impact) at the record's time 0."""
 
     model_config = INPUT
 
     quantity: Literal["contact_force", "medium_force", "stress", "struck_end_velocity",
                       "working_end_velocity"]
     x: float | None = Field(default=None, description="the gauge's station for a stress, m")
-    time: list[float] = Field(min_length=MIN_SAMPLES, max_length=MAX_SAMPLES, description="s")
+    time: list[float] | None = Field(default=None, min_length=MIN_SAMPLES, max_length=MAX_SAMPLES,
+                                     description="s, the record's clock")
+    time_start: float | None = Field(default=None, description="s: the first sample's time, with sample_rate "
+                                                               "instead of time (default 0)")
+    sample_rate: float | None = Field(default=None, gt=0.0, le=1e12,
+                                      description="Hz: samples a second of an evenly sampled record, "
+                                                  "instead of time")
+    time_offset: float | None = Field(default=None, ge=-1e4, le=1e4, description=(
+        "s: the model's time at the record's time 0 (a record triggered where the pulse reaches "
+        "its gauge: about x/c); left out, 0 for a record that starts at rest, else fitted"))
     values: list[float] = Field(min_length=MIN_SAMPLES, max_length=MAX_SAMPLES,
                                 description="SI: N, Pa (tension positive) or m/s")
 
     @model_validator(mode="after")
     def _consistent(self) -> "Record":
-        if len(self.values) != len(self.time):
-            raise field_error("Record", ("values",), f"must have one value per time: "
-                              f"{len(self.values)} values for {len(self.time)} times", None)
-        if self.time[0] < 0.0:
-            raise field_error("Record", ("time",),
-                              f"must start at or after 0 (the impact), not at {self.time[0]:g} s", None)
-        steps = np.diff(self.time)
-        if (steps <= 0.0).any():
-            i = int(np.argmax(steps <= 0.0)) + 1
-            raise field_error("Record", ("time", i), f"must increase: time[{i}] = {self.time[i]:.9g} s "
-                              f"is not after time[{i - 1}] = {self.time[i - 1]:.9g} s", None)
+        if self.time is None and self.sample_rate is None:
+            raise field_error("Record", ("time",), "is required: give the samples' times, or "
+                              "time_start and sample_rate for an evenly sampled record", None)
+        if self.time is not None and (self.sample_rate is not None or self.time_start is not None):
+            name = "sample_rate" if self.sample_rate is not None else "time_start"
+            raise field_error("Record", (name,), "cannot be given with time: give the times, or "
+                              "time_start and sample_rate, not both", getattr(self, name))
+        if self.time_start is not None and self.sample_rate is None:
+            raise field_error("Record", ("sample_rate",), "is required with time_start", None)
+        if self.time is not None:
+            if len(self.values) != len(self.time):
+                raise field_error("Record", ("values",), f"must have one value per time: "
+                                  f"{len(self.values)} values for {len(self.time)} times", None)
+            steps = np.diff(self.time)
+            if (steps <= 0.0).any() and ((steps < 0.0).any() or even_sampling(self.time) is None):
+                i = int(np.argmax(steps <= 0.0)) + 1
+                raise field_error("Record", ("time", i), f"must increase: time[{i}] = {self.time[i]:.9g} s "
+                                  f"is not after time[{i - 1}] = {self.time[i - 1]:.9g} s", None)
+        if self.instants[-1] + (self.time_offset or 0.0) <= 0.0:
+            raise field_error("Record", ("time",), "must reach past the impact: the last sample is at "
+                              f"{self.instants[-1] + (self.time_offset or 0.0):.6g} s of the model's time "
+                              "(the record's time + time_offset)", None)
         if self.quantity == "stress" and self.x is None:
             raise field_error("Record", ("x",), "is required for a stress record: the gauge's "
                               "station, m from the struck end", None)
@@ -73,6 +140,32 @@ class Record(BaseModel):
                               "are all equal: a record with no pulse determines nothing", None)
         return self
 
+    @cached_property
+    def sample_times(self) -> tuple[float, ...]:
+        """The samples' times on the record's clock (s): `time`, the even sampling it rounds, or
+        `time_start` + k/`sample_rate` (a tuple, which compares as a field's value would)."""
+        if self.time is None:
+            return tuple((self.time_start or 0.0) + np.arange(len(self.values)) / self.sample_rate)
+        steps = np.diff(self.time)
+        rebuilt = even_sampling(self.time) if (steps <= 0.0).any() else None
+        return tuple(rebuilt) if rebuilt is not None else tuple(self.time)
+
+    @property
+    def instants(self) -> np.ndarray:
+        """`sample_times` as an array."""
+        return np.asarray(self.sample_times, dtype=float)
+
+    @property
+    def notes(self) -> list[str]:
+        """What was read differently from how it was given, for the answer's warnings."""
+        if self.time is None or not (np.diff(self.time) <= 0.0).any():
+            return []
+        repeats = int(np.sum(np.diff(self.time) <= 0.0))
+        t = self.instants
+        return [f"record.time repeats {repeats} of its {len(t)} instants, as rounding an even sampling "
+                f"does: read as {len(t)} samples evenly from {t[0]:.9g} to {t[-1]:.9g} s "
+                f"({(len(t) - 1) / (t[-1] - t[0]):.6g} Hz); give time_start and sample_rate to say so"]
+
     @property
     def unit(self) -> str:
         return QUANTITIES[self.quantity][1]
@@ -82,8 +175,36 @@ class Record(BaseModel):
         """The quantity as a CSV header names it."""
         return f"stress@{self.x:g}" if self.quantity == "stress" else self.quantity
 
-    def check_against(self, case: Case, field: str = "record") -> None:
-        """Refuse, naming the field, a record this case cannot produce."""
+    def station(self, case: Case) -> float:
+        """Where the quantity is measured along the tool (m): the gauge, or the end it is at."""
+        if self.quantity == "stress":
+            return self.x
+        return case.tool.length if self.quantity in ("medium_force", "working_end_velocity") else 0.0
+
+    def starts_at_rest(self) -> bool:
+        """Whether the first sample is at rest: within `REST_NOISE` deviations of the record's
+        noise of 0, or `REST_SHARE` of its peak. A record triggered by its pulse does not."""
+        values = np.asarray(self.values)
+        peak = float(np.max(np.abs(values)))
+        noise = record_noise(self) * float(np.ptp(values))
+        return abs(values[0]) <= max(REST_NOISE * noise, REST_SHARE * peak)
+
+    def offset_bounds(self, case: Case) -> tuple[float, float]:
+        """Where a fitted `time_offset` is sought by default: the pulse's arrival at the station,
+        x/c (c the tool's wave speed), give or take the record's own rise (its first sample to
+        its peak), within which a trigger fires."""
+        from .grid import wave_speed
+
+        values = np.asarray(self.values)
+        t = self.instants
+        rise = float(t[int(np.argmax(np.abs(values)))] - t[0])
+        arrival = self.station(case) / wave_speed(case.tool)
+        rise = max(rise, 1e-3 * arrival, float(t[1] - t[0]))
+        return max(0.0, arrival - rise) - t[0], arrival + rise - t[0]
+
+    def check_against(self, case: Case, field: str = "record", offset_high: float | None = None) -> None:
+        """Refuse, naming the field, a record this case cannot produce; `offset_high` is the
+        largest time_offset a fit will try, when it is fitted."""
         errors = []
         if self.quantity == "stress" and not 0.0 <= self.x <= case.tool.length:
             errors.append(FieldError(field=f"{field}.x", message=(
@@ -92,10 +213,13 @@ class Record(BaseModel):
         if self.quantity == "medium_force" and case.medium is None:
             errors.append(FieldError(field=f"{field}.quantity",
                                      message="a medium force needs a medium: the case has none"))
-        if self.time[-1] > case.numerics.duration:
+        offset = self.time_offset if self.time_offset is not None else (offset_high or 0.0)
+        end = float(self.instants[-1]) + offset
+        if end > case.numerics.duration:
+            shifted = f" (its last sample + time_offset {offset:.6g} s)" if offset else ""
             errors.append(FieldError(field=f"{field}.time", message=(
-                f"ends at {self.time[-1]:.6g} s, after the case's numerics.duration of "
-                f"{case.numerics.duration:.6g} s: times are in seconds from the impact (SI); "
+                f"ends at {end:.6g} s of the model's time{shifted}, after the case's "
+                f"numerics.duration of {case.numerics.duration:.6g} s: times are in seconds (SI); "
                 "lengthen numerics.duration if the record is that long")))
         if errors:
             raise CaseError(errors)
@@ -105,52 +229,92 @@ class Record(BaseModel):
         return {"history_stride": 1, "probes": [self.x] if self.quantity == "stress" else []}
 
 
+def record_noise(record: Record) -> float:
+    """The record's noise over its range, from the scatter of its second differences (robust: a
+    median), which a pulse sampled finely enough hardly has: the least misfit a fit can reach."""
+    values = np.asarray(record.values)
+    second = np.diff(values, 2)
+    scatter = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
+    return scatter / float(np.ptp(values))
+
+
 def parse_record(data: dict, field: str = "record") -> Record:
     """Validate a record given as JSON; `CaseError` names each bad field under `field`."""
     return validated(Record, data, field)
 
 
-def read_record(source: str | os.PathLike) -> Record:
+def read_record(source: str | os.PathLike, **clock: float) -> Record:
     """Read a record from a CSV file (see the module's docstring): `CaseError` names the line
-    and column of anything that is not a sample."""
+    and column of anything that is not a sample. `clock` (time_start, sample_rate, time_offset)
+    adds to what the file's comment lines say (the command line's flags)."""
     text = Path(source).read_text()
-    return record_from_csv(text)
+    return record_from_csv(text, **clock)
 
 
-def record_from_csv(text: str) -> Record:
-    """A record from CSV text with a header `time,<quantity>`."""
-    rows = [row for row in csv.reader(io.StringIO(text)) if row and any(cell.strip() for cell in row)]
+def _csv_error(message: str, field: str = "record") -> CaseError:
+    return CaseError([FieldError(field=field, message=message)])
+
+
+def _clock_comment(line: int, text: str, clock: dict[str, float]) -> None:
+    """A comment line's `name = value` for a field of `CLOCK_FIELDS` into `clock`."""
+    name, equals, value = text.lstrip("#").partition("=")
+    name = name.strip()
+    if not equals or name not in CLOCK_FIELDS:
+        return  # a free comment
+    try:
+        clock[name] = float(value)
+    except ValueError:
+        raise _csv_error(f"line {line}: {name} = {value.strip()!r} is not a number", f"record.{name}") from None
+
+
+def record_from_csv(text: str, **given: float) -> Record:
+    """A record from CSV text: a header `time,<quantity>` and two columns, or a header
+    `<quantity>`, one column and the sampling in comment lines or in `given`."""
+    clock: dict[str, float] = {}
+    rows: list[tuple[int, list[str]]] = []
+    for line, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not row or not any(cell.strip() for cell in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            if not rows:
+                _clock_comment(line, ",".join(row), clock)
+            continue
+        rows.append((line, [cell.strip() for cell in row]))
+    for name, value in given.items():
+        if name in clock and clock[name] != value:
+            raise _csv_error(f"is {value:g}, but the file says {name} = {clock[name]:g}: give one",
+                             f"record.{name}")
+        clock[name] = value
     if not rows:
-        raise CaseError([FieldError(field="record", message="is empty: give a header time,<quantity> and samples")])
-    header = [cell.strip() for cell in rows[0]]
+        raise _csv_error("is empty: give a header time,<quantity> and samples")
+    (header_line, header), samples = rows[0], rows[1:]
     known = ", ".join(q if q != "stress" else "stress@X" for q in QUANTITIES)
-    if len(header) != 2 or header[0] != "time":
-        raise CaseError([FieldError(field="record", message=(
-            f"line 1 must be the header time,<quantity> with the quantity one of {known}; "
-            f"found {','.join(header)!r}"))])
-    quantity, x = header[1], None
+    timed = len(header) == 2 and header[0] == "time"
+    if not (timed or len(header) == 1 and header[0] != "time"):
+        raise _csv_error(f"line {header_line} must be the header time,<quantity> (or <quantity> alone, "
+                         f"with sample_rate given) with the quantity one of {known}; found {','.join(header)!r}")
+    label = header[-1]
+    quantity, x = label, None
     if quantity.startswith("stress@"):
         try:
             quantity, x = "stress", float(quantity.removeprefix("stress@"))
         except ValueError:
-            raise CaseError([FieldError(field="record.x", message=(
-                f"{header[1]!r}: the gauge's station must be a number of metres, as in stress@0.35"))]) from None
+            raise _csv_error(f"{label!r}: the gauge's station must be a number of metres, as in stress@0.35",
+                             "record.x") from None
     elif quantity not in QUANTITIES or quantity == "stress":
-        raise CaseError([FieldError(field="record.quantity", message=(
-            f"{quantity!r} is not a recorded quantity: give one of {known}"))])
-    time, values = [], []
-    for line, row in enumerate(rows[1:], start=2):
-        if len(row) != 2:
-            raise CaseError([FieldError(field="record", message=(
-                f"line {line} has {len(row)} columns, not 2 (time and {header[1]})"))])
+        raise _csv_error(f"{quantity!r} is not a recorded quantity: give one of {known}", "record.quantity")
+    columns = "time and " + label if timed else label
+    numbers = []
+    for line, row in samples:
+        if len(row) != len(header):
+            raise _csv_error(f"line {line} has {len(row)} columns, not {len(header)} ({columns})")
         try:
-            t, v = float(row[0]), float(row[1])
+            numbers.append([float(cell) for cell in row])
         except ValueError:
-            raise CaseError([FieldError(field="record", message=(
-                f"line {line}: {','.join(row)!r} is not two numbers"))]) from None
-        time.append(t)
-        values.append(v)
-    data = {"quantity": quantity, "time": time, "values": values}
+            raise _csv_error(f"line {line}: {','.join(row)!r} is not {'two numbers' if timed else 'a number'}") from None
+    data: dict = {"quantity": quantity, "values": [row[-1] for row in numbers], **clock}
+    if timed:
+        data["time"] = [row[0] for row in numbers]
     if x is not None:
         data["x"] = x
     return parse_record(data)
@@ -158,8 +322,12 @@ def record_from_csv(text: str) -> Record:
 
 def record_to_csv(record: Record) -> str:
     """The record as CSV text, as `record_from_csv` reads it."""
-    lines = [f"time,{record.label}"]
-    lines += [f"{t!r},{v!r}" for t, v in zip(record.time, record.values)]
+    lines = [f"# {name} = {getattr(record, name)!r}" for name in CLOCK_FIELDS
+             if getattr(record, name) is not None]
+    if record.time is None:
+        lines += [record.label] + [f"{v!r}" for v in record.values]
+    else:
+        lines += [f"time,{record.label}"] + [f"{t!r},{v!r}" for t, v in zip(record.time, record.values)]
     return "\n".join(lines) + "\n"
 
 

@@ -6,7 +6,6 @@ and loads the kernel then."""
 
 from __future__ import annotations
 
-import itertools
 import types
 import typing
 from typing import Any
@@ -14,13 +13,14 @@ from typing import Any
 import numpy as np
 from pydantic import BaseModel, Field, model_validator
 
-from .case import INPUT, Case, CaseError, FieldError, Whole, field_error, validated
+from .case import INPUT, Case, CaseError, FieldError, Numerics, Whole, field_error, validated
 from .evaluate import Batch, Space, check_grid, evaluate_batch
 from .grid import first_cells
 from .limits import Limits
 from .record import Record
 from .summary import Summary
 
+OFFSET = "record.time_offset"  # a parameter of the fit that is the record's, not the case's
 UNITS_FACTOR = 30.0  # a record this far above or below every model's peak has the wrong units
 COARSE_TOLERANCE = 0.1  # of the grid of the units check: a peak within tens of percent is enough
 EXAMPLE_QUANTITIES = ("energy.transfer_efficiency", "max_compressive_stress", "peak_contact_force",
@@ -38,28 +38,84 @@ class Calibration(BaseModel):
         min_length=1, description="dotted field path → [low, high], the bounds of the fit")
 
 
+STUDY_NUMERICS = ("duration", "tolerance")  # what a study reads of a case's numerics
+
+
+def study_case(case: Case, tolerance: float | None = None) -> Case:
+    """The case as a study runs it: every run on the study's own grid (the explicit scheme at
+    Courant number 1, chosen for the tolerance), so of its numerics only the duration and the
+    tolerance (`tolerance` when given) are kept; a fixed grid it gives is set aside."""
+    kept = Numerics(duration=case.numerics.duration, tolerance=tolerance or case.numerics.tolerance)
+    return case.model_copy(update={"numerics": kept})
+
+
+def set_aside(case: Case) -> list[str]:
+    """A warning naming the numerics a study does not use, if the case gives any."""
+    given = [f"numerics.{name}" for name in case.numerics.model_dump(exclude_defaults=True)
+             if name not in STUDY_NUMERICS]
+    if not given:
+        return []
+    return [f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} set aside: a study runs every "
+            "case on its own grid, the explicit scheme at Courant number 1, chosen for "
+            "numerics.tolerance (0.01 when not given)"]
+
+
 def parse_calibration(data: dict) -> Calibration:
     """Validate a calibration given as JSON; `CaseError` names each bad field."""
     return validated(Calibration, data)
+
+
+def fitted_bounds(calibration: Calibration) -> dict[str, list[float]]:
+    """The parameters to fit and their bounds: the request's, and the record's time_offset when
+    it is fitted by default (neither given nor in the parameters, and the record does not start
+    at rest: `Record.offset_bounds`). Refuses a time_offset both given and fitted."""
+    bounds = dict(calibration.parameters)
+    record = calibration.record
+    if OFFSET in bounds and record.time_offset is not None:
+        raise CaseError([FieldError(field=f"parameters[{OFFSET!r}]", message=(
+            f"the record gives time_offset = {record.time_offset:g} s: leave it out of the record "
+            "to fit it here, or out of the parameters to keep it"))])
+    if OFFSET not in bounds and record.time_offset is None and not record.starts_at_rest():
+        bounds[OFFSET] = list(record.offset_bounds(calibration.case))
+    return bounds
+
+
+def run_span(record: Record, space: Space) -> float:
+    """How long the study's runs last (s of the model's time): to the record's last sample at the
+    latest time_offset the fit may try."""
+    offset = (space.high[space.paths.index(OFFSET)] if OFFSET in space.paths
+              else record.time_offset or 0.0)
+    return float(record.instants[-1] + offset)
+
+
+# What a user can change when a study's grid is over the limits: not the case's grid, which a study
+# sets aside (`study_case`).
+GRID_REMEDY = ("the study chooses its grid for numerics.tolerance and the record's length sets the "
+               "runs': shorten the record, loosen numerics.tolerance, or raise the limit")
+DURATION_REMEDY = ("the study chooses its grid for numerics.tolerance: shorten numerics.duration, "
+                   "loosen numerics.tolerance, or raise the limit")
 
 
 def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Space:
     """Refuse, naming the field, what no fit can use: a record the case cannot produce, a
     parameter that is not a number of the case or bounds it cannot take, and a record whose peak
     is `UNITS_FACTOR` or more from the model's at every corner of the bounds (its units are off),
-    from quick runs on a coarse grid. Returns the parameters' space."""
-    case, record = calibration.case, calibration.record
-    record.check_against(case)
-    space = Space.of(calibration.parameters, "parameters")
-    space.check(case, "parameters", limits)
-    base = case.model_dump(mode="json", exclude_none=True)
-    base["outputs"] = record.outputs()
-    corners = [space.tree(base, space.values(np.array(corner, dtype=float)))
-               for corner in itertools.product((0.0, 1.0), repeat=len(space.paths))]
-    coarse = first_cells(case, COARSE_TOLERANCE)
-    check_grid(case, coarse, record.time[-1], limits, field="record.time")
-    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=record.time[-1],
-                                   series={"quantity": record.quantity, "times": record.time},
+    from quick runs on a coarse grid the case accepts. Returns the parameters' space (the
+    record's time_offset among them when it is fitted)."""
+    case, record = study_case(calibration.case), calibration.record
+    space = Space.of(fitted_bounds(calibration), "parameters")
+    case_space = space.without(OFFSET)
+    record.check_against(case, offset_high=space.high[space.paths.index(OFFSET)] if OFFSET in space.paths else None)
+    if case_space.paths:
+        case_space.check(case, "parameters")
+    corners = [corner.model_dump(mode="json", exclude_none=True) for corner in case_space.corners(case)]
+    for corner in corners:
+        corner["outputs"] = record.outputs()
+    coarse = max(first_cells(case, COARSE_TOLERANCE), case_space.fewest_cells(case))
+    duration = run_span(record, space)
+    check_grid(case, coarse, duration, limits, field="record.time", remedy=GRID_REMEDY)
+    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=duration,
+                                   series={"quantity": record.quantity, "times": None},
                                    quantities=None))
     peaks = [float(np.max(np.abs(a["series"]))) for a in answers if "series" in a]
     if peaks:
@@ -184,9 +240,14 @@ def quantity_fields(request: "Optimization") -> dict[str, str]:
 
 def check_optimization(request: Optimization, limits: Limits = Limits()) -> Space:
     """Refuse, naming the field, variables the case cannot take and quantities the summary does
-    not have, without a run (the service's check before it queues). Returns the variables' space."""
+    not have, and a study whose least grid (the fewest cells every point within the bounds takes)
+    is over the limits, without a run (the service's check before it queues). Returns the
+    variables' space."""
     space = Space.of(request.variables, "variables")
-    space.check(request.case, "variables", limits)
+    case = study_case(request.case)
+    space.check(case, "variables")
+    check_grid(case, space.fewest_cells(case), case.numerics.duration, limits,
+               field="case.numerics.duration", remedy=DURATION_REMEDY)
     errors = [FieldError(field=field, message=(
                   f"{name!r} is not a number of the pulse summary: give a summary quantity such as "
                   + ", ".join(EXAMPLE_QUANTITIES)))

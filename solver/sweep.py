@@ -51,11 +51,11 @@ class Sweep(BaseModel):
         min_length=1, description="dotted field path → the values it takes; every combination runs")
 
 
-def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits = Limits(),
+def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits | None = Limits(),
              field: str = "parameters") -> list[tuple[dict[str, Any], Case]]:
     """Every (parameter values, validated case) of the sweep, or `CaseError` naming, for each bad
-    variant (invalid, or over a size limit), the parameter value it came from (as
-    `field[path][index]`) and what it breaks."""
+    variant (invalid, or over a size limit unless `limits` is None), the parameter value it came
+    from (as `field[path][index]`) and what it breaks."""
     names = list(sweep.parameters)
     for name, values in sweep.parameters.items():
         if not values:
@@ -75,7 +75,8 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits = Li
                 where = f"{field}[{name!r}][{k}]"
                 set_field(tree, name, value)
             case = parse_case(tree)
-            check_case(case, limits)
+            if limits is not None:
+                check_case(case, limits)
             found.append((values, case))
         except CaseError as error:
             for e in error.errors:
