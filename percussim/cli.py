@@ -357,17 +357,19 @@ def _study_on_service(args: argparse.Namespace, what: str, request: dict) -> dic
 def _calibrate(args: argparse.Namespace) -> int:
     from .solver.calibrate import calibrate
     from .solver.case import as_case
-    from .solver.record import read_record
+    from .solver.record import CLOCK_FIELDS, read_record
 
     def request() -> dict:
-        return {"case": as_case(_case_source(args.case)), "record": read_record(args.record),
+        clock = {name: getattr(args, name) for name in CLOCK_FIELDS if getattr(args, name) is not None}
+        return {"case": as_case(_case_source(args.case)), "record": read_record(args.record, **clock),
                 "parameters": dict(args.fit)}
 
     fit = _study(args, "calibration", request, calibrate)
     if isinstance(fit, int):
         return fit
     _write_study(fit, args, "fit", {key: fit[key] for key in (
-        "parameters", "correlation", "nrmse", "noise", "evaluations", "warnings", "grid", "seconds")})
+        "parameters", "correlation", "nrmse", "noise", "evaluations", "warnings", "record", "grid",
+        "seconds")})
     return 0
 
 
@@ -469,7 +471,17 @@ def parser() -> argparse.ArgumentParser:
     fit.add_argument("case", help="impact case JSON, or a preset's name")
     fit.add_argument("--record", required=True, metavar="RECORD.csv",
                      help="header time,<quantity> (contact_force, medium_force, stress@X, "
-                          "struck_end_velocity, working_end_velocity), then samples in SI units")
+                          "struck_end_velocity, working_end_velocity), then samples in SI units; "
+                          "or a header <quantity> alone, one value a line, with --sample-rate (or "
+                          "comment lines '# sample_rate = HZ' and '# time_start = S' before the header)")
+    fit.add_argument("--sample-rate", dest="sample_rate", type=float, metavar="HZ",
+                     help="an evenly sampled record's samples a second (its file then has no time column)")
+    fit.add_argument("--time-start", dest="time_start", type=float, metavar="S",
+                     help="with --sample-rate: the first sample's time (default 0)")
+    fit.add_argument("--time-offset", dest="time_offset", type=float, metavar="S",
+                     help="the model's time at the record's time 0 (a record triggered at its gauge: "
+                          "about x/c after the impact); left out, 0 for a record that starts at rest, "
+                          "else fitted (or fit it within bounds: --fit record.time_offset=LOW:HIGH)")
     fit.add_argument("--fit", type=_bounds, action="append", required=True, metavar="FIELD=LOW:HIGH",
                      help="a parameter and its bounds (repeat), e.g. contact.stiffness=1e9:1e13")
     optimise = commands.add_parser("optimize", help="find the fields' values that maximise or minimise "

@@ -43,6 +43,7 @@ MIN_SAMPLES = 20  # fewer say too little about any parameter's effect on the pul
 MAX_SAMPLES = 200_000
 REST_NOISE = 4.0  # a first sample within this many noise deviations of 0 is at rest...
 REST_SHARE = 0.02  # ...or within this share of the record's peak
+RISEN = 0.9  # of the peak: a pulse's front has risen (noise on a plateau moves the peak itself)
 CLOCK_FIELDS = ("time_start", "sample_rate", "time_offset")  # a CSV's comment lines may give them
 
 # quantity → (its history's path, its unit)
@@ -68,18 +69,19 @@ def printed_step(value: float) -> float:
 
 def even_sampling(time: list[float]) -> np.ndarray | None:
     """The even sampling that `time` rounds, if every instant lies within its rounding (half its
-    `printed_step`) of it; else None. The line is fitted through every instant, each weighted by
-    its rounding, which averages the rounding out (the two ends alone would leave their
-    rounding over the record's length in the sample rate)."""
+    `printed_step`) of it; else None. The line is fitted through the middles of consecutive
+    distinct instants, each at its half-sample: where rounding repeats a time, the middle is the
+    rounding's threshold, which the even sampling crossed within that sample, so the fit is good
+    to a fraction of a sample interval however coarse the rounding."""
     t = np.asarray(time, dtype=float)
-    if not t[-1] > t[0]:
+    changes = np.flatnonzero(np.diff(t) > 0.0)
+    if len(changes) < 2:
         return None
-    k = np.arange(len(t), dtype=float)
+    step, start = np.polyfit(changes + 0.5, 0.5 * (t[changes] + t[changes + 1]), 1)
+    even = start + step * np.arange(len(t))
     rounding = 0.5 * np.array([printed_step(v) for v in time])
-    floor = 1e-3 * float(np.median(rounding)) or 1e-15 * float(np.abs(t).max())
-    step, start = np.polyfit(k, t, 1, w=1.0 / np.maximum(rounding, floor))
-    even = start + step * k
-    return even if step > 0.0 and bool(np.all(np.abs(t - even) <= 1.01 * rounding + floor)) else None
+    slack = 1.01 * rounding + 1e-3 * float(np.median(rounding)) + 1e-12 * float(np.abs(t).max())
+    return even if step > 0.0 and bool(np.all(np.abs(t - even) <= slack)) else None
 
 
 class Record(BaseModel):
@@ -108,14 +110,14 @@ class Record(BaseModel):
     @model_validator(mode="after")
     def _consistent(self) -> "Record":
         if self.time is None and self.sample_rate is None:
+            if self.time_start is not None:
+                raise field_error("Record", ("sample_rate",), "is required with time_start", None)
             raise field_error("Record", ("time",), "is required: give the samples' times, or "
                               "time_start and sample_rate for an evenly sampled record", None)
         if self.time is not None and (self.sample_rate is not None or self.time_start is not None):
             name = "sample_rate" if self.sample_rate is not None else "time_start"
             raise field_error("Record", (name,), "cannot be given with time: give the times, or "
                               "time_start and sample_rate, not both", getattr(self, name))
-        if self.time_start is not None and self.sample_rate is None:
-            raise field_error("Record", ("sample_rate",), "is required with time_start", None)
         if self.time is not None:
             if len(self.values) != len(self.time):
                 raise field_error("Record", ("values",), f"must have one value per time: "
@@ -164,7 +166,8 @@ class Record(BaseModel):
         t = self.instants
         return [f"record.time repeats {repeats} of its {len(t)} instants, as rounding an even sampling "
                 f"does: read as {len(t)} samples evenly from {t[0]:.9g} to {t[-1]:.9g} s "
-                f"({(len(t) - 1) / (t[-1] - t[0]):.6g} Hz); give time_start and sample_rate to say so"]
+                f"({(len(t) - 1) / (t[-1] - t[0]):.4g} Hz, fitted through its instants); give "
+                "time_start and sample_rate to say so"]
 
     @property
     def unit(self) -> str:
@@ -192,12 +195,12 @@ class Record(BaseModel):
     def offset_bounds(self, case: Case) -> tuple[float, float]:
         """Where a fitted `time_offset` is sought by default: the pulse's arrival at the station,
         x/c (c the tool's wave speed), give or take the record's own rise (its first sample to
-        its peak), within which a trigger fires."""
+        the first that reaches `RISEN` of its peak), within which a trigger fires."""
         from .grid import wave_speed
 
-        values = np.asarray(self.values)
+        values = np.abs(np.asarray(self.values))
         t = self.instants
-        rise = float(t[int(np.argmax(np.abs(values)))] - t[0])
+        rise = float(t[int(np.argmax(values >= RISEN * values.max()))] - t[0])
         arrival = self.station(case) / wave_speed(case.tool)
         rise = max(rise, 1e-3 * arrival, float(t[1] - t[0]))
         return max(0.0, arrival - rise) - t[0], arrival + rise - t[0]
