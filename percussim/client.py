@@ -293,7 +293,8 @@ class Client:
         """Queue a fit of a case's parameters to a measured record, on the workers. `request` is
         that of a local `percussim.calibrate`: `{"case", "record", "parameters": {PATH: [low,
         high]}}`, with the case as for `submit` and the record a `Record`, its JSON
-        (`{"quantity", "x", "time", "values"}`) or the path of a CSV record (read here: one that
+        (`{"quantity", "x", "time", "values"}`, or `time_start` and `sample_rate` instead of
+        `time`, and a `time_offset`) or the path of a CSV record (read here: one that
         is not a record raises `percussim.CaseError` naming its line before anything is sent).
         Returns the study's record (`id`, `status` "queued", ...); raises `Refused` naming each
         offending field."""

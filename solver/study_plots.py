@@ -49,7 +49,10 @@ def fit_figure(fit: dict, name: str = "case") -> Figure:
     decorate(top, "", label)
     bottom.plot(t * scale_t, (record - model) * scale, lw=0.8, color="C3")
     bottom.axhline(0.0, color="0.3", lw=0.6)
-    decorate(bottom, f"time ({unit_t})", "record − model")
+    offset = fit["record"].get("time_offset") or 0.0
+    clock = f"time ({unit_t})" if offset == 0.0 else (
+        f"time on the record's clock ({unit_t}): the impact at {-offset * scale_t:.4g} {unit_t}")
+    decorate(bottom, clock, "record − model")
     fitted = ", ".join(f"{path} = {p['value']:.4g}" + (f" ± {p['standard_error']:.2g}"
                                                           if p["standard_error"] is not None else "")
                        for path, p in fit["parameters"].items())

@@ -1,5 +1,5 @@
 """One-dimensional impacts with closed forms: the cases and the formulas that the tests
-(test_striker_rod.py, test_media.py, test_blows.py) and the validation report
+(test_striker_rod.py, test_media.py, test_blows.py, test_measured_records.py) and the validation report
 (bench/validation.py) hold the solver to. docs/model.md derives each formula.
 
 A steel piston of length L_s at v strikes a steel tool of length L through a stiff linear contact.
@@ -14,6 +14,9 @@ An anvil (a lumped body between a lumped striker and the tool, `anvil_case`): th
 short stiff contact part as two-body impact says (`two_body_impact`); with linear contacts on a tool
 whose far end sends nothing back, striker, anvil and struck end are a linear system whose matrix
 exponential gives the forces (`linear_three_bodies`).
+
+A split Hopkinson bar (`Hopkinson`): a uniform striker on a uniform bar through a contact spring,
+by d'Alembert (`rods_through_a_spring`), and the record a recorder triggered by the pulse writes.
 
 Plain Python, NumPy and SciPy: no test framework, no solver.
 """
@@ -246,3 +249,63 @@ def rods_through_a_spring(velocity: float, striker_transit: float, striker_imped
         force[k + 1] = stiffness * max(delta, 0.0)
         sent[k + 1] = force[k + 1] - returning(grid[k + 1])
     return np.interp(times, grid, force)
+
+
+class Hopkinson:
+    """The incident bar of a split Hopkinson bar: steel, Ø20 mm, 2.1 m, a strain gauge 1.082 m
+    from the struck end, and a striker of the bar's own section at 5 m/s: a pulse of ρ·c·v/2 =
+    101.5 MPa lasting 2·L_s/c = 236 µs, its front rising over 20 µs (10–90%) through a contact
+    spring. The record a recorder triggered by the pulse writes: 12.5 MHz from where the stress
+    reaches 10% of its plateau, for 340 µs (before the bar's far end sends anything back)."""
+
+    E, RHO = 2.1e11, 7850.0
+    AREA = math.pi * 0.010**2
+    C = math.sqrt(E / RHO)
+    Z = RHO * C * AREA
+    BAR, GAUGE = 2.1, 1.082  # m
+    VELOCITY, STRIKER = 5.0, 0.61  # m/s, m
+    RISE = 20e-6  # s, 10–90% of the front: the contact's time constant Z/(2k) times ln 9
+    STIFFNESS = (Z / 2.0) / (RISE / math.log(9.0))
+    RATE = 12.5e6  # Hz
+    TRIGGER = 0.10  # of the plateau: where the recorder starts
+    SPAN = 340e-6  # s of record
+    NOISE = 0.01  # of the plateau
+
+    @classmethod
+    def case(cls, velocity: float = VELOCITY, length: float = STRIKER, stiffness: float = STIFFNESS) -> dict:
+        rod = {"youngs_modulus": cls.E, "density": cls.RHO, "area": cls.AREA}
+        return {"name": "shpb", "striker": {"velocity": velocity, "length": length, **rod},
+                "tool": {"length": cls.BAR, **rod}, "contact": {"stiffness": stiffness, "exponent": 0.0},
+                "numerics": {"duration": 6.5e-4}}
+
+    @classmethod
+    def gauge_stress(cls, times: np.ndarray) -> np.ndarray:
+        """The stress at the gauge (compression negative) at the model's `times`: the struck end's
+        force x/c earlier, until the bar's far end sends its reflection back, at (2L − x)/c."""
+        assert times[-1] < (2.0 * cls.BAR - cls.GAUGE) / cls.C
+        force = rods_through_a_spring(cls.VELOCITY, cls.STRIKER / cls.C, cls.Z, cls.Z, cls.STIFFNESS,
+                                      np.maximum(times - cls.GAUGE / cls.C, 0.0))
+        return -force / cls.AREA
+
+    @classmethod
+    def triggered_record(cls, seed: int = 0, digits: int = 3) -> tuple[str, float]:
+        """The record as CSV, its time column rounded to `digits` significant digits, from the
+        trigger; and the true time_offset (the trigger's instant after the impact)."""
+        fine = np.arange(0.0, 3e-4, 1e-8)
+        trigger = fine[np.argmax(cls.gauge_stress(fine) <= -cls.TRIGGER * cls.RHO * cls.C * cls.VELOCITY / 2.0)]
+        times = trigger + np.arange(0.0, cls.SPAN, 1.0 / cls.RATE)
+        values = cls.gauge_stress(times)
+        values = values + cls.NOISE * np.abs(values).max() * np.random.default_rng(seed).standard_normal(len(times))
+        lines = [f"time,stress@{cls.GAUGE}"] + [f"{t:.{digits}g},{v:.6g}" for t, v in zip(times - trigger, values)]
+        return "\n".join(lines) + "\n", float(trigger)
+
+    @classmethod
+    def half_width_excess(cls) -> float:
+        """How much longer than 2·L_s/c the pulse's half-amplitude width is (s). The contact spring
+        (time constant τ = Z/(2k)) loads as 1 − e^(−s/τ), half at τ·ln 2; after the striker's round
+        trip it unloads as (1 + s/τ)·e^(−s/τ) (from `rods_through_a_spring`'s equation), half at
+        τ·1.6783: the width is 2·L_s/c + τ·(1.6783 − ln 2)."""
+        from scipy.optimize import brentq
+
+        tau = (cls.Z / 2.0) / cls.STIFFNESS
+        return tau * (brentq(lambda x: (1.0 + x) * math.exp(-x) - 0.5, 0.5, 5.0) - math.log(2.0))

@@ -11,9 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from scipy.optimize import brentq
-
-from closed_forms import rods_through_a_spring
+from closed_forms import Hopkinson as H
 from percussim.cli import main
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
@@ -22,51 +20,6 @@ from percussim.solver.grid import explicit_numerics
 from percussim.solver.record import (Record, even_sampling, parse_record, printed_step, read_record,
                                      record_from_csv, record_to_csv)
 from percussim.solver.study import OFFSET, check_calibration, fitted_bounds, parse_calibration
-
-# The incident bar of a split Hopkinson bar: steel, Ø20 mm, 2.1 m, a gauge 1.082 m from the
-# struck end, and a striker of the bar's own section.
-E, RHO = 2.1e11, 7850.0
-AREA = math.pi * 0.010**2
-C = math.sqrt(E / RHO)
-Z = RHO * C * AREA
-BAR, GAUGE = 2.1, 1.082
-VELOCITY, STRIKER = 5.0, 0.61  # m/s, m: a pulse of ρ·c·v/2 = 101.5 MPa lasting 2·L_s/c = 236 µs
-RISE = 20e-6  # s, 10–90% of the pulse's front: the contact's time constant Z/2/k times ln 9
-STIFFNESS = (Z / 2.0) / (RISE / math.log(9.0))
-RATE = 12.5e6  # Hz
-TRIGGER = 0.10  # of the plateau: where the recorder starts
-SPAN = 340e-6  # s of record from the trigger, before the bar's far end sends anything back
-NOISE = 0.01  # of the plateau
-
-
-def bar_case(velocity: float = VELOCITY, length: float = STRIKER, stiffness: float = STIFFNESS) -> dict:
-    return {"name": "shpb", "striker": {"velocity": velocity, "length": length, "youngs_modulus": E,
-                                        "density": RHO, "area": AREA},
-            "tool": {"length": BAR, "youngs_modulus": E, "density": RHO, "area": AREA},
-            "contact": {"stiffness": stiffness, "exponent": 0.0}, "numerics": {"duration": 6.5e-4}}
-
-
-def gauge_stress(times: np.ndarray) -> np.ndarray:
-    """The stress at the gauge (compression negative) at the model's `times`: the struck end's
-    force x/c earlier, until the bar's far end sends its reflection back, at (2L − x)/c."""
-    assert times[-1] < (2.0 * BAR - GAUGE) / C
-    force = rods_through_a_spring(VELOCITY, STRIKER / C, Z, Z, STIFFNESS, np.maximum(times - GAUGE / C, 0.0))
-    return -force / AREA
-
-
-def triggered_record(seed: int = 0, digits: int = 3) -> tuple[str, float]:
-    """The record as a CSV with its time column rounded to `digits` significant digits, starting
-    where the stress first reaches `TRIGGER` of its plateau; and the true time_offset."""
-    fine = np.arange(0.0, 3e-4, 1e-8)
-    stress = gauge_stress(fine)
-    trigger = fine[np.argmax(stress <= -TRIGGER * RHO * C * VELOCITY / 2.0)]
-    times = trigger + np.arange(0.0, SPAN, 1.0 / RATE)
-    values = gauge_stress(times)
-    values = values + NOISE * np.abs(values).max() * np.random.default_rng(seed).standard_normal(len(times))
-    clock = times - trigger
-    lines = [f"time,stress@{GAUGE}"] + [f"{t:.{digits}g},{v:.6g}" for t, v in zip(clock, values)]
-    return "\n".join(lines) + "\n", float(trigger)
-
 
 def wave_theory(record: Record) -> dict[str, float]:
     """The wave theory's reading of the record: v = 2|σ|/(ρc) from the plateau (the median of the
@@ -82,47 +35,37 @@ def wave_theory(record: Record) -> dict[str, float]:
     rise = np.interp(half, s[first - 1:first + 1], t[first - 1:first + 1])
     fall = np.interp(half, s[last:last + 2][::-1], t[last:last + 2][::-1])
     impulse = float(np.sum(s) * (t[1] - t[0]))
-    return {"velocity": 2.0 * plateau / (RHO * C), "half_width_length": C * (fall - rise) / 2.0,
-            "impulse_length": C * impulse / plateau / 2.0}
-
-
-def half_width_excess() -> float:
-    """How much longer than 2·L_s/c the half-amplitude width of this pulse is (s). The contact
-    spring (time constant τ = Z/(2k)) loads as 1 − e^(−s/τ), half at τ·ln 2; after the striker's
-    round trip it unloads as (1 + s/τ)·e^(−s/τ) (d'Alembert, as in `rods_through_a_spring`),
-    half at τ·1.6783: the width is 2·L_s/c + τ·(1.6783 − ln 2)."""
-    tau = (Z / 2.0) / STIFFNESS
-    fall = brentq(lambda x: (1.0 + x) * math.exp(-x) - 0.5, 0.5, 5.0)
-    return tau * (fall - math.log(2.0))
+    return {"velocity": 2.0 * plateau / (H.RHO * H.C), "half_width_length": H.C * (fall - rise) / 2.0,
+            "impulse_length": H.C * impulse / plateau / 2.0}
 
 
 def test_the_closed_form_pulse_is_the_kernels_on_a_fine_grid():
     """The record's maker against the solver on 4000 cells: within 0.5% of the plateau."""
-    case = parse_case(bar_case() | {"outputs": {"probes": [GAUGE]}})
+    case = parse_case(H.case() | {"outputs": {"probes": [H.GAUGE]}})
     run = simulate_rod(case, numerics=explicit_numerics(case, 4000))
     times = np.arange(0.0, 6.0e-4, 1e-7)
     kernel = np.interp(times, run.history["time"], run.probe_stress[:, 0])
-    plateau = RHO * C * VELOCITY / 2.0
-    assert np.abs(gauge_stress(times) - kernel).max() <= 5e-3 * plateau
-    assert -gauge_stress(times).min() == pytest.approx(plateau, rel=1e-3)
+    plateau = H.RHO * H.C * H.VELOCITY / 2.0
+    assert np.abs(H.gauge_stress(times) - kernel).max() <= 5e-3 * plateau
+    assert -H.gauge_stress(times).min() == pytest.approx(plateau, rel=1e-3)
 
 
 def test_a_triggered_shpb_record_is_fitted_within_3_standard_errors_and_2_percent_of_wave_theory():
-    text, offset = triggered_record()
+    text, offset = H.triggered_record()
     record = record_from_csv(text)
     assert len(record.notes) == 1 and "rounding an even sampling" in record.notes[0]
-    assert np.abs(record.instants - np.arange(len(record.values)) / RATE).max() < 1e-9
+    assert np.abs(record.instants - np.arange(len(record.values)) / H.RATE).max() < 1e-9
     assert not record.starts_at_rest()
-    start = bar_case(velocity=7.0, length=0.8, stiffness=2e9)
+    start = H.case(velocity=7.0, length=0.8, stiffness=2e9)
     fit = calibrate({"case": start, "record": record.model_dump(exclude_none=True),
                      "parameters": {"striker.velocity": [2.0, 10.0], "striker.length": [0.3, 1.0],
                                     "contact.stiffness": [1e8, 1e10]}}, processes=1)
     found = fit["parameters"]
-    truth = {"striker.velocity": VELOCITY, "striker.length": STRIKER, OFFSET: offset}
+    truth = {"striker.velocity": H.VELOCITY, "striker.length": H.STRIKER, OFFSET: offset}
     for name, value in truth.items():
         assert abs(found[name]["value"] - value) <= 3.0 * found[name]["standard_error"], (name, found[name])
-    assert found["striker.velocity"]["value"] == pytest.approx(VELOCITY, rel=0.005)
-    assert found["striker.length"]["value"] == pytest.approx(STRIKER, rel=0.005)
+    assert found["striker.velocity"]["value"] == pytest.approx(H.VELOCITY, rel=0.005)
+    assert found["striker.length"]["value"] == pytest.approx(H.STRIKER, rel=0.005)
     reading = wave_theory(record)
     assert found["striker.velocity"]["value"] == pytest.approx(reading["velocity"], rel=0.02)
     # The half-amplitude width of a pulse whose 20-µs front a contact spring makes is longer than
@@ -130,26 +73,26 @@ def test_a_triggered_shpb_record_is_fitted_within_3_standard_errors_and_2_percen
     # impulse's (the striker rebounds): the wave theory's length is 2% off the truth or more. The
     # fit's length is within 2% of the reading less that excess, and the fitted model, read the
     # same way, gives the record's reading within 2%.
-    excess = C * half_width_excess() / 2.0
-    assert reading["half_width_length"] - excess == pytest.approx(STRIKER, rel=0.005)
+    excess = H.C * H.half_width_excess() / 2.0
+    assert reading["half_width_length"] - excess == pytest.approx(H.STRIKER, rel=0.005)
     assert found["striker.length"]["value"] == pytest.approx(reading["half_width_length"] - excess, rel=0.02)
-    model = wave_theory(Record(quantity="stress", x=GAUGE, time=fit["series"]["time"], values=fit["series"]["model"]))
+    model = wave_theory(Record(quantity="stress", x=H.GAUGE, time=fit["series"]["time"], values=fit["series"]["model"]))
     for name in reading:
         assert model[name] == pytest.approx(reading[name], rel=0.02), name
     # the rise: the contact's stiffness within 10%
-    assert found["contact.stiffness"]["value"] == pytest.approx(STIFFNESS, rel=0.1)
+    assert found["contact.stiffness"]["value"] == pytest.approx(H.STIFFNESS, rel=0.1)
     assert fit["record"]["time_offset"] == found[OFFSET]["value"]
     assert fit["warnings"] == record.notes, fit["warnings"]
     assert fit["nrmse"] == pytest.approx(fit["noise"], rel=0.2)
 
 
 def test_a_record_1000_times_too_small_is_refused_naming_its_units():
-    """Strain given where stress is asked: 1/E off; here 1000× off, a prefix."""
-    text, _ = triggered_record()
+    """Values 1000× too small (a prefix off: kPa read as Pa)."""
+    text, _ = H.triggered_record()
     record = record_from_csv(text)
     small = record.model_dump(exclude_none=True) | {"values": [v / 1000.0 for v in record.values]}
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": bar_case(), "record": small,
+        check_calibration(parse_calibration({"case": H.case(), "record": small,
                                              "parameters": {"striker.velocity": [2.0, 10.0]}}))
     error = refused.value.errors[0]
     assert error.field == "record.values" and "SI units" in error.message and "Pa" in error.message
@@ -209,7 +152,7 @@ def test_inconsistent_clocks_are_refused_naming_the_field(change, field, words):
 def test_a_rounded_even_sampling_is_rebuilt_within_2_ns(start, digits):
     """At 12.5 MHz (80 ns a sample), times of 2 to 4 significant digits: up to 125 samples share a
     time."""
-    exact = start + np.arange(3000) / RATE
+    exact = start + np.arange(3000) / H.RATE
     rounded = [float(f"{t:.{digits}g}") for t in exact]
     record = parse_record({"quantity": "contact_force", "time": rounded,
                            "values": [math.sin(k / 50.0) for k in range(3000)]})
@@ -242,29 +185,29 @@ def test_the_printed_step_is_the_last_digits_unit():
 # Records triggered at arrival
 
 def test_a_record_at_rest_keeps_the_impact_as_its_time_zero_and_a_triggered_one_fits_its_offset():
-    text, offset = triggered_record()
+    text, offset = H.triggered_record()
     triggered = record_from_csv(text)
-    bounds = fitted_bounds(parse_calibration({"case": bar_case(), "record": triggered.model_dump(exclude_none=True),
+    bounds = fitted_bounds(parse_calibration({"case": H.case(), "record": triggered.model_dump(exclude_none=True),
                                               "parameters": {"striker.velocity": [2.0, 10.0]}}))
     low, high = bounds[OFFSET]
-    assert low < GAUGE / C < offset < high < GAUGE / C + 40e-6
-    at_rest = parse_record({"quantity": "stress", "x": GAUGE, "time_start": 0.0, "sample_rate": RATE,
-                            "values": gauge_stress(np.arange(0.0, 4e-4, 1.0 / RATE)).tolist()})
+    assert low < H.GAUGE / H.C < offset < high < H.GAUGE / H.C + 40e-6
+    at_rest = parse_record({"quantity": "stress", "x": H.GAUGE, "time_start": 0.0, "sample_rate": H.RATE,
+                            "values": H.gauge_stress(np.arange(0.0, 4e-4, 1.0 / H.RATE)).tolist()})
     assert at_rest.starts_at_rest()
-    assert OFFSET not in fitted_bounds(parse_calibration({"case": bar_case(), "record": at_rest.model_dump(exclude_none=True),
+    assert OFFSET not in fitted_bounds(parse_calibration({"case": H.case(), "record": at_rest.model_dump(exclude_none=True),
                                                           "parameters": {"striker.velocity": [2.0, 10.0]}}))
 
 
 def test_a_known_offset_is_used_and_cannot_be_fitted_too():
-    text, offset = triggered_record()
+    text, offset = H.triggered_record()
     record = record_from_csv(text).model_dump(exclude_none=True) | {"time_offset": offset}
-    fit = calibrate({"case": bar_case(velocity=7.0), "record": record,
+    fit = calibrate({"case": H.case(velocity=7.0), "record": record,
                      "parameters": {"striker.velocity": [2.0, 10.0]}}, processes=1)
     assert set(fit["parameters"]) == {"striker.velocity"}
-    assert fit["parameters"]["striker.velocity"]["value"] == pytest.approx(VELOCITY, rel=0.01)
+    assert fit["parameters"]["striker.velocity"]["value"] == pytest.approx(H.VELOCITY, rel=0.01)
     assert fit["record"]["time_offset"] == offset
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": bar_case(), "record": record,
+        check_calibration(parse_calibration({"case": H.case(), "record": record,
                                              "parameters": {OFFSET: [0.0, 3e-4]}}))
     assert refused.value.errors[0].field == f"parameters[{OFFSET!r}]"
 
@@ -272,13 +215,13 @@ def test_a_known_offset_is_used_and_cannot_be_fitted_too():
 def test_the_command_line_reads_an_evenly_sampled_record_with_flags(tmp_path, capsys):
     import json
 
-    text, offset = triggered_record()
+    text, offset = H.triggered_record()
     record = record_from_csv(text)
-    (tmp_path / "r.csv").write_text(f"stress@{GAUGE}\n" + "\n".join(f"{v!r}" for v in record.values) + "\n")
-    (tmp_path / "case.json").write_text(json.dumps(bar_case(velocity=7.0)))
+    (tmp_path / "r.csv").write_text(f"stress@{H.GAUGE}\n" + "\n".join(f"{v!r}" for v in record.values) + "\n")
+    (tmp_path / "case.json").write_text(json.dumps(H.case(velocity=7.0)))
     code = main(["calibrate", str(tmp_path / "case.json"), "--record", str(tmp_path / "r.csv"),
-                 "--sample-rate", str(RATE), "--time-offset", repr(offset),
+                 "--sample-rate", str(H.RATE), "--time-offset", repr(offset),
                  "--fit", "striker.velocity=2:10"])
     assert code == 0, capsys.readouterr().err
     shown = json.loads(capsys.readouterr().out)
-    assert shown["parameters"]["striker.velocity"]["value"] == pytest.approx(VELOCITY, rel=0.01)
+    assert shown["parameters"]["striker.velocity"]["value"] == pytest.approx(H.VELOCITY, rel=0.01)

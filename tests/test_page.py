@@ -215,6 +215,40 @@ def test_a_calibration_from_an_uploaded_record_shows_its_fit(page, stack, tmp_pa
     assert stack.client.get("/v1/jobs").json()["total"] == before
 
 
+def test_an_evenly_sampled_triggered_record_is_fitted_with_its_time_offset(page, stack, tmp_path):
+    """A split Hopkinson bar's record as a recorder writes it: one column under `# sample_rate`,
+    its clock started by the pulse at the gauge. The page reads the rate, sends the record as its
+    start and rate, and shows the fitted time_offset with its standard error beside the
+    striker's velocity."""
+    from closed_forms import Hopkinson as H
+
+    from percussim.solver.record import record_from_csv
+
+    text, offset = H.triggered_record()
+    record = record_from_csv(text)
+    (tmp_path / "shpb.csv").write_text(f"# gauge 1 of the incident bar\n# sample_rate = {H.RATE:g}\n"
+                                       f"stress@{H.GAUGE}\n" + "\n".join(f"{v:.6g}" for v in record.values) + "\n")
+    fill_json(page, json.dumps(H.case(velocity=7.0), indent=2))
+    page.click("#calibration-panel summary")
+    page.set_input_files("#record-file", str(tmp_path / "shpb.csv"))
+    expect(page.locator("#record-info")).to_contain_text(f"{len(record.values)} samples of stress at x = 1.082 m at 12.50 MHz")
+    for row in page.locator("#fit-parameters tbody tr").all()[1:]:
+        row.get_by_role("button", name="remove this row").click()
+    for cell, text in zip(page.locator("#fit-parameters tbody tr input").all(), ("striker.velocity", "2", "10")):
+        cell.fill(text)
+    with page.expect_request(lambda r: r.url.endswith("/v1/calibrations") and r.method == "POST") as posted:
+        page.click("#fit")
+    sent = json.loads(posted.value.post_data)["record"]
+    assert sent["sample_rate"] == H.RATE and "time" not in sent
+    expect(page.locator("#job-status")).to_have_text("succeeded", timeout=60_000)
+    fit = stack.client.get(f"/v1/calibrations/{shown_job(page)}").json()["fit"]
+    found = fit["parameters"]["record.time_offset"]
+    assert abs(found["value"] - offset) <= 3.0 * found["standard_error"]
+    cells = [t.strip() for t in page.locator("[data-parameter='record.time_offset'] td").all_inner_texts()]
+    assert cells[:2] == [shown(found["value"]), shown(found["standard_error"])]
+    assert fit["parameters"]["striker.velocity"]["value"] == pytest.approx(5.0, rel=0.01)
+
+
 def test_an_optimisation_shows_its_progress_and_best_design(page, stack):
     """The rock drill's piston length and speed for the most energy into the rock within a stress
     limit: the progress bar moves while it runs, then the best design, its limit, every run and

@@ -40,27 +40,41 @@ function rows(tableId) {
   return out;
 }
 
-// A CSV record as the API's JSON. Only its shape is read here (a header `time,<quantity>`, two
-// columns): the service checks the samples and names any bad one, which `lines` maps back to
-// its line in the file.
+// A CSV record as the API's JSON. Only its shape is read here (a header `time,<quantity>` and two
+// columns, or `<quantity>` and one column, with comment lines `# sample_rate = …`, `# time_start =
+// …`, `# time_offset = …` before the header): the service checks the samples and names any bad
+// one, which `lines` maps back to its line in the file.
+const CLOCK_FIELDS = ["time_start", "sample_rate", "time_offset"];
+
 function parseRecord(text) {
   const found = [];
+  const clock = {};
   text.split(/\r?\n/).forEach((line, i) => {
-    if (line.trim()) found.push([i + 1, line.split(",").map((cell) => cell.trim())]);
+    if (!line.trim()) return;
+    if (line.trim().startsWith("#")) {
+      const [name, ...value] = line.trim().slice(1).split("=");
+      if (!found.length && value.length && CLOCK_FIELDS.includes(name.trim())) clock[name.trim()] = typed(value.join("=").trim());
+      return;
+    }
+    found.push([i + 1, line.split(",").map((cell) => cell.trim())]);
   });
   if (!found.length) throw [{ field: "record", message: "the file is empty" }];
   const [[headerLine, header], ...samples] = found;
-  if (header.length !== 2 || header[0] !== "time") {
-    throw [{ field: `line ${headerLine}`, message: `must be the header time,<quantity>; found ${header.join(",")}` }];
+  const timed = header.length === 2 && header[0] === "time";
+  const known = /^(contact_force|medium_force|struck_end_velocity|working_end_velocity|stress@.*)$/;
+  if (!timed && (header.length !== 1 || !known.test(header[0]))) {
+    throw [{ field: `line ${headerLine}`, message: `must be the header time,<quantity> (or <quantity> alone, with # sample_rate = … above it); found ${header.join(",")}` }];
   }
-  const odd = samples.find(([, cells]) => cells.length !== 2);
-  if (odd) throw [{ field: `line ${odd[0]}`, message: `has ${odd[1].length} columns: give time,value` }];
-  const stress = header[1].startsWith("stress@");
+  const odd = samples.find(([, cells]) => cells.length !== header.length);
+  if (odd) throw [{ field: `line ${odd[0]}`, message: `has ${odd[1].length} columns: give ${timed ? "time,value" : "one value"}` }];
+  const label = header.at(-1);
+  const stress = label.startsWith("stress@");
   const record = {
-    quantity: stress ? "stress" : header[1],
-    ...(stress ? { x: typed(header[1].slice("stress@".length)) } : {}),
-    time: samples.map(([, cells]) => typed(cells[0])),
-    values: samples.map(([, cells]) => typed(cells[1])),
+    quantity: stress ? "stress" : label,
+    ...(stress ? { x: typed(label.slice("stress@".length)) } : {}),
+    ...clock,
+    ...(timed ? { time: samples.map(([, cells]) => typed(cells[0])) } : {}),
+    values: samples.map(([, cells]) => typed(cells.at(-1))),
   };
   return { record, lines: samples.map(([line]) => line) };
 }
@@ -75,10 +89,13 @@ async function chooseRecord() {
     measured = parseRecord(await file.text());
     showProblems(box, null);
     const { record } = measured;
-    const [first, last] = [record.time[0], record.time.at(-1)];
-    const span = typeof first === "number" && typeof last === "number" ? ` over ${us(first)}–${us(last)} µs` : "";
+    const count = record.values.length;
+    const [first, last] = record.time ? [record.time[0], record.time.at(-1)]
+      : [record.time_start || 0, (record.time_start || 0) + (count - 1) / record.sample_rate];
+    const span = Number.isFinite(first) && Number.isFinite(last) ? ` over ${us(first)}–${us(last)} µs` : "";
+    const rate = record.sample_rate ? ` at ${fmt(record.sample_rate / 1e6)} MHz` : "";
     const where = record.quantity === "stress" ? ` at x = ${fmt(record.x)} m` : "";
-    info.textContent = `${file.name}: ${record.time.length} samples of ${record.quantity}${where}${span}.`;
+    info.textContent = `${file.name}: ${count} samples of ${record.quantity}${where}${rate}${span}.`;
   } catch (problems) {
     if (!Array.isArray(problems)) throw problems;
     info.textContent = "";
