@@ -62,10 +62,10 @@ SAME_MISFIT = 4.0  # residual variances: starts whose sums of squares differ les
 class _Problem:
     """The fit's residual on one grid, each run counted and cancellable. The record's
     time_offset, when fitted, moves the instants the model is read at, not the run: points that
-    differ in it alone share one run."""
+    differ in it alone share one run. `cells` is the grid of every run, once chosen."""
 
-    def __init__(self, base: dict, space: Space, record: Record, cells: int, evaluator: Evaluator,
-                 cancelled: CancelCheck | None):
+    def __init__(self, base: dict, space: Space, record: Record, evaluator: Evaluator,
+                 cancelled: CancelCheck | None, cells: int = 0):
         self.base, self.space, self.record, self.cells = base, space, record, cells
         self.evaluator, self.cancelled = evaluator, cancelled
         self.case_space = space.without(OFFSET)
@@ -83,6 +83,10 @@ class _Problem:
         if self.offset_at is None:
             return values, self.record.time_offset or 0.0
         return np.delete(values, self.offset_at), float(values[self.offset_at])
+
+    def case_at(self, u: np.ndarray) -> Case:
+        """The case at a point of the unit cube."""
+        return Case.model_validate(self.case_space.tree(self.base, self.split(u)[0]))
 
     def model(self, units: list[np.ndarray]) -> list[np.ndarray]:
         """The model's series at the record's instants, per point of the unit cube."""
@@ -168,8 +172,8 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
     own = space.own(case)
     base = case.model_dump(mode="json", exclude_none=True)
     base["outputs"] = record.outputs()
-    problem = _Problem(base, space, record, 0, evaluator, cancelled)
-    own_case = Case.model_validate(problem.case_space.tree(base, problem.split(own)[0]))
+    problem = _Problem(base, space, record, evaluator, cancelled)
+    own_case = problem.case_at(own)
     problem.cells = study_grid(own_case, problem.case_space, None, limits)
     check_grid(own_case, problem.cells, problem.duration, limits, field="record.time", remedy=GRID_REMEDY)
 
@@ -195,7 +199,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
 
     refinements, moved = 0, 0.0
     while True:
-        finer = _Problem(base, space, record, 2 * problem.cells, evaluator, cancelled)
+        finer = _Problem(base, space, record, evaluator, cancelled, cells=2 * problem.cells)
         try:
             check_grid(own_case, finer.cells, finer.duration, limits, field="record.time", remedy=GRID_REMEDY)
         except CaseError:

@@ -53,11 +53,25 @@ def fit_figure(fit: dict, name: str = "case") -> Figure:
     clock = f"time ({unit_t})" if offset == 0.0 else (
         f"time on the record's clock ({unit_t}): the impact at {-offset * scale_t:.4g} {unit_t}")
     decorate(bottom, clock, "record − model")
-    fitted = ", ".join(f"{path} = {p['value']:.4g}" + (f" ± {p['standard_error']:.2g}"
-                                                          if p["standard_error"] is not None else "")
-                       for path, p in fit["parameters"].items())
-    fig.suptitle(f"Fit of {name}: nrmse {fit['nrmse']:.3g}\n{fitted}", fontsize="medium")
+    fitted = [f"{path} = {p['value']:.4g}" + (f" ± {p['standard_error']:.2g}" if p["standard_error"] is not None else "")
+              for path, p in fit["parameters"].items()]
+    fig.suptitle(f"Fit of {name}: nrmse {fit['nrmse']:.3g}\n" + _lines(fitted, TITLE_WIDTH), fontsize="medium")
     return fig
+
+
+TITLE_WIDTH = 100  # characters of a title's line: the figure's width at its font
+
+
+def _lines(items: list[str], width: int) -> str:
+    """`items` joined by commas, a new line before one that would pass `width`."""
+    lines = [items[0]]
+    for item in items[1:]:
+        if len(lines[-1]) + 2 + len(item) > width:
+            lines[-1] += ","
+            lines.append(item)
+        else:
+            lines[-1] += ", " + item
+    return "\n".join(lines)
 
 
 def convergence_figure(answer: dict, name: str = "case") -> Figure:

@@ -309,3 +309,20 @@ class Hopkinson:
 
         tau = (cls.Z / 2.0) / cls.STIFFNESS
         return tau * (brentq(lambda x: (1.0 + x) * math.exp(-x) - 0.5, 0.5, 5.0) - math.log(2.0))
+
+    @classmethod
+    def reading(cls, times: np.ndarray, stress) -> dict[str, float]:
+        """The wave theory's reading of an incident pulse: v = 2|σ|/(ρc) from the plateau (the
+        median of the middle half between the half-amplitude crossings); L_s = c·T/2 from the
+        half-amplitude width T (crossings interpolated linearly), and from the impulse's width
+        ∫|σ|dt/|σ_plateau| (which is 2·L_s/c only when the striker is left at rest)."""
+        t, s = np.asarray(times), -np.asarray(stress)
+        rough = np.median(s[s > 0.5 * s.max()])
+        above = np.flatnonzero(s >= 0.5 * rough)
+        first, last = above[0], above[-1]
+        plateau = float(np.median(s[first + (last - first) // 4: last - (last - first) // 4]))
+        rise = np.interp(0.5 * plateau, s[first - 1:first + 1], t[first - 1:first + 1])
+        fall = np.interp(0.5 * plateau, s[last:last + 2][::-1], t[last:last + 2][::-1])
+        impulse = float(np.sum(s) * (t[1] - t[0]))
+        return {"velocity": 2.0 * plateau / (cls.RHO * cls.C), "half_width_length": cls.C * (fall - rise) / 2.0,
+                "impulse_length": cls.C * impulse / plateau / 2.0}
