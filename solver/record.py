@@ -38,6 +38,7 @@ import numpy as np
 from pydantic import BaseModel, Field, model_validator
 
 from .case import INPUT, Case, CaseError, FieldError, field_error, validated
+from .grid import wave_speed
 
 MIN_SAMPLES = 20  # fewer say too little about any parameter's effect on the pulse
 MAX_SAMPLES = 200_000
@@ -196,8 +197,6 @@ class Record(BaseModel):
         """Where a fitted `time_offset` is sought by default: the pulse's arrival at the station,
         x/c (c the tool's wave speed), give or take the record's own rise (its first sample to
         the first that reaches `RISEN` of its peak), within which a trigger fires."""
-        from .grid import wave_speed
-
         values = np.abs(np.asarray(self.values))
         t = self.instants
         rise = float(t[int(np.argmax(values >= RISEN * values.max()))] - t[0])

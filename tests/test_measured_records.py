@@ -68,16 +68,17 @@ def test_a_triggered_shpb_record_is_fitted_within_3_standard_errors_and_2_percen
     assert fit["nrmse"] == pytest.approx(fit["noise"], rel=0.2)
 
 
-def test_a_record_1000_times_too_small_is_refused_naming_its_units():
-    """Values 1000× too small (a prefix off: kPa read as Pa)."""
+@pytest.mark.parametrize("factor", [1e-3, 1.0 / H.E], ids=["1000 times too small", "strain, not stress"])
+def test_a_record_in_other_units_is_refused_naming_its_units(factor):
+    """Values 1000× too small (a prefix off: kPa read as Pa), or the gauge's strain itself."""
     text, _ = H.triggered_record()
     record = record_from_csv(text)
-    small = record.model_dump(exclude_none=True) | {"values": [v / 1000.0 for v in record.values]}
+    small = record.model_dump(exclude_none=True) | {"values": [v * factor for v in record.values]}
     with pytest.raises(CaseError) as refused:
         check_calibration(parse_calibration({"case": H.case(), "record": small,
                                              "parameters": {"striker.velocity": [2.0, 10.0]}}))
     error = refused.value.errors[0]
-    assert error.field == "record.values" and "SI units" in error.message and "Pa" in error.message
+    assert error.field == "record.values" and "SI units" in error.message and "(Pa)" in error.message
 
 
 # Evenly sampled records
