@@ -67,9 +67,9 @@ def _print_summary(summary: dict, path: str | None) -> int:
 
 def _limits():
     """The size limits of local runs: the service's settings (`PERCUSSIM_MAX_*`) read here too."""
-    from percussim.worker.settings import Settings
+    from percussim.worker.settings import load
 
-    return Settings().limits()
+    return load().limits()
 
 
 def _run(args: argparse.Namespace) -> int:
@@ -538,6 +538,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser().parse_args(argv)
     try:
         return args.handler(args)
+    except ValueError as error:
+        from percussim.worker.settings import SettingsError
+
+        if not isinstance(error, SettingsError):
+            raise
+        for line in str(error).splitlines():
+            print(f"percussim: {line}", file=sys.stderr)
+        return EXIT_INVALID
     except ModuleNotFoundError as error:
         extra = EXTRA_OF.get((error.name or "").partition(".")[0])
         if extra is None:

@@ -95,3 +95,27 @@ def test_run_progress_goes_to_stderr_and_stdout_stays_the_summary(tmp_path):
     # Not a terminal, and short: no bar unless forced.
     quiet = _percussim("run", "fig9", cwd=ROOT)
     assert "%|" not in quiet.stderr and json.loads(quiet.stdout) == json.loads(forced.stdout)
+
+
+def test_a_bad_setting_is_one_line_naming_the_variable_with_exit_2(tmp_path):
+    """In `run`, `serve` and `worker` alike: no traceback, the variable, its value and what it
+    accepts; whole numbers may be written as 1e8."""
+    import os
+
+    def percussim(env: dict, *args):
+        return subprocess.run([sys.executable, "-m", "percussim", *args], cwd=tmp_path, capture_output=True,
+                              text=True, env={**os.environ, "PERCUSSIM_RESULTS_DIR": str(tmp_path), **env},
+                              timeout=120)
+
+    for command in (["run", "fig3"], ["serve", "--port", "1"], ["worker"]):
+        done = percussim({"PERCUSSIM_MAX_STEPS": "1e8.5", "PERCUSSIM_MAX_NODE_STEPS": "lots"}, *command)
+        assert done.returncode == 2, (command, done.stderr)
+        assert done.stderr.splitlines() == [
+            "percussim: PERCUSSIM_MAX_STEPS=1e8.5: must be a whole number, as 20000000 or 2e7",
+            "percussim: PERCUSSIM_MAX_NODE_STEPS=lots: must be a number, as 2e10"], command
+    refused = percussim({"PERCUSSIM_JOB_TIME_LIMIT": "-1"}, "serve", "--port", "1")
+    assert refused.returncode == 2 and refused.stderr == "percussim: PERCUSSIM_JOB_TIME_LIMIT=-1: must be greater than 0\n"
+    # 1e8 and 1e3 are whole numbers: the limit applies (fig3 on the paper's grid takes 4820 steps)
+    assert percussim({"PERCUSSIM_MAX_STEPS": "1e8"}, "run", "fig3").returncode == 0
+    small = percussim({"PERCUSSIM_MAX_STEPS": "1e3"}, "run", "fig3")
+    assert small.returncode == 2 and "exceed the limit of 1000 (PERCUSSIM_MAX_STEPS raises it)" in small.stderr

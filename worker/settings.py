@@ -11,11 +11,36 @@ from __future__ import annotations
 
 from functools import lru_cache
 from pathlib import Path
+from typing import Annotated, Any
 
-from pydantic import Field, model_validator
+from pydantic import BeforeValidator, Field, ValidationError, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from percussim.solver.limits import Limits
+
+PREFIX = "PERCUSSIM_"
+
+
+def _whole(value: Any) -> Any:
+    """A whole number as people write a limit: 20000000, 2e7 or 20_000_000 (else left for the
+    integer check to refuse)."""
+    if isinstance(value, str):
+        text = value.strip().replace("_", "")
+        try:
+            number = float(text)
+        except ValueError:
+            return value
+        return int(number) if number.is_integer() and abs(number) < 2**63 else value
+    return value
+
+
+Whole = Annotated[int, BeforeValidator(_whole)]
+ACCEPTS = {"int_parsing": "a whole number, as 20000000 or 2e7", "float_parsing": "a number, as 2e10"}
+
+
+class SettingsError(ValueError):
+    """`PERCUSSIM_*` variables that cannot be read: one line each, naming the variable, its value
+    and what it accepts."""
 
 
 class Settings(BaseSettings):
@@ -33,12 +58,12 @@ class Settings(BaseSettings):
     redelivery_seconds: float | None = Field(
         default=None, gt=0, description="seconds after which a job whose worker died is delivered "
                                         "again (Redis); default job_time_limit + 120, never less")
-    max_cells: int = Limits.max_cells
-    max_steps: int = Limits.max_steps
+    max_cells: Whole = Limits.max_cells
+    max_steps: Whole = Limits.max_steps
     max_node_steps: float = Limits.max_node_steps
     max_output_values: float = Limits.max_output_values
-    max_sweep_variants: int = Field(default=1000, ge=1, description="variants one sweep may queue")
-    max_body_bytes: int = Field(default=2_000_000, ge=1024, description="largest request body accepted")
+    max_sweep_variants: Whole = Field(default=1000, ge=1, description="variants one sweep may queue")
+    max_body_bytes: Whole = Field(default=2_000_000, ge=1024, description="largest request body accepted")
     api_keys: str | None = Field(default=None, description="comma-separated API keys; none: no keys needed")
     cors_origins: str | None = Field(default=None, description="comma-separated origins browsers may call from")
 
@@ -77,6 +102,24 @@ def _items(text: str | None) -> list[str]:
     return [item.strip() for item in (text or "").split(",") if item.strip()]
 
 
+def load() -> Settings:
+    """The settings from the environment now; `SettingsError` names each bad variable."""
+    try:
+        return Settings()
+    except ValidationError as error:
+        lines = []
+        for problem in error.errors():
+            message = ACCEPTS.get(problem["type"], problem["msg"].removeprefix("Value error, "))
+            message = message.replace("Input should be ", "")
+            if not problem["loc"]:  # a rule between two variables, which it names itself
+                lines.append(message)
+                continue
+            name = PREFIX + str(problem["loc"][0]).upper()
+            lines.append(f"{name}={problem['input']!s}: must be {message}")
+        raise SettingsError("\n".join(lines)) from None
+
+
 @lru_cache
 def settings() -> Settings:
-    return Settings()
+    """The settings, read once a process."""
+    return load()
