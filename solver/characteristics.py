@@ -37,7 +37,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from .compiled import compiled
 
 from .case import Case
 from .grid import area_integral, tool_area, wave_speed
@@ -58,7 +58,7 @@ MIN_SUBSTEPS = 4
 MAX_SUBSTEPS = 100_000
 
 
-@njit(cache=True)
+@compiled()
 def _external_force(t, kind, amplitude, omega, start, duration):
     if kind == FORCE_SINE:
         return amplitude * math.sin(omega * t)
@@ -69,7 +69,7 @@ def _external_force(t, kind, amplitude, omega, start, duration):
     return 0.0
 
 
-@njit(cache=True)
+@compiled()
 def _next_break(t, kind, omega, start, duration):
     """The first instant after t where R(t) jumps or kinks (inf when there is none)."""
     if kind == FORCE_PULSE:
@@ -84,7 +84,7 @@ def _next_break(t, kind, omega, start, duration):
     return math.inf
 
 
-@njit(cache=True)
+@compiled()
 def _spring(delta, c1, alpha, c0):
     """G(δ)·δ and its derivative in δ."""
     if delta >= 0.0:
@@ -92,7 +92,7 @@ def _spring(delta, c1, alpha, c0):
     return c0 * delta, c0
 
 
-@njit(cache=True)
+@compiled()
 def _contact_force(y, w, u0, incoming, c1, alpha, c0, b1, z):
     """F_c from the striker (y, w), the struck end u_0 and the arriving wave (`incoming` = 2·N⁻):
     the damper sees `δ' = w − u_0'`, `u_0' = (F_c + incoming)/Z`, solved for F_c."""
@@ -100,14 +100,14 @@ def _contact_force(y, w, u0, incoming, c1, alpha, c0, b1, z):
     return (spring + b1 * (w - incoming / z)) / (1.0 + b1 / z)
 
 
-@njit(cache=True)
+@compiled()
 def _arriving(t, p, wave):
     """The arriving wave (2·N⁻ at the struck end) at t: `wave` = (its mean over the step, its
     change over the step), the step starting at p[11] and lasting p[14]."""
     return wave[0] + wave[1] * ((t - p[11]) / p[14] - 0.5)
 
 
-@njit(cache=True)
+@compiled()
 def _struck_rates(t, s, wave, p, out):
     """d/dt of (y, w, u_0, work of R, impulse of F_c) at the struck end."""
     c1, alpha, c0, b1, m1, z = p[0], p[1], p[2], p[3], p[4], p[5]
@@ -121,7 +121,7 @@ def _struck_rates(t, s, wave, p, out):
     out[4] = force
 
 
-@njit(cache=True)
+@compiled()
 def _struck_substep(t, dt, s, wave, p, out, k, stage):
     """One RK4 substep of the struck end from t, written to `out`. R is evaluated on the substep's
     own side of a break (the caller never lets a substep straddle one)."""
@@ -135,7 +135,7 @@ def _struck_substep(t, dt, s, wave, p, out, k, stage):
         out[q] = s[q] + dt / 6.0 * (k[0, q] + 2.0 * k[1, q] + 2.0 * k[2, q] + k[3, q])
 
 
-@njit(cache=True)
+@compiled()
 def _struck_rate_bound(s, incoming, p):
     """The struck end's fastest rate: contact relaxation against the tool, the striker's
     oscillation on the contact, the damper against the striker."""
@@ -146,7 +146,7 @@ def _struck_rate_bound(s, incoming, p):
     return k / (z + b1) + math.sqrt(k / m1) + b1 * z / (m1 * (z + b1))
 
 
-@njit(cache=True)
+@compiled()
 def _observe_struck(t, force, area0, obs):
     if force > obs[O_PEAK_FORCE]:
         obs[O_PEAK_FORCE] = force
@@ -157,7 +157,7 @@ def _observe_struck(t, force, area0, obs):
         obs[O_TENSION], obs[O_TENSION_X], obs[O_TENSION_TIME] = -force / area0, 0.0, t
 
 
-@njit(cache=True)
+@compiled()
 def _vertex(t0, dt, earliest, f0, f1, f2):
     """Maximum of the parabola through (t0 − dt, f0), (t0, f1), (t0 + dt, f2) when f1 is the
     largest and the four samples from `earliest` (at t0 − 2·dt) are a parabola's (third difference
@@ -170,7 +170,7 @@ def _vertex(t0, dt, earliest, f0, f1, f2):
     return f1 - 0.25 * (f0 - f2) * offset, t0 + offset * dt
 
 
-@njit(cache=True)
+@compiled()
 def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
     """Advance the struck end over [t_step, t_step + τ] under the arriving `wave`: substeps,
     breaks of R, events δ = 0 (each located by bisection on the substep length) and the extreme
@@ -247,7 +247,7 @@ def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
     return _contact_force(s[0], s[1], s[2], _arriving(t_end, p, wave), p[0], p[1], p[2], p[3], z)
 
 
-@njit(cache=True)
+@compiled()
 def _working_end_step(tau, s, wave, c2, b2, z, area, t_step, length, obs):
     """Advance the working end over one step under the arriving `wave` (2·N⁺: its mean and change
     over the step): RK4 substeps of `u_L' = −(incoming + c2·u_L)/(Z + b2)`, with ∫b2·u_L'² and ∫F_m
@@ -285,7 +285,7 @@ def _working_end_step(tau, s, wave, c2, b2, z, area, t_step, length, obs):
     return c2 * s[0] - b2 * (incoming + c2 * s[0]) / (z + b2)
 
 
-@njit(cache=True)
+@compiled()
 def _limited(before, now, after):
     """The change over a step of a wave whose means over it and its neighbours are given: the
     smaller of the two one-sided changes, 0 where they disagree in sign (minmod)."""
@@ -295,7 +295,7 @@ def _limited(before, now, after):
     return left if abs(left) < abs(right) else right
 
 
-@njit(cache=True)
+@compiled()
 def _run(h, tau, steps, last_fraction, cell_area, cell_z, striker, medium, obs, history, stride):
     """March `steps` whole steps and a last one of `last_fraction`·τ (the ends only: the run ends
     at exactly the duration). Cell j holds its right- and left-going waves' forces; `striker`

@@ -69,10 +69,11 @@ from collections import namedtuple
 
 import numpy as np
 from llvmlite import ir
-from numba import njit, types
+from numba import types
 from numba.core import cgutils
 from numba.extending import intrinsic
 
+from .compiled import compiled
 from .layout import (ENERGY_SLOTS, E_ANVIL_KINETIC, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
                      E_EXTERNAL_WORK, E_LAUNCHED, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
                      E_STRIKER_STRAIN, E_TOOL_KINETIC, E_WITHDRAWN,
@@ -212,7 +213,7 @@ def new_observed(max_contacts: int) -> Observed:
     return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)))
 
 
-@njit(cache=True)
+@compiled()
 def boundary_weights(weights, tau):
     """How the end rows and the boundary terms of the scheme (`Weights`) weight the layers.
 
@@ -228,7 +229,7 @@ def boundary_weights(weights, tau):
     return Boundary(end_weight=end_weight, spring_weight=1.0, damper_factor=1.0 / tau, back=1)
 
 
-@njit(cache=True)
+@compiled()
 def segment_layout(n):
     """`(length, head)`: nodes `1 … head` are swept serially, nodes `head+1 … n` as `SEGMENTS`
     segments of `length` nodes (none when the tool is too short for them)."""
@@ -236,7 +237,7 @@ def segment_layout(n):
     return length, n - SEGMENTS * length
 
 
-@njit(cache=True)
+@compiled()
 def factor_tool_rows(tool, rod, weights, medium):
     """Eliminate rows u_N … u_1 once (`ToolRows`): `P`, `1/den`, the coefficient `c` of `Q_{i+1}`
     in `Q_i = rhs_i/den_i + c_i·Q_{i+1}`, and the segments' multiples of their carries: for node i
@@ -279,7 +280,7 @@ def factor_tool_rows(tool, rod, weights, medium):
                     coefficient_product=coefficient_product, p_product=p_product)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def segment_starts(length, head):
     """The segments' length and first nodes, unsigned (`segment_layout`)."""
     size = np.uint64(length)
@@ -287,7 +288,7 @@ def segment_starts(length, head):
     return size, b0, b0 + size, b0 + np.uint64(2) * size, b0 + np.uint64(3) * size
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def sweep_toward_struck_end(u, row, rows, length, head):
     """`Q_i = a_i + c_i·Q_{i+1}` for i = n … 1, row `row` of `u` holding `a_i` on entry, with the
     factors `rows` (`ToolRows`) and the segments of `segment_layout`.
@@ -322,7 +323,7 @@ def sweep_toward_struck_end(u, row, rows, length, head):
     return first, (carry_0, carry_1, carry_2, carry_3)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def substitute_toward_working_end(u, row, rows, length, head, x_0, carries):
     """`u_i = P_i·u_{i−1} + Q_i` for i = 1 … n from `u_0 = x_0`, row `row` of `u` holding what
     `sweep_toward_struck_end` left, with its carries: the true Q are made on the way."""
@@ -355,7 +356,7 @@ def substitute_toward_working_end(u, row, rows, length, head, x_0, carries):
         before = after
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def external_force(t, force):
     """`R(t)` of the `ForceLaw`: P·sin(ωt), P·|sin(ωt)|, or P on [t1, t1 + Δt]."""
     kind, amplitude, omega, start, duration = force
@@ -369,7 +370,7 @@ def external_force(t, force):
     return 0.0
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def contact_law(delta, contact):
     """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
     separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
@@ -381,7 +382,7 @@ def contact_law(delta, contact):
     return c0 * delta, 0.5 * c0 * delta * delta
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def contact_spring(delta, contact):
     """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
     exponents without a power."""
@@ -397,7 +398,7 @@ def contact_spring(delta, contact):
     return c0 * delta, c0
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def quotient_force(delta, ref, ref_potential, contact):
     """`(Φ(δ) − Φ_ref)/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref).
 
@@ -414,7 +415,7 @@ def quotient_force(delta, ref, ref_potential, contact):
     return spring, 0.5 * stiffness
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def bracketed_newton_step(x, g, slope, lo, hi, scale):
     """One Newton step on an increasing g, g(x) = `g`, g'(x) = `slope`, within the bracket [lo, hi]
     narrowed by the sign of g; a step that leaves it is replaced by bisection. Returns the new x,
@@ -429,7 +430,7 @@ def bracketed_newton_step(x, g, slope, lo, hi, scale):
     return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
 
 
-@njit(cache=True)
+@compiled()
 def solve_overlap(free, compliance, ref, ref_potential, guess, contact, damper):
     """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
 
@@ -454,7 +455,7 @@ def solve_overlap(free, compliance, ref, ref_potential, guess, contact, damper):
     return x
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def crossing(before_that, before, now):
     """Where in the last step (0 … 1) the overlap crossed zero, on the parabola through its last
     three values (a straight line when it has only two); third order, so the contact times' error
@@ -474,7 +475,7 @@ def crossing(before_that, before, now):
     return linear
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def node_stress(u, recorded, i, step):
     """`σ_i = E·∂u/∂x` (tension +) at node i of the `Recorded` layer: central inside; at the ends
     the end force over the area."""
@@ -522,13 +523,13 @@ ANVIL_PHASE = 0.2
 ANVIL_SUBSTEPS = 64
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def substeps(rate, span, limit):
     """Substeps of `span` that keep (`rate` × substep) within `limit`."""
     return min(MAX_SUBSTEPS, max(1, math.ceil(rate * span / limit)))
 
 
-@njit(cache=True)
+@compiled()
 def solve_spring_balance(target, compliance, guess, contact):
     """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
     `target` and `target − compliance·Φ'(target)`, where `bracketed_newton_step` finds it (on one
@@ -556,7 +557,7 @@ def solve_spring_balance(target, compliance, guess, contact):
     return x
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def link_force(delta, approach, mobility, contact):
     """A contact's force from its overlap δ, the speed `approach` its faces would close at were it
     off, and its `mobility`, how they give way to it (1/Z at a rod's end, 0 at a mass):
@@ -565,7 +566,7 @@ def link_force(delta, approach, mobility, contact):
     return (contact_spring(delta, contact)[0] + b * approach) / (1.0 + b * mobility)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def struck_forces(x, v_in, v_face, contact, striker, anvil):
     """`(F1, F2)`: the contact's force and the force on the tool's struck end (F1 without an
     anvil) in the state `x` = (y, w, y_a, w_a, u_0) under the waves arriving now, at the struck
@@ -583,7 +584,7 @@ def struck_forces(x, v_in, v_face, contact, striker, anvil):
     return force, force
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil):
     """The rates of the state `x` = (y, w, y_a, w_a, u_0) under the contact force F1, the force
     F2 on the tool's end and R, with the velocities a stage `X = x + g·X'` has (g = 0: at x):
@@ -605,7 +606,7 @@ def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil)
     return y_rate, w_rate, ya_rate, wa_rate, end_force / impedance + 2.0 * v_in
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def moved(x, span, rates, striker):
     """`x + span·rates`; an elastic striker's w is its face's velocity, the rate of y."""
     w = rates[0] if striker.elastic else x[1] + span * rates[1]
@@ -613,7 +614,7 @@ def moved(x, span, rates, striker):
             x[4] + span * rates[4])
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def overlap_rates(rates, anvil):
     """δ1' and δ2' from the state's rates (δ1 = y − y_a, δ2 = y_a − u_0; δ1 = y − u_0 and no δ2
     without an anvil)."""
@@ -622,7 +623,7 @@ def overlap_rates(rates, anvil):
     return rates[0] - rates[4], 0.0
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def spring_stage(free, base, compliance, g, guess, contact):
     """`(F, δ)` of one contact within a stage: `δ = free − compliance·F`,
     `F = Φ'(δ) + b·(δ − base)/g` (its damper sees the stage's δ' = (δ − base)/g)."""
@@ -632,7 +633,7 @@ def spring_stage(free, base, compliance, g, guess, contact):
     return contact_spring(delta, contact)[0] + contact.damping * (delta - base) / g, delta
 
 
-@njit(cache=True)
+@compiled()
 def anvil_balance(free, base, gives, g, guess, contact, end):
     """`(F1, F2, δ1, δ2)` of the two contacts of a stage with an anvil: `δ = free − C·F`,
     `C = [[a + b, −b], [−b, b + t]]` (`gives` = (a, b, t): how the striker's face, the anvil and
@@ -672,7 +673,7 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
             contact_spring(delta2, end)[0] + d2 * (delta2 - base[1]), delta1, delta2)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
     """One implicit stage `X = x + g·X'` of the striker, the anvil and the struck end
     (`body_rates`): linear but for the contacts' springs Φ'(δ), so one equation in δ = y − u_0, or
@@ -695,14 +696,14 @@ def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
                          contact, anvil.contact)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def mean_velocity(impulse, contact, striker):
     """An elastic striker's mean velocity, its momentum over its mass, after the contact's
     `impulse`."""
     return contact.striker_velocity - impulse / striker.mass
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def force_on_substep(t, t_a, t_b, force):
     """R at t on a substep [t_a, t_b] that no break of R crosses: a pulse takes its value at the
     substep's midpoint, so that both ends of the substep see its side of a jump."""
@@ -711,7 +712,7 @@ def force_on_substep(t, t_a, t_b, force):
     return external_force(t, force)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def next_break(t, force):
     """The first instant after t where R jumps or kinks (inf when there is none)."""
     if force.kind == FORCE_PULSE:
@@ -728,7 +729,7 @@ def next_break(t, force):
     return math.inf
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def hermite(a, b, rate_a, rate_b, span, s):
     """The cubic with values a, b and rates rate_a, rate_b at the ends of a span, at fraction s."""
     s2 = s * s
@@ -737,7 +738,7 @@ def hermite(a, b, rate_a, rate_b, span, s):
             + (3.0 * s2 - 2.0 * s3) * b + (s3 - s2) * span * rate_b)
 
 
-@njit(cache=True)
+@compiled()
 def hermite_root(a, b, rate_a, rate_b, span):
     """Where in [0, 1] the cubic of `hermite` crosses zero (a and b of opposite signs)."""
     lo, hi = 0.0, 1.0
@@ -753,7 +754,7 @@ def hermite_root(a, b, rate_a, rate_b, span):
     return 0.5 * (lo + hi)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def limited_slope(before, now, after, tau):
     """The slope within a step of a rate whose means over it and its neighbours are given: the
     smaller of the two one-sided slopes, 0 where they disagree in sign (minmod)."""
@@ -763,7 +764,7 @@ def limited_slope(before, now, after, tau):
     return (left if abs(left) < abs(right) else right) / tau
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     """Substeps over a stretch of `span` for the struck end's links: each contact relaxing against
     what gives way to it, at its stiffness at the overlap the stretch may reach, and an anvil's
@@ -797,7 +798,7 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     return max(count, min(ANVIL_SUBSTEPS, substeps(math.sqrt(omega2), span, ANVIL_PHASE)))
 
 
-@njit(cache=True)
+@compiled()
 def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, events):
     """Advance the striker, the anvil and the struck end over [t0, t0 + τ] under the incoming
     waves' rates `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
@@ -900,7 +901,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     return work, dissipated, count, (f_max, t_max), (e_max, te_max, e_min, te_min)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def working_end_step(tau, state, v_mean, v_slope, medium):
     """Advance the working end over one step under the incoming wave's rate
     `v_in(t) = v_mean + v_slope·(t − τ/2)` (t from the step's start):
@@ -958,13 +959,13 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
 # against the law.
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def medium_state(ends):
     """The medium's state `(set, deepest, surface, spent)` from its end slots."""
     return ends[S_MEDIUM], ends[S_MEDIUM + 1], ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def static_resistance(u, state, medium):
     """F_s(u): rock loads at k beyond its deepest penetration and unloads at k_u above its set;
     soil is elastic at k = R_u/q above its set up to R_u; neither pulls (F_s ≥ 0)."""
@@ -977,7 +978,7 @@ def static_resistance(u, state, medium):
     return min(medium.ultimate_resistance, max(0.0, k * (u - set_)))
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def medium_energy(u, state, medium):
     """`(stored, plastic)`: what the medium would give back unloading from u, and what its
     permanent penetration cost (module comment above)."""
@@ -993,7 +994,7 @@ def medium_energy(u, state, medium):
     return 0.5 * f * f / k, medium.ultimate_resistance * set_
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def yielded(u, state, medium):
     """The medium's state after a substep that ended at u."""
     set_, deepest, surface, spent = state
@@ -1006,7 +1007,7 @@ def yielded(u, state, medium):
     return set_, deepest, surface, spent
 
 
-@njit(cache=True)
+@compiled()
 def fresh_rock(u, state, medium):
     """Rock's state as a new blow meets it at u: a loading starts from where the end is, at k
     (`deepest` = u, the `surface` its line passes through at the present F_s), so that F_s, the
@@ -1021,7 +1022,7 @@ def fresh_rock(u, state, medium):
     return set_, new_deepest, new_surface, spent
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def yielding_stage(base, g, v_in, state, medium):
     """One implicit stage `u = base + g·u'(u)` of the working end on a yielding medium in `state`,
     with `u' = 2·v_in − F/Z`. Returns `(u, u', F, F_s)`.
@@ -1069,7 +1070,7 @@ def yielding_stage(base, g, v_in, state, medium):
     return set_ + f_s / k, rate, f_s * (1.0 + j * rate), f_s
 
 
-@njit(cache=True)
+@compiled()
 def yielding_end_step(tau, state, v_mean, v_slope, medium):
     """`working_end_step` for a medium that yields: `state` = (u_N, F_m, set, deepest, surface,
     spent) (the medium's state, the `S_MEDIUM_…` slots' values); the dampers' dissipation (b2, or
@@ -1133,7 +1134,7 @@ STRESS_BLOCK = 64
 #   vectorises them beside the sums only with both). Sound: a non-finite displacement makes the
 #   kinetic energy non-finite, which `advance` checks before it uses the stresses, and a stress of
 #   −0 or +0 is the same record.
-@njit(cache=True, fastmath={"contract", "reassoc", "nnan", "nsz"})
+@compiled(fastmath={"contract", "reassoc", "nnan", "nsz"})
 def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_sigma,
                              half_e_over_h):
     """The tool's energy terms between the layers in rows `new`, `cur` of `u` and the interior
@@ -1177,7 +1178,7 @@ def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_
     return kinetic, strain, low, low_start, high, high_start
 
 
-@njit(cache=True, fastmath={"nnan"})
+@compiled(fastmath={"nnan"})
 def first_node(u, row, half_e_over_h, start, value):
     """The first node of the block from `start` where the stress is `value` (its last if none)."""
     one = np.uint64(1)
@@ -1190,7 +1191,7 @@ def first_node(u, row, half_e_over_h, start, value):
 
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
     """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
     contact); the first one to close sets the co-impact time and the rebound velocity."""
@@ -1214,7 +1215,7 @@ def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
         ends[S_CONTACT_START] = t_cross
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
     """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
     `Overlaps`: a change of sign placed on the parabola through the last three overlaps."""
@@ -1223,7 +1224,7 @@ def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
         track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def vertex(earliest, before_that, before, now):
     """The maximum between four equally spaced samples whose third is a strict maximum: the vertex
     of the parabola through the last three, `(value, where it lies from the third sample in
@@ -1238,7 +1239,7 @@ def vertex(earliest, before_that, before, now):
     return before, 0.0
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_end_extreme(extremes, slot, value, x, t):
     if value > extremes[slot]:
         extremes[slot] = value
@@ -1282,7 +1283,7 @@ def uncounted(typingctx, bundle):
     return bundle(bundle), codegen
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def step_constants(tool, rod, weights, contact, anvil):
     """What every step derives from the bundles (`StepConstants`)."""
     n = len(tool.node_area) - 1
@@ -1314,7 +1315,7 @@ def step_constants(tool, rod, weights, contact, anvil):
     )
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def launch_striker(state, row, row_before, at, contact, striker, tau):
     """The striker at `at` in the layer in `row`, moving at W1 in it and in the layer before
     (`row_before`), unstrained: an elastic striker's incoming waves each carry W1/2."""
@@ -1337,7 +1338,7 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
         ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
 
 
-@njit(cache=True)
+@compiled()
 def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
     had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
@@ -1375,7 +1376,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     ends[S_CONTACT_START] = t
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step):
     """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
     from the first instant), an anvil at 0 between them moving at its own velocity; and layer −1
@@ -1407,7 +1408,7 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, s
                     working_end_stress=0.0)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def known_layers(u, layer, i, weight_cur, weight_old):
     """The known layers' combination `v = w_n·u^n + w_{n−1}·u^{n−1}` at nodes i − 1, i, i + 1."""
     _, cur, old, _ = layer
@@ -1416,7 +1417,7 @@ def known_layers(u, layer, i, weight_cur, weight_old):
             weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1])
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def right_hand_sides(u, layer, tool, rows, rod, weights, step):
     """Right-hand sides of the tool's rows u_1 … u_{N−1} over their diagonals, into row `new` of
     `u` (the sweep turns them into the Q_i there). The known layers enter the operator as one
@@ -1439,7 +1440,7 @@ def right_hand_sides(u, layer, tool, rows, rod, weights, step):
             u[new, i] = (2.0 * u[cur, i] - u[old, i] + r * lap) * inv_den[i]
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def explicit_interior(u, layer, tool, r, n):
     """The explicit scheme's interior nodes 1 … n−1 of the new layer: uncoupled (den_i = 1)."""
     new, cur, old, _ = layer
@@ -1458,7 +1459,7 @@ def explicit_interior(u, layer, tool, r, n):
 NO_CARRIES = (0.0, 0.0, 0.0, 0.0)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def sweep(u, layer, rows, step):
     """The sweep toward the struck end: `(Q_1, carries)`, Q_1 the tool's link to the struck end
     `u_1 = P_1·u_0 + Q_1` (`sweep_toward_struck_end`). The explicit scheme's rows are uncoupled:
@@ -1469,7 +1470,7 @@ def sweep(u, layer, rows, step):
     return sweep_toward_struck_end(u, layer.new, rows, length, head)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def back_substitute(u, layer, u_0, carries, rows, step):
     """The substitution toward the working end from the new `u_0`: the new layer in row `new`."""
     if step.explicit:
@@ -1486,7 +1487,7 @@ def back_substitute(u, layer, u_0, carries, rows, step):
 # What the tool touches enters a step only here (the module's docstring says how).
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def working_end_diagonal(tool, rod, weights, medium):
     """The diagonal of the working end's row u_N: `M_N/τ² + θ·k_N + θ_s·c2 + b2·d`, the end node's
     mass, the end cell's stiffness and the medium's spring and damper, weighted as the scheme
@@ -1498,7 +1499,7 @@ def working_end_diagonal(tool, rod, weights, medium):
             + medium.damping * damper_factor)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def working_end_row(u, layer, rows, rod, weights, medium, step):
     """The right-hand side of the working end's row u_N over its diagonal, into row `new` of `u`
     (where the sweep starts from it): the end node's inertia, the medium's spring and damper on the
@@ -1516,7 +1517,7 @@ def working_end_row(u, layer, rows, rod, weights, medium, step):
     u[new, n] = rhs * rows.inv_den[n]
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def working_end_force(u, layer, medium, step):
     """The medium's force on the new layer, `c2·u_N + b2·u_N'` as the scheme weights them."""
     new, _, _, ref = layer
@@ -1526,7 +1527,7 @@ def working_end_force(u, layer, medium, step):
             + medium.damping * damper_factor * (u[new, n] - u[ref, n]))
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, step):
     """The striker row (11) and the struck end's row (9) of the step, solved with the contact.
 
@@ -1561,7 +1562,7 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
     return (b_y - contact_force) / a_y, (b_0 + contact_force) / a_0, contact_force
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force,
                    scratch, step):
     """The ends that integrate their own equations, over the step to `t`: the waves arriving at
@@ -1624,7 +1625,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     return True, velocity, end_state[3], end_state[8], far_state[1], flows
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def rate_integral(rates, tau, a, b, power):
     """∫ v(s)^power ds over [a, b] (power 1 or 2) for a rate linear within each step: `rates` =
     (mean, slope) of this step, on [0, τ], and of the two before it, on [−τ, 0] and [−2τ, −τ]."""
@@ -1643,14 +1644,14 @@ def rate_integral(rates, tau, a, b, power):
     return total
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def back_rates(ends, now):
     """The back end's incoming rate over this step (`now`) and the two before, for `rate_integral`."""
     return (now, (ends[S_BACK_RATE], ends[S_BACK_RATE + 1]),
             (ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3]))
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def free_back_end(striker_u, layer, ends, striker, tau):
     """An elastic striker's back end, free, `back_delay` beyond its last node: the node moves at
     the wave arriving at it plus that wave as the free end returns it, `back_delay` later:
@@ -1670,7 +1671,7 @@ def free_back_end(striker_u, layer, ends, striker, tau):
     ends[S_BACK_RATE], ends[S_BACK_RATE + 1] = now
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def incoming_wave(u, layer, inner, edge, ends, slot, tau):
     """For the ends that integrate their own equations: the mean rate over this step of the wave
     arriving at the end node `edge` (its neighbour `inner`) and its slope within the step. Its
@@ -1689,7 +1690,7 @@ def incoming_wave(u, layer, inner, edge, ends, slot, tau):
 # --- Energy audit, extremes, recording ------------------------------------------------------------
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod,
                         step):
     """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
@@ -1727,7 +1728,7 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     return balance, (low, low_block, high, high_block)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool,
                            step):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
@@ -1778,7 +1779,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     return balance, (low, low_block, high, high_block)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_energy_excess(extremes, balance):
     """Whether the energy balance is finite; the largest energy the scheme created so far."""
     if not abs(balance) < 1e300:
@@ -1788,7 +1789,7 @@ def track_energy_excess(extremes, balance):
     return True
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod,
                               step):
     """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
@@ -1809,7 +1810,7 @@ def track_ends_between_layers(extremes, contact_range, end_range, working_range,
     track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_stress_extremes(extremes, u, recorded, interior, rod, step):
     """The recorded layer's extreme stresses along the tool (`interior`: its interior nodes' least
     and greatest stress with their blocks, `tool_energy_and_stresses`) against the records.
@@ -1836,7 +1837,7 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
             extremes[slot + 2] = recorded.time
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_vertex):
     """The peak contact force and the end stresses' extremes between layers, from the recorded
     layer's end forces and those of the three layers before it (carried in `ends`); at the struck
@@ -1877,7 +1878,7 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
     ends[S_MEDIUM_FORCE] = medium_force
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def record_history(recorders, column, state, recorded, m_rec, force, anvil, step):
     """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
     them; none yet for layer 0, whose energy is all the striker's)."""
@@ -1919,7 +1920,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
         history[H_MEDIUM_PLASTIC, column] = energy[0, E_MEDIUM_PLASTIC]
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def record_probes(recorders, row, u, recorded, step):
     """The stress at each probe into `row` of `probes`: linear between its two nodes."""
     for k in range(len(recorders.probe_node)):
@@ -1931,7 +1932,7 @@ def record_probes(recorders, row, u, recorded, step):
         recorders.probes[row, k] = s
 
 
-@njit(cache=True, inline="always")
+@compiled(inline="always")
 def record_fields(recorders, row, state, recorded, striker, step):
     """The displacement and the stress along the tool into `row` of the fields, and along an
     elastic striker: its x runs from its face away from the tool, so its stress is `−E·∂u/∂x`
@@ -1956,7 +1957,7 @@ def record_fields(recorders, row, state, recorded, striker, step):
 # CPU has one: each of the two recurrences along the tool then has a single operation a node on its
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
-@njit(cache=True, fastmath={"contract"})
+@compiled(fastmath={"contract"})
 def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state,
             observed, recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).

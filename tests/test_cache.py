@@ -1,9 +1,13 @@
 """A new process finds the kernel in Numba's cache and does not compile it again."""
 
 import json
+import os
+import shutil
 import subprocess
 import sys
 from pathlib import Path
+
+import pytest
 
 PROBE = """
 import json
@@ -22,3 +26,47 @@ def test_a_new_process_loads_the_compiled_kernel():
                                       text=True, check=True, timeout=300).stdout) for _ in range(2)]
     # The first run may have filled the cache; the second must only read it.
     assert runs[1] == {"hits": 1, "misses": 0}
+
+
+STALE_PROBE = """
+import json
+from percussim.solver import kernel
+from percussim.solver.controller import simulate_rod
+from percussim.solver.presets import load_preset
+result = simulate_rod(load_preset("fig3"))
+s = kernel.advance.stats
+print(json.dumps({"kernel": kernel.__file__, "hits": sum(s.cache_hits.values()),
+                  "misses": sum(s.cache_misses.values()),
+                  "peak": result.summary["peak_contact_force"]["value"],
+                  "force": result.history["contact/force"].tolist()}))
+"""
+SLOTS = "H_CONTACT_FORCE, H_OVERLAP, H_MEDIUM_FORCE, H_EXTERNAL_FORCE = 5, 6, 7, 8"
+
+
+@pytest.mark.slow
+def test_a_changed_slot_constant_recompiles_the_kernel(tmp_path):
+    """A copy of the package, run warm; then two history slots swapped in layout.py alone (the
+    kernel's own file unchanged, which is all Numba's cache checks): the next run compiles again
+    and records the contact force where the controller reads it."""
+    root = Path(__file__).resolve().parents[1]
+    package = tmp_path / "percussim"
+    shutil.copytree(root / "percussim", package, ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(root / "solver", package / "solver", ignore=shutil.ignore_patterns("__pycache__"))
+    env = {**os.environ, "PYTHONPATH": str(tmp_path)}
+    env.pop("NUMBA_CACHE_DIR", None)  # the copy's own cache, in its __pycache__
+
+    def probe() -> dict:
+        done = subprocess.run([sys.executable, "-c", STALE_PROBE], cwd=tmp_path, capture_output=True, text=True,
+                              env=env, timeout=600)
+        assert done.returncode == 0, done.stderr
+        return json.loads(done.stdout)
+
+    first, warm = probe(), probe()
+    assert Path(first["kernel"]).is_relative_to(tmp_path)
+    assert warm["misses"] == 0 and warm["hits"] == 1 and warm["force"] == first["force"]
+    layout = package / "solver" / "layout.py"
+    assert SLOTS in layout.read_text()
+    layout.write_text(layout.read_text().replace(SLOTS, SLOTS.replace("5, 6", "6, 5")))
+    swapped = probe()
+    assert swapped["misses"] == 1 and swapped["hits"] == 0
+    assert swapped["force"] == first["force"] and swapped["peak"] == first["peak"]

@@ -1,0 +1,53 @@
+"""How the kernel is compiled and kept: Numba's on-disk cache, in a folder named after a hash of
+every source of the solver, so that machine code compiled from other sources is never loaded.
+
+Numba checks a cached function against its own file's time stamp and size only (numba issue
+1833): a change to a module it reads constants from, such as `layout.py`'s slots, would leave the
+old machine code in use, and wrong numbers with no error. Here a change to any source of the
+solver moves the cache to a new folder, and the next run compiles again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+from functools import lru_cache
+from pathlib import Path
+
+from numba import njit
+from numba.core import config
+
+SOLVER = Path(__file__).resolve().parent
+
+
+@lru_cache(maxsize=1)
+def sources_hash() -> str:
+    """A hash of every Python source of the solver, by path and content."""
+    digest = hashlib.sha256()
+    for path in sorted(SOLVER.rglob("*.py")):
+        digest.update(path.relative_to(SOLVER).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()[:16]
+
+
+@lru_cache(maxsize=1)
+def cache_folder() -> str:
+    """Where the compiled kernel is kept: a folder for these sources in `NUMBA_CACHE_DIR` when it
+    is set (a read-only install's), else in the solver's `__pycache__` when the solver's folder can
+    be written, else in the user's cache."""
+    base = os.environ.get("NUMBA_CACHE_DIR") or (
+        str(SOLVER / "__pycache__") if os.access(SOLVER, os.W_OK) else str(Path.home() / ".cache" / "percussim"))
+    return os.path.join(base, f"percussim-{sources_hash()}")
+
+
+def compiled(**options):
+    """`numba.njit(cache=True, **options)` with its cache in `cache_folder()`. Numba reads the
+    cache's folder when a function is decorated, so it is set for that moment only: other Numba
+    code in the process keeps its own."""
+    def decorate(function):
+        previous = config.CACHE_DIR
+        config.CACHE_DIR = cache_folder()
+        try:
+            return njit(cache=True, **options)(function)
+        finally:
+            config.CACHE_DIR = previous
+    return decorate
