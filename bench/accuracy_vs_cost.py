@@ -29,8 +29,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 
-from percussim.solver.case import CaseError, parse_case  # noqa: E402
 from percussim.solver.accuracy import estimated_values  # noqa: E402
+from percussim.solver.case import CaseError, parse_case  # noqa: E402
 from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
 from percussim.solver.grid import resolve_numerics, wave_speed  # noqa: E402
 from percussim.solver.presets import preset_json  # noqa: E402
@@ -96,8 +96,10 @@ def cheapest(rows, target: float) -> tuple[float, int] | None:
 
 
 def table(results: dict) -> str:
-    lines = [f"| preset | scheme | error ≤ 1e-2 | error ≤ 1e-3 | error ≤ 1e-4 | error at {LADDER[-1]} cells |",
-             "|---|---|---|---|---|---|"]
+    lines = [
+        f"| preset | scheme | error ≤ 1e-2 | error ≤ 1e-3 | error ≤ 1e-4 | error at {LADDER[-1]} cells |",
+        "|---|---|---|---|---|---|",
+    ]
     for name, r in results.items():
         for scheme, rows in r["ladder"].items():
             cells = []
@@ -138,15 +140,23 @@ def main() -> None:
     print(found)
     if not args.write:
         return
-    text = ["# Speed against accuracy", "",
-            "Written by `bench/accuracy_vs_cost.py --write` (rerun it to check). Error: the largest "
-            "relative error over the headline quantities against the converged reference of an "
-            "independent method (the characteristics solver). Cost: CPU time of one run on one core, "
-            "the least over repeats, after compilation, without the companion runs that estimate a "
-            "fixed grid's error. All schemes at Courant number 1, on ladders of cells 2^(k/4)·10. A "
-            "grid meets an accuracy when it and every finer grid of its ladder do.", "",
-            "## Cheapest run that reaches an accuracy (CPU time, and cells)", "", found, "",
-            "![largest relative error against CPU time](accuracy_vs_cost.png)", ""]
+    text = [
+        "# Speed against accuracy",
+        "",
+        "Written by `bench/accuracy_vs_cost.py --write` (rerun it to check). Error: the largest "
+        "relative error over the headline quantities against the converged reference of an "
+        "independent method (the characteristics solver). Cost: CPU time of one run on one core, "
+        "the least over repeats, after compilation, without the companion runs that estimate a "
+        "fixed grid's error. All schemes at Courant number 1, on ladders of cells 2^(k/4)·10. A "
+        "grid meets an accuracy when it and every finer grid of its ladder do.",
+        "",
+        "## Cheapest run that reaches an accuracy (CPU time, and cells)",
+        "",
+        found,
+        "",
+        "![largest relative error against CPU time](accuracy_vs_cost.png)",
+        "",
+    ]
     (ROOT / "docs" / "accuracy_vs_cost.md").write_text("\n".join(text))
     plot(results, ROOT / "docs" / "accuracy_vs_cost.png")
     readme = ROOT / "README.md"

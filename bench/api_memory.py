@@ -53,11 +53,15 @@ def main() -> None:
             for job_id in ids:
                 stack.wait_status(job_id, ("succeeded",))
             print(f"API process (percussim serve --no-worker), pid {api}:")
-            rows = [("resident after start-up", f"{before / 1024:.1f} MB"),
-                    (f"resident after {args.jobs} jobs and {args.jobs} refusals",
-                     f"{status_kb(api, 'VmRSS') / 1024:.1f} MB"),
-                    ("peak resident (VmHWM)", f"{status_kb(api, 'VmHWM') / 1024:.1f} MB"),
-                    ("Numba's extensions mapped", "yes" if maps_numba(api) else "no")]
+            rows = [
+                ("resident after start-up", f"{before / 1024:.1f} MB"),
+                (
+                    f"resident after {args.jobs} jobs and {args.jobs} refusals",
+                    f"{status_kb(api, 'VmRSS') / 1024:.1f} MB",
+                ),
+                ("peak resident (VmHWM)", f"{status_kb(api, 'VmHWM') / 1024:.1f} MB"),
+                ("Numba's extensions mapped", "yes" if maps_numba(api) else "no"),
+            ]
             for label, value in rows:
                 print(f"  {label:<42}{value:>10}")
         finally:

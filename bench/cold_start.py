@@ -53,11 +53,15 @@ def fresh_process(repeat: int) -> None:
     walls, phases = [], []
     for _ in range(repeat):
         start = time.perf_counter()
-        subprocess.run([sys.executable, "-m", "percussim", "run", "fig3"], cwd=ROOT,
-                       check=True, capture_output=True)
+        subprocess.run([sys.executable, "-m", "percussim", "run", "fig3"], cwd=ROOT, check=True, capture_output=True)
         walls.append(time.perf_counter() - start)
-        phases.append(json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=ROOT, check=True,
-                                                capture_output=True, text=True).stdout))
+        phases.append(
+            json.loads(
+                subprocess.run(
+                    [sys.executable, "-c", PROBE], cwd=ROOT, check=True, capture_output=True, text=True
+                ).stdout
+            )
+        )
     print("A fresh process (percussim run fig3):")
     print(line("whole process, wall", walls))
     for phase in phases[0]:
@@ -75,13 +79,16 @@ def fresh_worker(repeat: int) -> None:
                 launched = time.time()
                 stack.add_worker(f"fresh{k}")
                 name = f"fresh{k}@percussim"
-                wait_for(lambda: name in stack.client.get("/readyz").json().get("workers", []), 60,
-                         "the fresh worker", interval=0.02)
+                wait_for(
+                    lambda: name in stack.client.get("/readyz").json().get("workers", []),
+                    60,
+                    "the fresh worker",
+                    interval=0.02,
+                )
                 job = stack.client.post("/v1/jobs", json=preset_json("fig3")).json()
                 record = stack.wait_status(job["id"], ("succeeded", "failed"))
                 assert record["status"] == "succeeded" and record["worker"] == name, record
-                started, finished = (datetime.fromisoformat(record[k]).timestamp()
-                                     for k in ("started", "finished"))
+                started, finished = (datetime.fromisoformat(record[k]).timestamp() for k in ("started", "finished"))
                 took.append(finished - started)
                 from_launch.append(finished - launched)
         finally:

@@ -58,20 +58,25 @@ def rows_of(summary: dict, expected: dict[str, float | None]) -> list[str]:
         "max penetration (m)": summary["medium_penetration"]["max"],
         "permanent penetration (m)": summary["medium_penetration"]["permanent"],
     }
-    return [f"| {name} | {value:.4g} | {'—' if expected.get(name) is None else f'{expected[name]:.4g}'} |"
-            for name, value in found.items()]
+    return [
+        f"| {name} | {value:.4g} | {'—' if expected.get(name) is None else f'{expected[name]:.4g}'} |"
+        for name, value in found.items()
+    ]
 
 
 def rock_table(summary: dict) -> list[str]:
     case = load_preset("rock_drill")
     rock = LundbergRock.of_case(case)
-    return rows_of(summary, {
-        "peak contact force (N)": rock.incident,
-        "max compressive stress (Pa)": rock.peak_force / case.tool.area,
-        "transfer efficiency": rock.efficiency,
-        "max penetration (m)": rock.max_penetration,
-        "permanent penetration (m)": rock.permanent_penetration,
-    })
+    return rows_of(
+        summary,
+        {
+            "peak contact force (N)": rock.incident,
+            "max compressive stress (Pa)": rock.peak_force / case.tool.area,
+            "transfer efficiency": rock.efficiency,
+            "max penetration (m)": rock.max_penetration,
+            "permanent penetration (m)": rock.permanent_penetration,
+        },
+    )
 
 
 def pile_table(summary: dict) -> list[str]:
@@ -79,33 +84,46 @@ def pile_table(summary: dict) -> list[str]:
     ram = CushionedImpact.of_case(case)
     soil = case.medium
     permanent = summary["medium_penetration"]["permanent"]
-    return rows_of(summary, {
-        "peak contact force (N)": ram.peak_force,
-        "its time (s)": ram.peak_time,
-        "max penetration (m)": permanent + soil.quake,
-    }) + [f"| plastic work at the toe (J) | {summary['energy']['medium_plastic']:.4g} | "
-          f"{soil.ultimate_resistance * permanent:.4g} (R_u·set) |"]
+    return rows_of(
+        summary,
+        {
+            "peak contact force (N)": ram.peak_force,
+            "its time (s)": ram.peak_time,
+            "max penetration (m)": permanent + soil.quake,
+        },
+    ) + [
+        f"| plastic work at the toe (J) | {summary['energy']['medium_plastic']:.4g} | "
+        f"{soil.ultimate_resistance * permanent:.4g} (R_u·set) |"
+    ]
 
 
 def piston_sweep() -> list[str]:
     sweep = Sweep(case=preset_json("rock_drill"), parameters={"striker.length": list(PISTON_LENGTHS)})
-    lines = ["| piston length (m) | Lundberg's x | transfer efficiency | Lundberg | permanent penetration (m) |",
-             "|---|---|---|---|---|"]
+    lines = [
+        "| piston length (m) | Lundberg's x | transfer efficiency | Lundberg | permanent penetration (m) |",
+        "|---|---|---|---|---|",
+    ]
     for row, (_, case) in zip(run_sweep(sweep, processes=1), variants(sweep)):
         expected = LundbergRock.of_case(case)
-        lines.append(f"| {row['striker.length']:g} | {expected.x:.3f} | {row['transfer_efficiency']:.4f} | "
-                     f"{expected.efficiency:.4f} | {row['permanent_penetration']:.4g} |")
+        lines.append(
+            f"| {row['striker.length']:g} | {expected.x:.3f} | {row['transfer_efficiency']:.4f} | "
+            f"{expected.efficiency:.4f} | {row['permanent_penetration']:.4g} |"
+        )
     return lines
 
 
 def pile_blows() -> list[str]:
     case = preset_json("pile") | {"blows": {"count": PILE_BLOWS}}
     blows = simulate(case).summary["blows"]
-    lines = ["| blow | peak contact force (N) | max compressive stress (Pa) | transfer efficiency | set (m) |",
-             "|---|---|---|---|---|"]
+    lines = [
+        "| blow | peak contact force (N) | max compressive stress (Pa) | transfer efficiency | set (m) |",
+        "|---|---|---|---|---|",
+    ]
     for k, blow in enumerate(blows, 1):
-        lines.append(f"| {k} | {blow['peak_contact_force']:.4g} | {blow['max_compressive_stress']:.4g} | "
-                     f"{blow['transfer_efficiency']:.4f} | {blow['set']:.4g} |")
+        lines.append(
+            f"| {k} | {blow['peak_contact_force']:.4g} | {blow['max_compressive_stress']:.4g} | "
+            f"{blow['transfer_efficiency']:.4f} | {blow['set']:.4g} |"
+        )
     return lines
 
 
@@ -117,30 +135,34 @@ def report(repeats: int) -> str:
     def grids(summary: dict) -> str:
         return ", ".join(str(r["cells"]) for r in summary["runs"])
 
-    return "\n".join([
-        f"Each at the default accuracy (1%), least of {repeats} runs after compilation "
-        "(`bench/device_presets.py --write`).",
-        "",
-        f"`rock_drill`: {rock_ms:.1f} ms, grids of {grids(rock)} cells, estimated error "
-        f"{rock['error_estimate']['worst']:.1e}.",
-        "",
-        *head, *rock_table(rock),
-        "",
-        f"`pile`: {pile_ms:.1f} ms, grids of {grids(pile)} cells, estimated error "
-        f"{pile['error_estimate']['worst']:.1e}.",
-        "",
-        *head, *pile_table(pile),
-        "",
-        "The rock drill's piston length swept (`striker.length`): the efficiency rises to Lundberg's "
-        "optimum (x = 1.2564) and falls past it.",
-        "",
-        *piston_sweep(),
-        "",
-        f"The pile, {PILE_BLOWS} blows (`blows.count`): each later blow meets the pile still moving "
-        "from the one before (no gravity or shaft resistance brings it to rest), which raises its force.",
-        "",
-        *pile_blows(),
-    ])
+    return "\n".join(
+        [
+            f"Each at the default accuracy (1%), least of {repeats} runs after compilation "
+            "(`bench/device_presets.py --write`).",
+            "",
+            f"`rock_drill`: {rock_ms:.1f} ms, grids of {grids(rock)} cells, estimated error "
+            f"{rock['error_estimate']['worst']:.1e}.",
+            "",
+            *head,
+            *rock_table(rock),
+            "",
+            f"`pile`: {pile_ms:.1f} ms, grids of {grids(pile)} cells, estimated error "
+            f"{pile['error_estimate']['worst']:.1e}.",
+            "",
+            *head,
+            *pile_table(pile),
+            "",
+            "The rock drill's piston length swept (`striker.length`): the efficiency rises to Lundberg's "
+            "optimum (x = 1.2564) and falls past it.",
+            "",
+            *piston_sweep(),
+            "",
+            f"The pile, {PILE_BLOWS} blows (`blows.count`): each later blow meets the pile still moving "
+            "from the one before (no gravity or shaft resistance brings it to rest), which raises its force.",
+            "",
+            *pile_blows(),
+        ]
+    )
 
 
 def main() -> None:

@@ -51,7 +51,6 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
 
 import closed_forms as CF  # noqa: E402
-
 from percussim.solver.calibrate import calibrate  # noqa: E402
 from percussim.solver.case import parse_case  # noqa: E402
 from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
@@ -76,6 +75,7 @@ LUNDBERG_BUDGET = 200
 
 # The records and the cases
 
+
 def fig5_like() -> dict:
     """Fig. 5's striker, tool and contact on a stiffer medium with a damper, over 1.5 ms."""
     case = preset_json("fig5")
@@ -95,8 +95,12 @@ def measured(quantity: str) -> dict:
     samples = {"contact_force": run.history["contact/force"], "stress": run.probe_stress[:, 0]}[quantity]
     values = np.interp(t, run.history["time"], samples)
     values += NOISE * np.abs(values).max() * np.random.default_rng(SEED).standard_normal(len(t))
-    return {"quantity": quantity, "time": t.tolist(), "values": values.tolist(),
-            **({"x": GAUGE} if quantity == "stress" else {})}
+    return {
+        "quantity": quantity,
+        "time": t.tolist(),
+        "values": values.tolist(),
+        **({"x": GAUGE} if quantity == "stress" else {}),
+    }
 
 
 def start_case(names: list[str]) -> dict:
@@ -126,9 +130,11 @@ def single_pass(case: dict) -> str:
     length, duration = case["tool"]["length"], case["numerics"]["duration"]
     reached, returned = (length + 2.0 * MAX_PISTON) / speed, 2.0 * length / speed
     verdict = "one pass, Lundberg's" if reached <= duration < returned else "NOT a single pass"
-    return (f"the longest piston's pulse is at the bit by {reached * 1e3:.3f} ms, the run ends at "
-            f"{duration * 1e3:g} ms, the bit's reflection is back at the struck end at "
-            f"{returned * 1e3:.3f} ms: {verdict}")
+    return (
+        f"the longest piston's pulse is at the bit by {reached * 1e3:.3f} ms, the run ends at "
+        f"{duration * 1e3:g} ms, the bit's reflection is back at the struck end at "
+        f"{returned * 1e3:.3f} ms: {verdict}"
+    )
 
 
 def lundberg(case: dict) -> tuple[float, float]:
@@ -143,6 +149,7 @@ def lundberg(case: dict) -> tuple[float, float]:
 
 
 # Running and timing
+
 
 def timed(study, request: dict, processes: int) -> tuple[dict, float, LocalEvaluator]:
     """The answer of `study` on `processes` processes, its wall time, and the evaluator (which says
@@ -169,91 +176,155 @@ class Table:
     def text(self) -> str:
         cells = [self.header] + self.rows
         widths = [max(len(row[k]) for row in cells) for k in range(len(self.header))]
-        lines = [self.title] + ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip()
-                                for row in cells]
+        lines = [self.title] + ["  " + "  ".join(c.ljust(w) for c, w in zip(row, widths)).rstrip() for row in cells]
         lines.insert(2, "  " + "  ".join("-" * w for w in widths))
         return "\n".join(lines + [f"  {note}" for note in self.notes])
 
     def markdown(self) -> str:
-        lines = [f"**{self.title}**", "", "| " + " | ".join(self.header) + " |",
-                 "|" + "---|" * len(self.header)]
+        lines = [f"**{self.title}**", "", "| " + " | ".join(self.header) + " |", "|" + "---|" * len(self.header)]
         lines += ["| " + " | ".join(row) + " |" for row in self.rows]
         return "\n".join(lines + [""] + [f"{note}\n" for note in self.notes])
 
 
 def calibration_tables(label: str, quantity: str, names: list[str], repeats: int) -> list[Table]:
-    request = {"case": start_case(names), "record": measured(quantity),
-               "parameters": {name: BOUNDS[name] for name in names}}
-    runs = Table(f"{label}: time and runs", ["processes", "wall time (median)", "range", "runs",
-                                             "nrmse", "noise", "grid (cells)", "note"])
+    request = {
+        "case": start_case(names),
+        "record": measured(quantity),
+        "parameters": {name: BOUNDS[name] for name in names},
+    }
+    runs = Table(
+        f"{label}: time and runs",
+        ["processes", "wall time (median)", "range", "runs", "nrmse", "noise", "grid (cells)", "note"],
+    )
     fits = []
     for processes in (2, 1):
         trials = [timed(calibrate, request, processes) for _ in range(repeats)]
         fit, _, evaluator = trials[0]
         seconds = [s for _, s, _ in trials]
         fits += [t[0] for t in trials]
-        runs.rows.append([str(processes), f"{statistics.median(seconds):.2f} s",
-                          f"{min(seconds):.2f}–{max(seconds):.2f} s", str(fit["evaluations"]),
-                          f"{fit['nrmse']:.4f}", f"{fit['noise']:.4f}",
-                          f"{fit['grid']['cells']} ({fit['grid']['refinements']} refinement"
-                          f"{'s' if fit['grid']['refinements'] != 1 else ''})", pool_note(evaluator)])
+        runs.rows.append(
+            [
+                str(processes),
+                f"{statistics.median(seconds):.2f} s",
+                f"{min(seconds):.2f}–{max(seconds):.2f} s",
+                str(fit["evaluations"]),
+                f"{fit['nrmse']:.4f}",
+                f"{fit['noise']:.4f}",
+                f"{fit['grid']['cells']} ({fit['grid']['refinements']} refinement"
+                f"{'s' if fit['grid']['refinements'] != 1 else ''})",
+                pool_note(evaluator),
+            ]
+        )
     fit = fits[0]
-    values = Table(f"{label}: recovered values", ["parameter", "start", "true", "found", "error",
-                                                  "standard error", "error in s.e.", "95% bounds hold true"])
+    values = Table(
+        f"{label}: recovered values",
+        ["parameter", "start", "true", "found", "error", "standard error", "error in s.e.", "95% bounds hold true"],
+    )
     for name in names:
         found = fit["parameters"][name]
         se = found["standard_error"]
         error = found["value"] / TRUE[name] - 1.0
         held = found["low"] is not None and found["low"] < TRUE[name] < found["high"]
-        values.rows.append([name, f"{START[name]:.3g}", f"{TRUE[name]:.3g}", f"{found['value']:.5g}",
-                            f"{error:+.2%}", "—" if se is None else f"{se:.3g} ({se / found['value']:.2%})",
-                            "—" if se is None else f"{abs(found['value'] - TRUE[name]) / se:.2f}",
-                            "yes" if held else "no"])
+        values.rows.append(
+            [
+                name,
+                f"{START[name]:.3g}",
+                f"{TRUE[name]:.3g}",
+                f"{found['value']:.5g}",
+                f"{error:+.2%}",
+                "—" if se is None else f"{se:.3g} ({se / found['value']:.2%})",
+                "—" if se is None else f"{abs(found['value'] - TRUE[name]) / se:.2f}",
+                "yes" if held else "no",
+            ]
+        )
     same = all(f["parameters"] == fit["parameters"] for f in fits)
-    values.notes.append("The same values in every run, on 1 and on 2 processes." if same else
-                        "The values differ between runs (1 and 2 processes, repeats): those of the first "
-                        "on 2 processes are shown.")
+    values.notes.append(
+        "The same values in every run, on 1 and on 2 processes."
+        if same
+        else "The values differ between runs (1 and 2 processes, repeats): those of the first on 2 processes are shown."
+    )
     values.notes.append("Warnings: " + ("; ".join(fit["warnings"]) if fit["warnings"] else "none."))
     return [runs, values]
 
 
 def rock_drill_table() -> Table:
-    table = Table(f"c. Rock drill: maximise energy.to_medium, max_compressive_stress ≤ {ALLOWABLE / 1e6:g} "
-                  "MPa, a budget of 1000 runs, 2 processes",
-                  ["rod", "wall time", "runs", "striker.length", "striker.velocity", "energy.to_medium",
-                   "max_compressive_stress (checked)", "designs checked", "grid (cells)", "note"])
+    table = Table(
+        f"c. Rock drill: maximise energy.to_medium, max_compressive_stress ≤ {ALLOWABLE / 1e6:g} "
+        "MPa, a budget of 1000 runs, 2 processes",
+        [
+            "rod",
+            "wall time",
+            "runs",
+            "striker.length",
+            "striker.velocity",
+            "energy.to_medium",
+            "max_compressive_stress (checked)",
+            "designs checked",
+            "grid (cells)",
+            "note",
+        ],
+    )
     for short in (False, True):
         case = rock_drill(short)
-        answer, seconds, evaluator = timed(optimize, {
-            "case": case, "variables": {"striker.length": [0.1, MAX_PISTON], "striker.velocity": [5.0, 20.0]},
-            "objective": {"maximize": "energy.to_medium"},
-            "limits": {"max_compressive_stress": {"max": ALLOWABLE}}, "max_evaluations": 1000}, 2)
+        answer, seconds, evaluator = timed(
+            optimize,
+            {
+                "case": case,
+                "variables": {"striker.length": [0.1, MAX_PISTON], "striker.velocity": [5.0, 20.0]},
+                "objective": {"maximize": "energy.to_medium"},
+                "limits": {"max_compressive_stress": {"max": ALLOWABLE}},
+                "max_evaluations": 1000,
+            },
+            2,
+        )
         rod = f"{case['tool']['length']:g} m over {case['numerics']['duration'] * 1e3:g} ms"
         rod += " (tests/test_optimize.py)" if short else " (the preset)"
         if answer["values"] is None:
             found = ["—"] * 4
         else:
-            found = [f"{answer['values']['striker.length']:.4f} m",
-                     f"{answer['values']['striker.velocity']:.3f} m/s",
-                     f"{answer['quantities']['energy.to_medium']:.2f} J",
-                     f"{answer['summary']['max_compressive_stress']['value'] / 1e6:.1f} MPa"]
-        table.rows.append([rod, f"{seconds:.1f} s", str(answer["evaluations"]), *found,
-                           str(len(answer["checked"])), str(answer["grid"]["cells"]), pool_note(evaluator)])
-        table.notes.append(f"{rod}: {single_pass(case)}. Stopped: {answer['stopped']}. "
-                           f"Warnings: {'; '.join(answer['warnings']) or 'none'}.")
+            found = [
+                f"{answer['values']['striker.length']:.4f} m",
+                f"{answer['values']['striker.velocity']:.3f} m/s",
+                f"{answer['quantities']['energy.to_medium']:.2f} J",
+                f"{answer['summary']['max_compressive_stress']['value'] / 1e6:.1f} MPa",
+            ]
+        table.rows.append(
+            [
+                rod,
+                f"{seconds:.1f} s",
+                str(answer["evaluations"]),
+                *found,
+                str(len(answer["checked"])),
+                str(answer["grid"]["cells"]),
+                pool_note(evaluator),
+            ]
+        )
+        table.notes.append(
+            f"{rod}: {single_pass(case)}. Stopped: {answer['stopped']}. "
+            f"Warnings: {'; '.join(answer['warnings']) or 'none'}."
+        )
     return table
 
 
 def lundberg_table() -> Table:
     case = rock_drill(short=True)
-    answer, seconds, evaluator = timed(optimize, {
-        "case": case, "variables": {"striker.length": [0.1, MAX_PISTON]},
-        "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": LUNDBERG_BUDGET}, 2)
+    answer, seconds, evaluator = timed(
+        optimize,
+        {
+            "case": case,
+            "variables": {"striker.length": [0.1, MAX_PISTON]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": LUNDBERG_BUDGET,
+        },
+        2,
+    )
     expected, efficiency = lundberg(case)
     found = answer["values"]["striker.length"]
-    table = Table(f"d. Lundberg's optimal piston: maximise energy.transfer_efficiency over striker.length "
-                  f"in [0.1, {MAX_PISTON:g}] m, 1.5-m rod, budget {LUNDBERG_BUDGET} runs, 2 processes",
-                  ["", "piston length", "efficiency"])
+    table = Table(
+        f"d. Lundberg's optimal piston: maximise energy.transfer_efficiency over striker.length "
+        f"in [0.1, {MAX_PISTON:g}] m, 1.5-m rod, budget {LUNDBERG_BUDGET} runs, 2 processes",
+        ["", "piston length", "efficiency"],
+    )
     found_efficiency = answer["quantities"]["energy.transfer_efficiency"]
     table.rows.append(["found", f"{found:.4f} m", f"{found_efficiency:.4f}"])
     table.rows.append(["Lundberg", f"{expected:.4f} m", f"{efficiency:.4f}"])
@@ -262,28 +333,45 @@ def lundberg_table() -> Table:
         f"{answer['evaluations']} runs in {seconds:.1f} s ({pool_note(evaluator)}). Lundberg: L* = x*·Z·a/(2k) "
         "with x* = 1.2564 the stationary point of (1 − e^−x)²/x, Z = ρ·a·A, a = √(E/ρ) and k the rock's "
         "loading stiffness; his efficiency there 2(1 − e^−x*)²/x*·(1 − k/k_u). "
-        f"Stopped: {answer['stopped']}. Warnings: {'; '.join(answer['warnings']) or 'none'}.")
+        f"Stopped: {answer['stopped']}. Warnings: {'; '.join(answer['warnings']) or 'none'}."
+    )
     return table
 
 
 def impedance_table() -> Table:
-    answer, seconds, evaluator = timed(optimize, {
-        "case": CF.matched_tool_case(1.7), "variables": {"striker.area": [CF.AREA / 4, 4 * CF.AREA]},
-        "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": LUNDBERG_BUDGET}, 2)
+    answer, seconds, evaluator = timed(
+        optimize,
+        {
+            "case": CF.matched_tool_case(1.7),
+            "variables": {"striker.area": [CF.AREA / 4, 4 * CF.AREA]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": LUNDBERG_BUDGET,
+        },
+        2,
+    )
     ratio = answer["values"]["striker.area"] / CF.AREA
     efficiency = answer["quantities"]["energy.transfer_efficiency"]
-    table = Table(f"e. The striker–tool impedance ratio r = A1/A2 that passes the most energy, budget "
-                  f"{LUNDBERG_BUDGET} runs, 2 processes", ["", "r", "efficiency"])
+    table = Table(
+        f"e. The striker–tool impedance ratio r = A1/A2 that passes the most energy, budget "
+        f"{LUNDBERG_BUDGET} runs, 2 processes",
+        ["", "r", "efficiency"],
+    )
     table.rows.append(["found", f"{ratio:.4f}", f"{efficiency:.4f}"])
     table.rows.append(["closed form", "1", "1"])
     table.rows.append(["difference", f"{ratio - 1.0:+.2%}", f"{efficiency - 1.0:+.2%}"])
-    worst = max(abs(run["quantities"]["energy.transfer_efficiency"]
-                    / CF.passed_share(run["values"]["striker.area"] / CF.AREA) - 1.0) for run in answer["history"])
+    worst = max(
+        abs(
+            run["quantities"]["energy.transfer_efficiency"] / CF.passed_share(run["values"]["striker.area"] / CF.AREA)
+            - 1.0
+        )
+        for run in answer["history"]
+    )
     table.notes.append(
         f"{answer['evaluations']} runs in {seconds:.1f} s ({pool_note(evaluator)}) on {answer['grid']['cells']} cells; "
         f"every run's efficiency within {worst:.2%} of 4r/(1 + r)² (the contact's finite stiffness and the "
         f"grid of the 1% tolerance). Stopped: {answer['stopped']}. "
-        f"Warnings: {'; '.join(answer['warnings']) or 'none'}.")
+        f"Warnings: {'; '.join(answer['warnings']) or 'none'}."
+    )
     return table
 
 
@@ -299,26 +387,41 @@ def shpb_table(write: bool) -> Table:
     answer, seconds, evaluator = timed(calibrate, {"case": case, "record": record, "parameters": SHPB_BOUNDS}, 2)
     reading = H.reading(record.instants, record.values)
     excess = H.C * H.half_width_excess() / 2.0
-    truth = {"striker.velocity": H.VELOCITY, "striker.length": H.STRIKER, "contact.stiffness": H.STIFFNESS,
-             "record.time_offset": offset}
-    theory = {"striker.velocity": f"{reading['velocity']:.4f}",
-              "striker.length": f"{reading['half_width_length']:.4f} ({reading['half_width_length'] - excess:.4f})"}
-    table = Table("f. A split Hopkinson bar's incident pulse, triggered at its gauge, 3-digit times, 1% noise, "
-                  "2 processes", ["parameter", "truth", "wave theory", "fitted", "standard error",
-                                  "(fitted − truth)/SE", "fitted/truth − 1"])
+    truth = {
+        "striker.velocity": H.VELOCITY,
+        "striker.length": H.STRIKER,
+        "contact.stiffness": H.STIFFNESS,
+        "record.time_offset": offset,
+    }
+    theory = {
+        "striker.velocity": f"{reading['velocity']:.4f}",
+        "striker.length": f"{reading['half_width_length']:.4f} ({reading['half_width_length'] - excess:.4f})",
+    }
+    table = Table(
+        "f. A split Hopkinson bar's incident pulse, triggered at its gauge, 3-digit times, 1% noise, 2 processes",
+        ["parameter", "truth", "wave theory", "fitted", "standard error", "(fitted − truth)/SE", "fitted/truth − 1"],
+    )
     for name, value in truth.items():
         found = answer["parameters"][name]
-        table.rows.append([name, f"{value:.6g}", theory.get(name, ""), f"{found['value']:.6g}",
-                           f"{found['standard_error']:.2g}",
-                           f"{(found['value'] - value) / found['standard_error']:+.2f}",
-                           f"{found['value'] / value - 1.0:+.2e}"])
+        table.rows.append(
+            [
+                name,
+                f"{value:.6g}",
+                theory.get(name, ""),
+                f"{found['value']:.6g}",
+                f"{found['standard_error']:.2g}",
+                f"{(found['value'] - value) / found['standard_error']:+.2f}",
+                f"{found['value'] / value - 1.0:+.2e}",
+            ]
+        )
     table.notes.append(
         f"{answer['evaluations']} runs in {seconds:.2f} s ({pool_note(evaluator)}), grid {answer['grid']['cells']} "
         f"cells after {answer['grid']['refinements']} refinements; nrmse {answer['nrmse']:.4f} against the "
         f"record's noise {answer['noise']:.4f}. Wave theory: v = 2|σ|/(ρc) from the plateau; L_s = c·T/2 from "
         f"the half-amplitude width T, and in brackets that less the contact spring's unloading, "
         f"c·τ·(1.678 − ln 2)/2 = {excess * 1e3:.1f} mm, which the record does not show. "
-        f"Warnings: {'; '.join(answer['warnings']) or 'none'}.")
+        f"Warnings: {'; '.join(answer['warnings']) or 'none'}."
+    )
     if write:
         folder = ROOT / "docs" / "inverse"
         folder.mkdir(exist_ok=True)
@@ -332,12 +435,19 @@ def shpb_facts() -> dict:
     """What the worked example quotes of the record: its first lines, and where its time_offset is
     sought (µs)."""
     text, _ = CF.Hopkinson.triggered_record()
-    request = parse_calibration({"case": CF.Hopkinson.case(**SHPB_START),
-                                 "record": record_from_csv(text).model_dump(exclude_none=True),
-                                 "parameters": SHPB_BOUNDS})
+    request = parse_calibration(
+        {
+            "case": CF.Hopkinson.case(**SHPB_START),
+            "record": record_from_csv(text).model_dump(exclude_none=True),
+            "parameters": SHPB_BOUNDS,
+        }
+    )
     low, high = fitted_bounds(request)[OFFSET]
-    return {"shpb_head": "\n".join("    " + line for line in text.splitlines()[:4]),
-            "shpb_low": low * 1e6, "shpb_high": high * 1e6}
+    return {
+        "shpb_head": "\n".join("    " + line for line in text.splitlines()[:4]),
+        "shpb_low": low * 1e6,
+        "shpb_high": high * 1e6,
+    }
 
 
 PAGE = """# Calibration and optimisation
@@ -498,10 +608,18 @@ def main() -> None:
     load = [os.getloadavg()[0]]
     warm_up()
     parts = [
-        lambda: calibration_tables(f"a. Two parameters from the stress at x = {GAUGE:g} m, {NOISE:.0%} noise",
-                                   "stress", ["contact.stiffness", "medium.stiffness"], args.repeats),
-        lambda: calibration_tables(f"b. Three parameters from the contact force, {NOISE:.0%} noise",
-                                   "contact_force", list(BOUNDS), args.repeats),
+        lambda: calibration_tables(
+            f"a. Two parameters from the stress at x = {GAUGE:g} m, {NOISE:.0%} noise",
+            "stress",
+            ["contact.stiffness", "medium.stiffness"],
+            args.repeats,
+        ),
+        lambda: calibration_tables(
+            f"b. Three parameters from the contact force, {NOISE:.0%} noise",
+            "contact_force",
+            list(BOUNDS),
+            args.repeats,
+        ),
         *([] if args.quick else [lambda: [rock_drill_table()]]),
         lambda: [lundberg_table()],
         lambda: [impedance_table()],
@@ -520,9 +638,16 @@ def main() -> None:
         if args.quick:
             measured += "\nc. (the 1000-run optimisation) was skipped: `--quick`.\n"
         options = (" --quick" if args.quick else "") + (f" --repeats {args.repeats}" if args.repeats != 3 else "")
-        (ROOT / "docs" / "inverse.md").write_text(PAGE.format(
-            measured=measured, cores=os.cpu_count(), python=sys.version.split()[0], load=load_text,
-            options=options, **shpb_facts()))
+        (ROOT / "docs" / "inverse.md").write_text(
+            PAGE.format(
+                measured=measured,
+                cores=os.cpu_count(),
+                python=sys.version.split()[0],
+                load=load_text,
+                options=options,
+                **shpb_facts(),
+            )
+        )
         print("wrote docs/inverse.md")
 
 

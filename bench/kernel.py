@@ -78,17 +78,24 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-from scipy.integrate import solve_ivp
-from scipy.linalg import solve_banded
-from scipy.optimize import brentq
-
 from percussim.solver import kernel as K
 from percussim.solver.case import Case, load_case, parse_case
-from percussim.solver.controller import (anvil_on, end_conditions, force_law, rod_constants,
-                                         scheme_weights, simulate_rod, striker_on, tool_on)
+from percussim.solver.controller import (
+    anvil_on,
+    end_conditions,
+    force_law,
+    rod_constants,
+    scheme_weights,
+    simulate_rod,
+    striker_on,
+    tool_on,
+)
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
 from percussim.solver.layout import HISTORY_COLUMNS
 from percussim.solver.summary import MAX_CONTACTS
+from scipy.integrate import solve_ivp
+from scipy.linalg import solve_banded
+from scipy.optimize import brentq
 
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE = ROOT / "bench" / "kernel_c" / "step.c"
@@ -138,8 +145,7 @@ def prepare(label: str, short: str, case: Case, **numerics) -> Setup:
 
 def explicit_courant_one(case: Case, cells: int) -> dict:
     h = case.tool.length / cells
-    return {"scheme": "explicit", "cells": cells,
-            "time_step": COURANT_ONE * h / wave_speed(case.tool)}
+    return {"scheme": "explicit", "cells": cells, "time_step": COURANT_ONE * h / wave_speed(case.tool)}
 
 
 def reported(state: K.State, observed: K.Observed) -> dict[str, float]:
@@ -154,8 +160,16 @@ def reported(state: K.State, observed: K.Observed) -> dict[str, float]:
         "contacts": count + state.ends[K.S_IN_CONTACT],
         "last contact end": contacts[min(count, MAX_CONTACTS) - 1, 1] if count else math.nan,
     }
-    names = ("external work", "dissipated contact", "dissipated medium", "striker kinetic",
-             "tool kinetic", "tool strain", "contact potential", "medium potential")
+    names = (
+        "external work",
+        "dissipated contact",
+        "dissipated medium",
+        "striker kinetic",
+        "tool kinetic",
+        "tool strain",
+        "contact potential",
+        "medium potential",
+    )
     found.update({f"energy: {name}": state.energy[0, i] for i, name in enumerate(names)})
     return found
 
@@ -172,14 +186,35 @@ def numba_run(s: Setup) -> dict[str, float]:
     state, observed = K.new_state(s.n, striker_cells), K.new_observed(MAX_CONTACTS)
     no_fields = np.empty((0, s.n + 1))
     recorders = K.Recorders(
-        history=np.empty((HISTORY_COLUMNS, 0)), history_stride=0,
-        probe_node=np.empty(0, np.int64), probe_weight=np.empty(0), probes=np.empty((0, 0)),
-        field_u=no_fields, field_stress=no_fields, field_stride=0, striker_u=no_fields,
-        striker_stress=no_fields)
+        history=np.empty((HISTORY_COLUMNS, 0)),
+        history_stride=0,
+        probe_node=np.empty(0, np.int64),
+        probe_weight=np.empty(0),
+        probes=np.empty((0, 0)),
+        field_u=no_fields,
+        field_stress=no_fields,
+        field_stride=0,
+        striker_u=no_fields,
+        striker_stress=no_fields,
+    )
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
     anvil = anvil_on(case, s.grid, contact)
-    status, _, _ = K.advance(0, s.num.steps, s.tool, s.rows, s.rod, s.weights, contact, striker,
-                             anvil, medium, force_law(case), state, observed, recorders)
+    status, _, _ = K.advance(
+        0,
+        s.num.steps,
+        s.tool,
+        s.rows,
+        s.rod,
+        s.weights,
+        contact,
+        striker,
+        anvil,
+        medium,
+        force_law(case),
+        state,
+        observed,
+        recorders,
+    )
     assert status == K.STATUS_OK
     return reported(state, observed)
 
@@ -189,18 +224,48 @@ def numba_run(s: Setup) -> dict[str, float]:
 
 
 # The order of step.c's prm[] enum
-C_PARAMETERS = ("h", "tau", "r", "youngs_modulus", "density", "area", "weight_new", "weight_old",
-                "centered", "end_masses", "m1", "w1", "c1", "alpha", "c0", "b1", "c2", "b2")
+C_PARAMETERS = (
+    "h",
+    "tau",
+    "r",
+    "youngs_modulus",
+    "density",
+    "area",
+    "weight_new",
+    "weight_old",
+    "centered",
+    "end_masses",
+    "m1",
+    "w1",
+    "c1",
+    "alpha",
+    "c0",
+    "b1",
+    "c2",
+    "b2",
+)
 
 
 def build_c(directory: str) -> ctypes.CDLL:
     library = Path(directory) / "step.so"
-    subprocess.run(["gcc", "-O3", "-march=native", "-shared", "-fPIC", "-o", str(library),
-                    str(C_SOURCE), "-lm"], check=True)
+    subprocess.run(
+        ["gcc", "-O3", "-march=native", "-shared", "-fPIC", "-o", str(library), str(C_SOURCE), "-lm"], check=True
+    )
     lib = ctypes.CDLL(str(library))
     array = np.ctypeslib.ndpointer(np.float64, flags="C_CONTIGUOUS")
-    lib.run.argtypes = [ctypes.c_long, ctypes.c_long, array, array, array, array, array, array,
-                        array, array, ctypes.c_long]
+    lib.run.argtypes = [
+        ctypes.c_long,
+        ctypes.c_long,
+        array,
+        array,
+        array,
+        array,
+        array,
+        array,
+        array,
+        array,
+        ctypes.c_long,
+    ]
     lib.run.restype = ctypes.c_int
     return lib
 
@@ -209,19 +274,41 @@ def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
     case, weights = s.case, s.weights
     assert s.grid.uniform and case.force is None, "step.c covers uniform tools without force"
     values = {
-        "h": s.grid.h, "tau": s.num.time_step, "r": s.rod.courant_squared,
-        "youngs_modulus": case.tool.youngs_modulus, "density": case.tool.density,
-        "area": case.tool.area, "weight_new": weights.new, "weight_old": weights.old,
-        "centered": float(weights.centered), "end_masses": float(weights.end_masses),
-        "m1": case.striker.mass, "w1": case.striker.velocity, "c1": case.contact.stiffness,
-        "alpha": case.contact.exponent, "c0": case.contact.tension_stiffness,
-        "b1": case.contact.damping, "c2": s.medium.stiffness, "b2": s.medium.damping,
+        "h": s.grid.h,
+        "tau": s.num.time_step,
+        "r": s.rod.courant_squared,
+        "youngs_modulus": case.tool.youngs_modulus,
+        "density": case.tool.density,
+        "area": case.tool.area,
+        "weight_new": weights.new,
+        "weight_old": weights.old,
+        "centered": float(weights.centered),
+        "end_masses": float(weights.end_masses),
+        "m1": case.striker.mass,
+        "w1": case.striker.velocity,
+        "c1": case.contact.stiffness,
+        "alpha": case.contact.exponent,
+        "c0": case.contact.tension_stiffness,
+        "b1": case.contact.damping,
+        "c2": s.medium.stiffness,
+        "b2": s.medium.damping,
     }
     parameters = np.array([values[name] for name in C_PARAMETERS])
     state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
     work = np.zeros(4 * (s.n + 1))
-    status = lib.run(s.n, s.num.steps, parameters, state.u, state.y, work, state.ends,
-                     observed.extremes, state.energy, observed.contacts, MAX_CONTACTS)
+    status = lib.run(
+        s.n,
+        s.num.steps,
+        parameters,
+        state.u,
+        state.y,
+        work,
+        state.ends,
+        observed.extremes,
+        state.energy,
+        observed.contacts,
+        MAX_CONTACTS,
+    )
     assert status == 0
     return reported(state, observed)
 
@@ -279,7 +366,7 @@ def banded_run(s: Setup) -> dict[str, float]:
     # The tool's rows (9), (8), (10) in solve_banded's layout: ab[1 + i − j, j] = A[i, j]
     ab = np.zeros((3, n + 1))
     ab[1, 0], ab[0, 1] = mass[0] + end_weight * k0, -end_weight * k0
-    ab[2, :n - 1] = -wn * r * lower
+    ab[2, : n - 1] = -wn * r * lower
     ab[1, 1:n] = 1.0 + wn * r * (lower + upper)
     ab[0, 2:] = -wn * r * upper
     ab[2, n - 1] = -end_weight * kn
@@ -301,11 +388,9 @@ def banded_run(s: Setup) -> dict[str, float]:
         delta_cur, delta_old, delta_ref = y[cur] - uc[0], y[old] - uo[0], y[ref] - ur[0]
         v = wc * uc + wo * uo
         rhs = np.empty(n + 1)
-        rhs[1:n] = 2.0 * uc[1:n] - uo[1:n] + r * (lower * (v[:n - 1] - v[1:n])
-                                                   + upper * (v[2:] - v[1:n]))
+        rhs[1:n] = 2.0 * uc[1:n] - uo[1:n] + r * (lower * (v[: n - 1] - v[1:n]) + upper * (v[2:] - v[1:n]))
         rhs[0] = mass[0] * (2.0 * uc[0] - uo[0])
-        rhs[n] = (mass[n] * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - spring_weight) * ur[n]
-                  + b2 * damper_factor * ur[n])
+        rhs[n] = mass[n] * (2.0 * uc[n] - uo[n]) - c2 * (1.0 - spring_weight) * ur[n] + b2 * damper_factor * ur[n]
         if weights.end_masses:
             rhs[0] += k0 * (v[1] - v[0])
             rhs[n] -= kn * (v[n] - v[n - 1])
@@ -317,13 +402,17 @@ def banded_run(s: Setup) -> dict[str, float]:
         ref_potential = contact_potential(delta_ref, *law) if m >= back else 0.0
 
         def force(d: float) -> float:
-            return (quotient_force(d, delta_ref, ref_potential, law)
-                    + b1 * damper_factor * (d - delta_ref))
+            return quotient_force(d, delta_ref, ref_potential, law) + b1 * damper_factor * (d - delta_ref)
 
         other = free - compliance * force(free)
         lo, hi = min(free, other), max(free, other)
-        delta = free if lo == hi else brentq(lambda d: d + compliance * force(d) - free, lo, hi,
-                                             xtol=1e-15 * (abs(lo) + abs(hi)), rtol=1e-15)
+        delta = (
+            free
+            if lo == hi
+            else brentq(
+                lambda d: d + compliance * force(d) - free, lo, hi, xtol=1e-15 * (abs(lo) + abs(hi)), rtol=1e-15
+            )
+        )
         f = force(delta)
         un = x + f * z
         u[new] = un
@@ -344,24 +433,23 @@ def banded_run(s: Setup) -> dict[str, float]:
         energy[K.E_DISSIPATED_MEDIUM] += b2 * (damper_factor * (un[n] - ur[n])) ** 2 * tau
         energy[K.E_STRIKER_KINETIC] = 0.5 * m1 * (y[new] - y[cur]) ** 2 / tau**2
         energy[K.E_TOOL_KINETIC] = 0.5 * case.tool.density * h / tau**2 * g.node_area @ (du * du)
-        energy[K.E_TOOL_STRAIN] = 0.5 * e_over_h * g.area_mid @ (
-            strain_sigma * (ea * ea + eb * eb) + (1.0 - 2.0 * strain_sigma) * ea * eb)
-        energy[K.E_CONTACT_POTENTIAL] = (
-            spring_weight * contact_potential(delta, *law)
-            + (1.0 - spring_weight) * contact_potential(delta_cur, *law))
-        energy[K.E_MEDIUM_POTENTIAL] = 0.5 * c2 * (spring_weight * un[n] ** 2
-                                                   + (1.0 - spring_weight) * uc[n] ** 2)
-        balance = (energy[K.E_DISSIPATED_CONTACT:].sum() - initial_energy
-                   - energy[K.E_EXTERNAL_WORK])
+        energy[K.E_TOOL_STRAIN] = (
+            0.5 * e_over_h * g.area_mid @ (strain_sigma * (ea * ea + eb * eb) + (1.0 - 2.0 * strain_sigma) * ea * eb)
+        )
+        energy[K.E_CONTACT_POTENTIAL] = spring_weight * contact_potential(delta, *law) + (
+            1.0 - spring_weight
+        ) * contact_potential(delta_cur, *law)
+        energy[K.E_MEDIUM_POTENTIAL] = 0.5 * c2 * (spring_weight * un[n] ** 2 + (1.0 - spring_weight) * uc[n] ** 2)
+        balance = energy[K.E_DISSIPATED_CONTACT :].sum() - initial_energy - energy[K.E_EXTERNAL_WORK]
         extremes[K.X_ENERGY_EXCESS] = max(extremes[K.X_ENERGY_EXCESS], balance)
 
         stress = np.empty(n + 1)
         stress[0], stress[n] = -contact_force / g.area[0], -medium_force / g.area[-1]
-        stress[1:n] = 0.5 * e_over_h * (un[2:] - un[:n - 1])
+        stress[1:n] = 0.5 * e_over_h * (un[2:] - un[: n - 1])
         for sign, slot in ((-1.0, K.X_MAX_COMPRESSION), (1.0, K.X_MAX_TENSION)):
             node = int(np.argmax(sign * stress))
             if sign * stress[node] > extremes[slot]:
-                extremes[slot:slot + 3] = sign * stress[node], node * h, t
+                extremes[slot : slot + 3] = sign * stress[node], node * h, t
 
         if contact_force > extremes[K.X_PEAK_FORCE]:
             extremes[K.X_PEAK_FORCE], extremes[K.X_PEAK_FORCE_TIME] = contact_force, t
@@ -418,7 +506,7 @@ def mol_run(case: Case, cells: int, method: str, rtol: float) -> MolRun:
 
     # state: y, u_0 … u_N, then their velocities
     def accelerations(state: np.ndarray) -> tuple[float, np.ndarray, float]:
-        y, u, vy, v = state[0], state[1:nodes + 1], state[nodes + 1], state[nodes + 2:]
+        y, u, vy, v = state[0], state[1 : nodes + 1], state[nodes + 1], state[nodes + 2 :]
         d = y - u[0]
         contact = (c1 * d ** (alpha + 1.0) if d >= 0.0 else c0 * d) + b1 * (vy - v[0])
         cell = stiffness * np.diff(u)
@@ -431,7 +519,7 @@ def mol_run(case: Case, cells: int, method: str, rtol: float) -> MolRun:
 
     def rhs(t: float, state: np.ndarray) -> np.ndarray:
         ay, au, _ = accelerations(state)
-        return np.concatenate((state[nodes + 1:], [ay], au))
+        return np.concatenate((state[nodes + 1 :], [ay], au))
 
     def separation(t: float, state: np.ndarray) -> float:
         return state[0] - state[1]
@@ -448,8 +536,15 @@ def mol_run(case: Case, cells: int, method: str, rtol: float) -> MolRun:
     start[nodes + 1] = w1
     # Absolute tolerances on the scale of the overlap (0.1 mm) and of the impact velocity
     scale = np.concatenate((np.full(nodes + 1, 1e-4), np.full(nodes + 1, abs(w1))))
-    sol = solve_ivp(rhs, (0.0, case.numerics.duration), start, method=method, rtol=rtol,
-                    atol=rtol * scale, events=(separation, force_rate))
+    sol = solve_ivp(
+        rhs,
+        (0.0, case.numerics.duration),
+        start,
+        method=method,
+        rtol=rtol,
+        atol=rtol * scale,
+        events=(separation, force_rate),
+    )
     co_impact = sol.t_events[0][0] if len(sol.t_events[0]) else math.nan
     peak = max((accelerations(state)[2] for state in sol.y_events[1]), default=math.nan)
     return MolRun(method, rtol, cells, co_impact, peak, sol.nfev)
@@ -464,8 +559,7 @@ def mol_errors(run: MolRun, reference: tuple[float, float]) -> tuple[float, floa
     return abs(run.co_impact / reference[0] - 1.0), abs(run.peak_force / reference[1] - 1.0)
 
 
-def cheapest_mol(case: Case, target: tuple[float, float], reference: tuple[float, float]
-                 ) -> tuple[MolRun | None, int]:
+def cheapest_mol(case: Case, target: tuple[float, float], reference: tuple[float, float]) -> tuple[MolRun | None, int]:
     """The solve_ivp run of least CPU time whose errors are within `target` (None if none of the
     ladder is), and how many runs the search took. For each method and rtol the cells are walked
     up until the target is met, or until a run costs 3× the best so far (finer grids only cost
@@ -489,17 +583,16 @@ def cheapest_mol(case: Case, target: tuple[float, float], reference: tuple[float
 
 
 def errors_of(found: dict[str, float], reference: tuple[float, float]) -> tuple[float, float]:
-    return (abs(found["co-impact time"] / reference[0] - 1.0),
-            abs(found["peak contact force"] / reference[1] - 1.0))
+    return (abs(found["co-impact time"] / reference[0] - 1.0), abs(found["peak contact force"] / reference[1] - 1.0))
 
 
-def cheapest_kernel(case: Case, target: tuple[float, float], reference: tuple[float, float]
-                    ) -> Setup | None:
+def cheapest_kernel(case: Case, target: tuple[float, float], reference: tuple[float, float]) -> Setup | None:
     """A cheap kernel run within `target`: the explicit scheme at Courant number 1 on `MOL_CELLS`
     and on, walked up until both errors are within it (as `cheapest_mol` walks)."""
     for cells in (*MOL_CELLS, *range(160, 2001, 32)):
-        s = prepare(f"explicit, Courant 1, {cells} cells", f"explicit {cells}", case,
-                    **explicit_courant_one(case, cells))
+        s = prepare(
+            f"explicit, Courant 1, {cells} cells", f"explicit {cells}", case, **explicit_courant_one(case, cells)
+        )
         errors = errors_of(numba_run(s), reference)
         if errors[0] <= target[0] and errors[1] <= target[1]:
             return s
@@ -540,10 +633,12 @@ def agreement(found: dict[str, float], numba: dict[str, float], initial_energy: 
             assert found[key] == value, f"{found[key]} contacts against {value}"
         else:
             worst_value = max(worst_value, abs(found[key] / value - 1.0))
-    return (f"co-impact time {abs(found['co-impact time'] / numba['co-impact time'] - 1):.1e}, "
-            f"peak force {abs(found['peak contact force'] / numba['peak contact force'] - 1):.1e}, "
-            f"worst of times/force/stresses {worst_value:.1e}, energy terms {worst_energy:.1e} of "
-            f"the impact energy; {int(numba['contacts'])} contact(s) in both")
+    return (
+        f"co-impact time {abs(found['co-impact time'] / numba['co-impact time'] - 1):.1e}, "
+        f"peak force {abs(found['peak contact force'] / numba['peak contact force'] - 1):.1e}, "
+        f"worst of times/force/stresses {worst_value:.1e}, energy terms {worst_energy:.1e} of "
+        f"the impact energy; {int(numba['contacts'])} contact(s) in both"
+    )
 
 
 def ns(seconds: float, s: Setup) -> str:
@@ -553,8 +648,7 @@ def ns(seconds: float, s: Setup) -> str:
 def reference_run(case: Case) -> tuple[tuple[float, float], float]:
     """Co-impact time and peak force, Richardson-extrapolated from the explicit scheme at Courant
     number 1 on 1600 and 3200 cells, and its uncertainty (a third of their difference, relative)."""
-    runs = [numba_run(prepare("reference", "", case, **explicit_courant_one(case, cells)))
-            for cells in (1600, 3200)]
+    runs = [numba_run(prepare("reference", "", case, **explicit_courant_one(case, cells))) for cells in (1600, 3200)]
     values, uncertainty = [], 0.0
     for key in ("co-impact time", "peak contact force"):
         coarse, fine = runs[0][key], runs[1][key]
@@ -575,18 +669,19 @@ ROCK_DRILL = {
     "numerics": {"duration": 1e-3},
 }
 END_CONDITIONS = {
-    "lumped striker, linear medium": {"striker": {"mass": 1.6, "velocity": 10.0},
-                                      "medium": {"stiffness": _ROCK_K}},
+    "lumped striker, linear medium": {"striker": {"mass": 1.6, "velocity": 10.0}, "medium": {"stiffness": _ROCK_K}},
     "lumped striker, bilinear rock": {"striker": {"mass": 1.6, "velocity": 10.0}},
-    "lumped striker, Smith soil": {"striker": {"mass": 1.6, "velocity": 10.0},
-                                   "medium": {"kind": "smith", "ultimate_resistance": 1e5,
-                                              "quake": 2.5e-3, "damping_factor": 0.5}},
+    "lumped striker, Smith soil": {
+        "striker": {"mass": 1.6, "velocity": 10.0},
+        "medium": {"kind": "smith", "ultimate_resistance": 1e5, "quake": 2.5e-3, "damping_factor": 0.5},
+    },
     "elastic striker, linear medium": {"medium": {"stiffness": _ROCK_K}},
     "elastic striker, bilinear rock": {},
-    "anvil, lumped striker, linear": {"striker": {"mass": 1.6, "velocity": 10.0},
-                                      "medium": {"stiffness": _ROCK_K},
-                                      "anvil": {"mass": 0.5, "contact": {"stiffness": 5e9,
-                                                                         "exponent": 0.0}}},
+    "anvil, lumped striker, linear": {
+        "striker": {"mass": 1.6, "velocity": 10.0},
+        "medium": {"stiffness": _ROCK_K},
+        "anvil": {"mass": 0.5, "contact": {"stiffness": 5e9, "exponent": 0.0}},
+    },
 }
 
 
@@ -608,18 +703,18 @@ def end_condition_costs(repeat: int) -> None:
 
     print("\nWhole calls (percussim.simulate, least CPU time over repeats):")
     calls = {
-        "rock drill, tolerance 0.01": {**ROCK_DRILL, "numerics": {"duration": 1e-3,
-                                                                  "tolerance": 0.01}},
+        "rock drill, tolerance 0.01": {**ROCK_DRILL, "numerics": {"duration": 1e-3, "tolerance": 0.01}},
         "rock drill, default accuracy": ROCK_DRILL,
-        **{f"preset {name}, default accuracy": _default_accuracy(name)
-           for name in ("fig3", "fig4", "fig5", "fig6")},
+        **{f"preset {name}, default accuracy": _default_accuracy(name) for name in ("fig3", "fig4", "fig5", "fig6")},
     }
     for label, case in calls.items():
         summary = percussim.simulate(case).summary
         cpu = least_cpu({"call": lambda: percussim.simulate(case)}, repeat, budget=2.0)["call"]
         runs = summary["runs"]
-        print(f"  {label:34s} {cpu * 1e3:9.1f} ms  ({len(runs)} runs, finest {runs[-1]['cells']} "
-              f"cells, error estimate {summary['error_estimate']['worst']:.2g})")
+        print(
+            f"  {label:34s} {cpu * 1e3:9.1f} ms  ({len(runs)} runs, finest {runs[-1]['cells']} "
+            f"cells, error estimate {summary['error_estimate']['worst']:.2g})"
+        )
 
 
 def _default_accuracy(name: str) -> dict:
@@ -642,10 +737,8 @@ def main() -> None:
     setups = [
         prepare("Fig. 3 preset: paper γ=0.5, 100 cells", "paper 100", fig3),
         prepare("Fig. 3, paper γ=0.5, 2000 cells, same τ", "paper 2000", fig3, cells=2000),
-        prepare("Fig. 3, explicit, Courant 1, 100 cells", "explicit 100", fig3,
-                **explicit_courant_one(fig3, 100)),
-        prepare("Fig. 3, explicit, Courant 1, 2000 cells", "explicit 2000", fig3,
-                **explicit_courant_one(fig3, 2000)),
+        prepare("Fig. 3, explicit, Courant 1, 100 cells", "explicit 100", fig3, **explicit_courant_one(fig3, 100)),
+        prepare("Fig. 3, explicit, Courant 1, 2000 cells", "explicit 2000", fig3, **explicit_courant_one(fig3, 2000)),
     ]
     for s in setups:  # compile every specialisation before timing
         numba_run(s)
@@ -657,48 +750,58 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as directory:
         lib = build_c(directory)
         for s in setups:
-            print(f"\n{s.label}: {s.num.steps} steps, τ = {s.num.time_step:.3g} s, Courant "
-                  f"{s.num.courant:.2f}, {s.node_steps:,} node-steps")
+            print(
+                f"\n{s.label}: {s.num.steps} steps, τ = {s.num.time_step:.3g} s, Courant "
+                f"{s.num.courant:.2f}, {s.node_steps:,} node-steps"
+            )
             numba, c, banded = numba_run(s), c_run(lib, s), banded_run(s)
             for name, found in (("C", c), ("solve_banded", banded)):
-                print(f"  agreement with Numba, {name + ':':13s} "
-                      f"{agreement(found, numba, initial_energy)}")
-            cpu = least_cpu({"Numba": lambda: numba_run(s), "C": lambda: c_run(lib, s)},
-                            args.repeat, budget=1.0)
+                print(f"  agreement with Numba, {name + ':':13s} {agreement(found, numba, initial_energy)}")
+            cpu = least_cpu({"Numba": lambda: numba_run(s), "C": lambda: c_run(lib, s)}, args.repeat, budget=1.0)
             cpu.update(least_cpu({"solve_banded": lambda: banded_run(s)}, 2, budget=2.0))
             kernel_cpu[s.label] = cpu["Numba"]
             for name, seconds in cpu.items():
                 print(f"  {name:13s} {ns(seconds, s)} per node-step  ({seconds * 1e3:9.2f} ms)")
             if s is setups[0]:
                 user = least_cpu({"simulate_rod": lambda: simulate_rod(fig3)}, args.repeat, 1.0)
-                print(f"  (simulate_rod, the whole user call with a history row a step and the "
-                      f"summary: {ns(user['simulate_rod'], s)} per node-step, "
-                      f"{user['simulate_rod'] * 1e3:.2f} ms)")
+                print(
+                    f"  (simulate_rod, the whole user call with a history row a step and the "
+                    f"summary: {ns(user['simulate_rod'], s)} per node-step, "
+                    f"{user['simulate_rod'] * 1e3:.2f} ms)"
+                )
             ratios["Numba/C"].append((s.short, cpu["Numba"] / cpu["C"]))
             ratios["solve_banded/Numba"].append((s.short, cpu["solve_banded"] / cpu["Numba"]))
-            print(f"  Numba/C {cpu['Numba'] / cpu['C']:.2f}, solve_banded/Numba "
-                  f"{cpu['solve_banded'] / cpu['Numba']:.0f}")
+            print(
+                f"  Numba/C {cpu['Numba'] / cpu['C']:.2f}, solve_banded/Numba {cpu['solve_banded'] / cpu['Numba']:.0f}"
+            )
 
     reference, uncertainty = reference_run(fig3)
-    print(f"\nReference (explicit, Courant 1, 1600 and 3200 cells, Richardson): co-impact time "
-          f"{reference[0] * 1e6:.4f} µs, peak contact force {reference[1] / 1e3:.3f} kN "
-          f"(uncertainty {uncertainty:.1e})")
+    print(
+        f"\nReference (explicit, Courant 1, 1600 and 3200 cells, Richardson): co-impact time "
+        f"{reference[0] * 1e6:.4f} µs, peak contact force {reference[1] / 1e3:.3f} kN "
+        f"(uncertainty {uncertainty:.1e})"
+    )
     for s in (setups[0], setups[2]):
         target = errors_of(numba_run(s), reference)
-        print(f"\n{s.label}: errors co-impact {target[0]:.2e}, peak force {target[1]:.2e}; "
-              f"Numba {kernel_cpu[s.label] * 1e3:.2f} ms")
+        print(
+            f"\n{s.label}: errors co-impact {target[0]:.2e}, peak force {target[1]:.2e}; "
+            f"Numba {kernel_cpu[s.label] * 1e3:.2f} ms"
+        )
         run, tried = cheapest_mol(fig3, target, reference)
         if run is None:
             print(f"  no solve_ivp run of the ladder meets both ({tried} runs tried)")
             continue
-        mol_cpu = least_cpu({"mol": lambda: mol_run(fig3, run.cells, run.method, run.rtol)},
-                            args.repeat, budget=1.0)["mol"]
+        mol_cpu = least_cpu({"mol": lambda: mol_run(fig3, run.cells, run.method, run.rtol)}, args.repeat, budget=1.0)[
+            "mol"
+        ]
         errors = mol_errors(run, reference)
-        print(f"  cheapest solve_ivp meeting both ({tried} runs tried): {run.method}, rtol "
-              f"{run.rtol:g}, {run.cells} cells: errors {errors[0]:.2e}, {errors[1]:.2e}; "
-              f"{run.evaluations} right-hand sides, {mol_cpu * 1e3:.2f} ms "
-              f"({mol_cpu / (run.evaluations * (run.cells + 1)) * 1e9:.0f} ns per node and "
-              f"right-hand side)")
+        print(
+            f"  cheapest solve_ivp meeting both ({tried} runs tried): {run.method}, rtol "
+            f"{run.rtol:g}, {run.cells} cells: errors {errors[0]:.2e}, {errors[1]:.2e}; "
+            f"{run.evaluations} right-hand sides, {mol_cpu * 1e3:.2f} ms "
+            f"({mol_cpu / (run.evaluations * (run.cells + 1)) * 1e9:.0f} ns per node and "
+            f"right-hand side)"
+        )
         ratio = mol_cpu / kernel_cpu[s.label]
         ratios["solve_ivp/Numba"].append((f"{s.short} (this run)", ratio))
         print(f"  solve_ivp/Numba at equal accuracy, against this run: {ratio:.0f}")
@@ -713,8 +816,10 @@ def main() -> None:
         errors = errors_of(numba_run(cheap), reference)
         ratio = mol_cpu / cheap_cpu
         ratios["solve_ivp/Numba"].append((f"{s.short} accuracy, both cheapest", ratio))
-        print(f"  the kernel's cheapest run meeting both: {cheap.label}: errors {errors[0]:.2e}, "
-              f"{errors[1]:.2e}; {cheap_cpu * 1e3:.3f} ms")
+        print(
+            f"  the kernel's cheapest run meeting both: {cheap.label}: errors {errors[0]:.2e}, "
+            f"{errors[1]:.2e}; {cheap_cpu * 1e3:.3f} ms"
+        )
         print(f"  solve_ivp/Numba at equal accuracy, each at its cheapest: {ratio:.0f}")
 
     print("\nRatios against their goals:")

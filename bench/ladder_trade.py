@@ -31,7 +31,10 @@ SETTINGS = [
     ("three grids, the order not confirmed by a fourth", {"MIN_RUNS": 3}),
     ("no safety factor (1.25 → 1)", {"SAFETY_FACTOR": 1.0}),
     ("an unconfirmed order trusted up to 2 (not 1)", {"UNCONFIRMED_ORDER": 2.0}),
-    ("grids observed under order 1 (not 0.5) taken as out of their asymptotic range, and read at order 1", {"LOWEST_ORDER": 1.0}),
+    (
+        "grids observed under order 1 (not 0.5) taken as out of their asymptotic range, and read at order 1",
+        {"LOWEST_ORDER": 1.0},
+    ),
     ("predicted grids aim at the tolerance (not 0.75×)", {"AIM": 1.0}),
     ("a first grid of 2 steps over the contact (not 4)", {"FIRST_POINTS": 2.0}),
     ("all four estimator margins loosened", LOOSE),
@@ -53,16 +56,21 @@ def run_setting(overrides: dict, cases: list[dict], processes: int) -> dict:
 
 
 def table(rows: list[tuple[str, dict]]) -> str:
-    lines = ["| setting | " + " | ".join(
-                f"{tol:g}: worst true / tol | beyond tol | beyond 1.5× | cost median"
-                for tol in bench_matrix.TOLERANCES) + " |",
-             "|---|" + "---|---|---|---|" * len(bench_matrix.TOLERANCES)]
+    lines = [
+        "| setting | "
+        + " | ".join(
+            f"{tol:g}: worst true / tol | beyond tol | beyond 1.5× | cost median" for tol in bench_matrix.TOLERANCES
+        )
+        + " |",
+        "|---|" + "---|---|---|---|" * len(bench_matrix.TOLERANCES),
+    ]
     for name, stats in rows:
         cells = []
         for tol in bench_matrix.TOLERANCES:
             s = stats[str(tol)]
-            cells.append(f"{s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | {s['beyond_1_5_tol']} | "
-                         f"{s['cost_median']:.2f}×")
+            cells.append(
+                f"{s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | {s['beyond_1_5_tol']} | {s['cost_median']:.2f}×"
+            )
         lines.append(f"| {name} | " + " | ".join(cells) + " |")
     return "\n".join(lines) + "\n"
 
@@ -85,7 +93,8 @@ def main() -> None:
             "Each row changes the named margin of the shipped ladder; the last changes all four of "
             "the estimator's. True error: a run's worst relative error against the reference; cost: "
             "its work against the cheapest fixed grid that meets the same tolerance, found in "
-            "hindsight.\n\n" + text)
+            "hindsight.\n\n" + text
+        )
 
 
 if __name__ == "__main__":

@@ -47,10 +47,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, postgres_server  # noqa: E402
-from sqlalchemy import and_, func, insert, select, text, true  # noqa: E402
-from percussim.worker.database import database, jobs as JOBS  # noqa: E402
+from percussim.worker.database import database  # noqa: E402
+from percussim.worker.database import jobs as JOBS
 from percussim.worker.settings import Settings  # noqa: E402
 from percussim.worker.store import JobStore, new_id, now  # noqa: E402
+from sqlalchemy import and_, func, insert, select, text, true  # noqa: E402
 
 DATABASES = ("sqlite", "postgresql")
 SIZES = (1000, 10_000, 100_000)
@@ -96,14 +97,23 @@ class Rows:
         sweep = None
         if rng.random() < SWEEP_SHARE:
             sweep = self.sweeps.setdefault(k // 100, new_id())
-        return {"id": new_id(), "owner": None, "name": f"case {rng.randrange(NAMES)}", "kind": "run",
-                "status": status, "progress": progress, "created": created, "started": started,
-                "finished": finished,
-                "error": "the solver diverged: the time step exceeds the stable one" if status == "failed" else None,
-                "attempts": 0 if started is None else 1,
-                "worker": None if started is None else "percussim1@bench",
-                "sweep": sweep, "cancel_requested": status == "cancelled",
-                "result_bytes": rng.randrange(200_000, 2_000_000) if status == "succeeded" else None}
+        return {
+            "id": new_id(),
+            "owner": None,
+            "name": f"case {rng.randrange(NAMES)}",
+            "kind": "run",
+            "status": status,
+            "progress": progress,
+            "created": created,
+            "started": started,
+            "finished": finished,
+            "error": "the solver diverged: the time step exceeds the stable one" if status == "failed" else None,
+            "attempts": 0 if started is None else 1,
+            "worker": None if started is None else "percussim1@bench",
+            "sweep": sweep,
+            "cancel_requested": status == "cancelled",
+            "result_bytes": rng.randrange(200_000, 2_000_000) if status == "succeeded" else None,
+        }
 
 
 def fill(engine, rows: Rows, start: int, stop: int) -> float:
@@ -146,14 +156,17 @@ def in_process(call, requests: int) -> tuple[float, float]:
 
 def statement(engine, query):
     """A call running `query` on a connection from the engine's pool."""
+
     def run():
         with engine.connect() as connection:
             connection.execute(query).all()
+
     return run
 
 
-def measure(kind: str, stack: Stack, settings: Settings, engine, rows: Rows, size: int,
-            requests: int) -> dict[str, float]:
+def measure(
+    kind: str, stack: Stack, settings: Settings, engine, rows: Rows, size: int, requests: int
+) -> dict[str, float]:
     """Print a line per query; returns each query's p95."""
     client = stack.client
     first = client.get("/v1/jobs", params={"limit": PAGE}).json()
@@ -184,20 +197,29 @@ def measure(kind: str, stack: Stack, settings: Settings, engine, rows: Rows, siz
         if label.startswith("page ") and followed:
             assert answer["jobs"] == deep["jobs"], "the cursor's page changed"
         results[label] = p95
-        print(f"  {kind:10s} N={size:<7d} {label:22s} p50 {p50:6.2f} ms  p95 {p95:6.2f} ms  "
-              f"(total {answer['total']}, {len(answer['jobs'])} jobs)")
+        print(
+            f"  {kind:10s} N={size:<7d} {label:22s} p50 {p50:6.2f} ms  p95 {p95:6.2f} ms  "
+            f"(total {answer['total']}, {len(answer['jobs'])} jobs)"
+        )
 
     # The statements as `JobStore.list` builds them: with no filter its condition is `true`, which
     # SQLite cannot answer from its b-tree's own count as it does a bare COUNT(*).
     everything = and_(true())
     count = in_process(statement(engine, select(func.count()).select_from(JOBS).where(everything)), requests)
-    selecting = in_process(statement(engine, select(JOBS).where(everything).order_by(
-        JOBS.c.created.desc(), JOBS.c.id.desc()).offset(0).limit(PAGE)), requests)
+    selecting = in_process(
+        statement(
+            engine,
+            select(JOBS).where(everything).order_by(JOBS.c.created.desc(), JOBS.c.id.desc()).offset(0).limit(PAGE),
+        ),
+        requests,
+    )
     store = JobStore(settings)
     listing = in_process(lambda: store.list(0, PAGE), requests)
-    print(f"  {kind:10s} N={size:<7d} in this process, the first page: JobStore.list p50 {listing[0]:.2f} ms "
-          f"p95 {listing[1]:.2f} ms; its COUNT(*) alone p50 {count[0]:.2f} ms p95 {count[1]:.2f} ms, "
-          f"its SELECT alone p50 {selecting[0]:.2f} ms p95 {selecting[1]:.2f} ms")
+    print(
+        f"  {kind:10s} N={size:<7d} in this process, the first page: JobStore.list p50 {listing[0]:.2f} ms "
+        f"p95 {listing[1]:.2f} ms; its COUNT(*) alone p50 {count[0]:.2f} ms p95 {count[1]:.2f} ms, "
+        f"its SELECT alone p50 {selecting[0]:.2f} ms p95 {selecting[1]:.2f} ms"
+    )
     return results
 
 
@@ -227,10 +249,14 @@ def run(kind: str, sizes: list[int], requests: int, outcome: dict) -> None:
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--databases", default=",".join(DATABASES),
-                        help="comma-separated: sqlite, postgresql (default both)")
-    parser.add_argument("--sizes", default=",".join(map(str, SIZES)),
-                        help="comma-separated numbers of jobs, growing (default 1000,10000,100000)")
+    parser.add_argument(
+        "--databases", default=",".join(DATABASES), help="comma-separated: sqlite, postgresql (default both)"
+    )
+    parser.add_argument(
+        "--sizes",
+        default=",".join(map(str, SIZES)),
+        help="comma-separated numbers of jobs, growing (default 1000,10000,100000)",
+    )
     parser.add_argument("--requests", type=int, default=200, help="timed requests per query")
     args = parser.parse_args()
     kinds = [k.strip() for k in args.databases.split(",") if k.strip()]
@@ -248,8 +274,9 @@ def main() -> None:
     for kind in kinds:
         p95 = outcome[(kind, largest)]["first page"]
         verdict = "meets" if p95 <= REQUIREMENT_MS else "MISSES"
-        print(f"{kind}: first page of {PAGE} at {largest} jobs, p95 {p95:.2f} ms: {verdict} "
-              f"p95 ≤ {REQUIREMENT_MS:.0f} ms")
+        print(
+            f"{kind}: first page of {PAGE} at {largest} jobs, p95 {p95:.2f} ms: {verdict} p95 ≤ {REQUIREMENT_MS:.0f} ms"
+        )
     print(f"bench time {time.perf_counter() - began:.0f} s")
 
 

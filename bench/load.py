@@ -69,9 +69,11 @@ def job_parts() -> None:
         solve = best(lambda: simulate(case))
         solve_and_write = best(lambda: simulate(case, result_path=path))
         size = path.stat().st_size
-    print(f"a Fig. 3 job's parts in one process: solve {solve * 1e3:.2f} ms; solve streaming its HDF5 "
-          f"result {solve_and_write * 1e3:.2f} ms, so writing {(solve_and_write - solve) * 1e3:.2f} ms "
-          f"({size / 1e6:.2f} MB)")
+    print(
+        f"a Fig. 3 job's parts in one process: solve {solve * 1e3:.2f} ms; solve streaming its HDF5 "
+        f"result {solve_and_write * 1e3:.2f} ms, so writing {(solve_and_write - solve) * 1e3:.2f} ms "
+        f"({size / 1e6:.2f} MB)"
+    )
 
 
 def main() -> None:
@@ -83,8 +85,11 @@ def main() -> None:
     warm_up()
     job_parts()
     case = preset_json("fig3")
-    with (tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url,
-          postgres_server() if args.postgresql else nullcontext() as postgres):
+    with (
+        tempfile.TemporaryDirectory() as tmp,
+        redis_server(Path(tmp) / "redis") as url,
+        postgres_server() if args.postgresql else nullcontext() as postgres,
+    ):
         env = {"PERCUSSIM_DATABASE_URL": postgres.database()} if postgres else {}
         print(f"job records in {'PostgreSQL' if postgres else 'SQLite'}")
         stack = Stack(Path(tmp), url, workers=2, env=env)
@@ -107,13 +112,16 @@ def main() -> None:
             elapsed = time.perf_counter() - start
             outcomes = [r["status"] for r in records]
             counts = {s: outcomes.count(s) for s in sorted(set(outcomes))}
-            in_service = [datetime.fromisoformat(r["finished"]).timestamp() - submitted[r["id"]]
-                          for r in records]
-            running = [datetime.fromisoformat(r["finished"]).timestamp()
-                       - datetime.fromisoformat(r["started"]).timestamp() for r in records]
-            print(f"sustained, a burst of {args.burst_jobs} jobs on 2 workers: posted in {posting:.2f} s, "
-                  f"all finished after {elapsed:.2f} s: {args.burst_jobs / elapsed:.1f} jobs/s; "
-                  f"outcomes {counts} ({args.burst_jobs - len(records)} unaccounted for)")
+            in_service = [datetime.fromisoformat(r["finished"]).timestamp() - submitted[r["id"]] for r in records]
+            running = [
+                datetime.fromisoformat(r["finished"]).timestamp() - datetime.fromisoformat(r["started"]).timestamp()
+                for r in records
+            ]
+            print(
+                f"sustained, a burst of {args.burst_jobs} jobs on 2 workers: posted in {posting:.2f} s, "
+                f"all finished after {elapsed:.2f} s: {args.burst_jobs / elapsed:.1f} jobs/s; "
+                f"outcomes {counts} ({args.burst_jobs - len(records)} unaccounted for)"
+            )
             print(f"  submission to finished: {percentiles(in_service)}; in the worker: {percentiles(running)}")
         finally:
             stack.stop()

@@ -12,11 +12,10 @@ divided by ε². The largest ratio found is what `solver/adaptive.py`'s LUMPED_E
 from __future__ import annotations
 
 import numpy as np
-
-from percussim.solver.case import parse_case
-from percussim.solver.controller import simulate_rod
 from percussim.solver.accuracy import estimated_values, not_estimated
 from percussim.solver.adaptive import LUMPED_ERROR, explicit_numerics, rigidity
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import contact_time_estimate, wave_speed
 from percussim.solver.lumped import simulate_lumped
 
@@ -34,9 +33,13 @@ def case_of(length: float, c1: float, m1: float, c2: float, tapered: bool) -> di
     if tapered:
         del tool["area"]
         tool["profile"] = {"x": [0.0, length / 2, length], "area": [0.002, 0.002, 0.0005]}
-    case = {**BASE, "tool": tool, "striker": {**BASE["striker"], "mass": m1},
-            "contact": {**BASE["contact"], "stiffness": c1},
-            "medium": {**BASE["medium"], "stiffness": c2}}
+    case = {
+        **BASE,
+        "tool": tool,
+        "striker": {**BASE["striker"], "mass": m1},
+        "contact": {**BASE["contact"], "stiffness": c1},
+        "medium": {**BASE["medium"], "stiffness": c2},
+    }
     period = contact_time_estimate(parse_case(case))
     case["numerics"] = {"duration": 3 * period}
     return case
@@ -71,12 +74,16 @@ def main() -> None:
                         grid = max(abs(check[q] / fine[q] - 1) for q in fine)
                         ratios.append(max(errors) / eps**2)
                         worst = max(worst, grid)
-                        print(f"L {length:4} m  c1 {c1:.0e}  m1 {m1:5}  c2 {c2:.0e}  "
-                              f"{'tapered' if tapered else 'uniform'}:  ε {eps:.3f}  "
-                              f"error {max(errors):.2e}  error/ε² {ratios[-1]:.3f}")
-    print(f"\n{len(ratios)} cases with ε ≤ 0.5: error/ε² at most {max(ratios):.3f} "
-          f"(median {np.median(ratios):.3f}); LUMPED_ERROR = {LUMPED_ERROR}; "
-          f"rod grid uncertainty at most {worst:.1e}")
+                        print(
+                            f"L {length:4} m  c1 {c1:.0e}  m1 {m1:5}  c2 {c2:.0e}  "
+                            f"{'tapered' if tapered else 'uniform'}:  ε {eps:.3f}  "
+                            f"error {max(errors):.2e}  error/ε² {ratios[-1]:.3f}"
+                        )
+    print(
+        f"\n{len(ratios)} cases with ε ≤ 0.5: error/ε² at most {max(ratios):.3f} "
+        f"(median {np.median(ratios):.3f}); LUMPED_ERROR = {LUMPED_ERROR}; "
+        f"rod grid uncertainty at most {worst:.1e}"
+    )
 
 
 if __name__ == "__main__":

@@ -40,11 +40,11 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 from percussim.solver import characteristics, matrix  # noqa: E402
-from percussim.solver.case import parse_case
 from percussim.solver.accuracy import estimated_values  # noqa: E402
 from percussim.solver.adaptive import explicit_numerics  # noqa: E402
-from percussim.solver.grid import wave_speed  # noqa: E402
+from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
+from percussim.solver.grid import wave_speed  # noqa: E402
 from percussim.solver.matrix import converged_reference, draw_cases, reference_cells  # noqa: E402
 from percussim.solver.presets import preset_json, preset_names  # noqa: E402
 from percussim.solver.simulate import simulate  # noqa: E402
@@ -80,13 +80,20 @@ def reference(case: dict) -> dict:
     max_cells = min(REFERENCE_CELLS, int(math.sqrt(REFERENCE_WORK / steps_per_cell)))
     first = reference_cells(parsed)
     if 8 * first > max_cells:  # four grids, the least an uncertainty is found from
-        found = {"skipped": f"its reference would take {steps_per_cell * (8 * first) ** 2:.1e} "
-                            f"node-steps on its finest grid, over {REFERENCE_WORK:.0e}"}
+        found = {
+            "skipped": f"its reference would take {steps_per_cell * (8 * first) ** 2:.1e} "
+            f"node-steps on its finest grid, over {REFERENCE_WORK:.0e}"
+        }
     else:
         ref = converged_reference(parsed, target=REFERENCE_TARGET, max_cells=max_cells)
-        found = {"values": ref.values, "uncertainty": ref.uncertainty, "left_out": ref.left_out,
-                 "cells": ref.cells, "contacts": ref.finest.contacts,
-                 "seconds": time.perf_counter() - start}
+        found = {
+            "values": ref.values,
+            "uncertainty": ref.uncertainty,
+            "left_out": ref.left_out,
+            "cells": ref.cells,
+            "contacts": ref.finest.contacts,
+            "seconds": time.perf_counter() - start,
+        }
     CACHE.mkdir(parents=True, exist_ok=True)
     path.write_text(json.dumps(found))
     return found
@@ -151,14 +158,18 @@ def tolerance_run(case, tol: float, ref: dict) -> dict:
     summary = simulate(run_case).summary
     seconds = time.process_time() - start
     estimate = summary["error_estimate"]
-    errors = {name: e for name, e in true_errors(estimated_values(summary), ref).items()
-              if name in estimate}
-    return {"errors": errors, "estimate": {k: v for k, v in estimate.items() if k != "worst"},
-            "worst": max(errors.values(), default=0.0), "estimated": estimate["worst"],
-            "work": sum((r["cells"] + 1) * (r["steps"] + 1) for r in summary["runs"]),
-            "cells": [r["cells"] for r in summary["runs"]], "seconds": seconds,
-            "warnings": summary["warnings"],
-            "missed": [name for name in ref["values"] if name not in estimate]}
+    errors = {name: e for name, e in true_errors(estimated_values(summary), ref).items() if name in estimate}
+    return {
+        "errors": errors,
+        "estimate": {k: v for k, v in estimate.items() if k != "worst"},
+        "worst": max(errors.values(), default=0.0),
+        "estimated": estimate["worst"],
+        "work": sum((r["cells"] + 1) * (r["steps"] + 1) for r in summary["runs"]),
+        "cells": [r["cells"] for r in summary["runs"]],
+        "seconds": seconds,
+        "warnings": summary["warnings"],
+        "missed": [name for name in ref["values"] if name not in estimate],
+    }
 
 
 def prepare(case_json: dict) -> dict:
@@ -196,14 +207,20 @@ def measure(case_json: dict) -> dict:
 def describe(case: dict) -> str:
     """A case in a few words: tool shape, contact exponent and damping ratio ζ, medium, force."""
     tool = case["tool"]
-    shape = "uniform" if "area" in tool else (
-        "tapered" if len(tool["profile"]["x"]) == 2 else
-        "stepped" if len(tool["profile"]["x"]) == 4 else "conical")
+    shape = (
+        "uniform"
+        if "area" in tool
+        else (
+            "tapered" if len(tool["profile"]["x"]) == 2 else "stepped" if len(tool["profile"]["x"]) == 4 else "conical"
+        )
+    )
     medium = "no medium" if "medium" not in case else f"c2 {case['medium']['stiffness']:.0e}"
     force = case.get("force", {}).get("kind", "no force")
-    return (f"{case['striker']['mass']:.3g} kg at {case['striker']['velocity']:.3g} m/s, {shape} "
-            f"{tool['length']:.2g} m, α {case['contact']['exponent']:.2g}, c1 "
-            f"{case['contact']['stiffness']:.1e}, {medium}, {force}")
+    return (
+        f"{case['striker']['mass']:.3g} kg at {case['striker']['velocity']:.3g} m/s, {shape} "
+        f"{tool['length']:.2g} m, α {case['contact']['exponent']:.2g}, c1 "
+        f"{case['contact']['stiffness']:.1e}, {medium}, {force}"
+    )
 
 
 def presets() -> list[dict]:
@@ -224,9 +241,15 @@ def presets() -> list[dict]:
             summary = simulate(case).summary
             best = min(best, time.perf_counter() - start)
         errors = true_errors(estimated_values(summary), ref)
-        rows.append({"name": name, "ms": 1e3 * best, "worst": max(errors.values()),
-                     "estimated": summary["error_estimate"]["worst"],
-                     "cells": [r["cells"] for r in summary["runs"]]})
+        rows.append(
+            {
+                "name": name,
+                "ms": 1e3 * best,
+                "worst": max(errors.values()),
+                "estimated": summary["error_estimate"]["worst"],
+                "cells": [r["cells"] for r in summary["runs"]],
+            }
+        )
     return rows
 
 
@@ -265,15 +288,25 @@ def overview(stats: dict, preset_rows: list[dict], count: int, seed: int) -> str
     ]
     for tol in TOLERANCES:
         s = stats[str(tol)]
-        lines.append(f"| {tol:g} | {s['cases']} | {s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | "
-                     f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['said_not_met']} | "
-                     f"{s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | {s['cost_counted']} |")
-    lines += ["", f"Each of the paper's presets at the default accuracy (1%), after compilation, least of "
-              f"{PRESET_REPEATS} runs (the reference solves the paper's model only; `bench/device_presets.py` "
-              "times the others):", "", "| preset | time | true error | estimate | grids (cells) |", "|---|---|---|---|---|"]
+        lines.append(
+            f"| {tol:g} | {s['cases']} | {s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | "
+            f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['said_not_met']} | "
+            f"{s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | {s['cost_counted']} |"
+        )
+    lines += [
+        "",
+        f"Each of the paper's presets at the default accuracy (1%), after compilation, least of "
+        f"{PRESET_REPEATS} runs (the reference solves the paper's model only; `bench/device_presets.py` "
+        "times the others):",
+        "",
+        "| preset | time | true error | estimate | grids (cells) |",
+        "|---|---|---|---|---|",
+    ]
     for p in preset_rows:
-        lines.append(f"| {p['name']} | {p['ms']:.2f} ms | {p['worst']:.1e} | {p['estimated']:.1e} | "
-                     f"{', '.join(map(str, p['cells']))} |")
+        lines.append(
+            f"| {p['name']} | {p['ms']:.2f} ms | {p['worst']:.1e} | {p['estimated']:.1e} | "
+            f"{', '.join(map(str, p['cells']))} |"
+        )
     return "\n".join(lines)
 
 
@@ -286,14 +319,17 @@ def table(results: list[dict], stats: dict, preset_rows: list[dict], seed: int) 
         "",
         overview(stats, preset_rows, len(results), seed).replace("[matrix.md](matrix.md)", "the table below"),
     ]
-    lines += ["", "Every case (true error and estimate, worst over the quantities; cost against "
-              "the cheapest fixed grid, whose cells are given):", "",
-              "| case | reference contacts | 1e-2: true | estimate | cost (cells) | 1e-3: true | estimate | cost (cells) |",
-              "|---|---|---|---|---|---|---|---|"]
+    lines += [
+        "",
+        "Every case (true error and estimate, worst over the quantities; cost against "
+        "the cheapest fixed grid, whose cells are given):",
+        "",
+        "| case | reference contacts | 1e-2: true | estimate | cost (cells) | 1e-3: true | estimate | cost (cells) |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
     for r in results:
         if "skipped" in r["reference"]:
-            lines.append(f"| {r['name']}: {describe(r['case'])} | left out: {r['reference']['skipped']} "
-                         "| | | | | | |")
+            lines.append(f"| {r['name']}: {describe(r['case'])} | left out: {r['reference']['skipped']} | | | | | | |")
             continue
         cells = []
         for tol in TOLERANCES:
@@ -304,8 +340,9 @@ def table(results: list[dict], stats: dict, preset_rows: list[dict], seed: int) 
                 continue
             ratio = f"{run['ratio']:.2f}× ({run['cheapest_cells']})" if run["ratio"] else "no fixed grid"
             cells.append(f"{run['worst']:.1e} | {run['estimated']:.1e} | {ratio}")
-        lines.append(f"| {r['name']}: {describe(r['case'])} | {r['reference']['contacts']} | "
-                     + " | ".join(cells) + " |")
+        lines.append(
+            f"| {r['name']}: {describe(r['case'])} | {r['reference']['contacts']} | " + " | ".join(cells) + " |"
+        )
     return "\n".join(lines) + "\n"
 
 
@@ -321,8 +358,9 @@ def matrix_parser(description: str) -> argparse.ArgumentParser:
 
 def main() -> None:
     parser = matrix_parser(__doc__.split("\n\n")[0])
-    parser.add_argument("--prepare", action="store_true",
-                        help="only compute the references and fixed grids into the cache")
+    parser.add_argument(
+        "--prepare", action="store_true", help="only compute the references and fixed grids into the cache"
+    )
     args = parser.parse_args()
     warm_up()
     cases = draw_cases(args.seed, args.count)
@@ -335,10 +373,15 @@ def main() -> None:
         results = []
         for result in pool.map(measure, cases):
             runs = result["runs"]
-            print(result["name"], " ".join(
-                f"{tol}: true {runs[tol]['worst']:.1e} est {runs[tol]['estimated']:.1e} "
-                f"cost {runs[tol]['ratio'] or float('nan'):.2f} cells {runs[tol]['cells']}"
-                for tol in runs), flush=True)
+            print(
+                result["name"],
+                " ".join(
+                    f"{tol}: true {runs[tol]['worst']:.1e} est {runs[tol]['estimated']:.1e} "
+                    f"cost {runs[tol]['ratio'] or float('nan'):.2f} cells {runs[tol]['cells']}"
+                    for tol in runs
+                ),
+                flush=True,
+            )
             results.append(result)
     stats = summarise(results)
     preset_rows = presets()
@@ -349,8 +392,10 @@ def main() -> None:
         (ROOT / "docs" / "matrix.md").write_text(table(results, stats, preset_rows, args.seed))
         quoted = overview(stats, preset_rows, len(results), args.seed)
         marked = re.compile(r"(<!-- matrix: .*? -->\n).*?(<!-- /matrix -->)", re.S)
-        for path, text in ((ROOT / "README.md", quoted.replace("(matrix.md)", "(docs/matrix.md)")),
-                           (ROOT / "docs" / "numerics.md", quoted)):
+        for path, text in (
+            (ROOT / "README.md", quoted.replace("(matrix.md)", "(docs/matrix.md)")),
+            (ROOT / "docs" / "numerics.md", quoted),
+        ):
             path.write_text(marked.sub(lambda m: m.group(1) + text + "\n" + m.group(2), path.read_text()))
 
 

@@ -33,12 +33,10 @@ def bench_case(cells: int, steps: int, field_stride: int) -> dict:
     return {
         "name": "memory-bench",
         "striker": {"mass": 20.0, "velocity": 5.0},
-        "tool": {"length": length, "area": 0.014209, "youngs_modulus": youngs_modulus,
-                 "density": density},
+        "tool": {"length": length, "area": 0.014209, "youngs_modulus": youngs_modulus, "density": density},
         "contact": {"stiffness": 1e11, "exponent": 0.5, "damping": 1.2e3},
         "medium": {"stiffness": 2e8, "damping": 1e3},
-        "numerics": {"duration": steps * time_step, "time_step": time_step, "cells": cells,
-                     "scheme": "explicit"},
+        "numerics": {"duration": steps * time_step, "time_step": time_step, "cells": cells, "scheme": "explicit"},
         "outputs": {"probes": [0.5 * length], "fields": True, "field_stride": field_stride},
     }
 
@@ -59,18 +57,39 @@ def child(cells: int, steps: int, field_stride: int) -> None:
         wall = time.perf_counter() - start
         size = path.stat().st_size
     num = result.numerics
-    print(json.dumps({
-        "cells": num.cells, "steps": num.steps, "wall": wall, "file_bytes": size,
-        "node_steps": (num.cells + 1) * num.steps,
-        "held_bytes": 8 * output_values(case, num),
-        "peak_rss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,  # KiB on Linux
-    }))
+    print(
+        json.dumps(
+            {
+                "cells": num.cells,
+                "steps": num.steps,
+                "wall": wall,
+                "file_bytes": size,
+                "node_steps": (num.cells + 1) * num.steps,
+                "held_bytes": 8 * output_values(case, num),
+                "peak_rss_bytes": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024,  # KiB on Linux
+            }
+        )
+    )
 
 
 def measure(cells: int, steps: int, field_stride: int) -> dict:
-    out = subprocess.run([sys.executable, __file__, "--child", "--cells", str(cells), "--steps",
-                          str(steps), "--field-stride", str(field_stride)],
-                         check=True, capture_output=True, text=True, cwd=ROOT)
+    out = subprocess.run(
+        [
+            sys.executable,
+            __file__,
+            "--child",
+            "--cells",
+            str(cells),
+            "--steps",
+            str(steps),
+            "--field-stride",
+            str(field_stride),
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
     return json.loads(out.stdout)
 
 
@@ -86,18 +105,25 @@ def main() -> None:
         return
 
     # Compiled once beforehand, so that no measured process holds the compiler's memory.
-    subprocess.run([sys.executable, "-c", "from percussim.solver.controller import warm_up; warm_up()"],
-                   check=True, cwd=ROOT)
+    subprocess.run(
+        [sys.executable, "-c", "from percussim.solver.controller import warm_up; warm_up()"], check=True, cwd=ROOT
+    )
     base = measure(**BASELINE)
     run = measure(args.cells, args.steps, args.field_stride)
     mb = 1e-6
-    print(f"baseline: {base['cells']} cells × {base['steps']} steps, peak RSS "
-          f"{base['peak_rss_bytes'] * mb:.1f} MB (interpreter, numpy, Numba, kernel, h5py)")
-    print(f"run: {run['cells']} cells × {run['steps']:,} steps ({run['node_steps']:.3g} node-steps), "
-          f"history every step, 1 probe, fields every {args.field_stride} steps, streamed to HDF5")
-    print(f"  peak RSS          {run['peak_rss_bytes'] * mb:8.1f} MB "
-          f"({(run['peak_rss_bytes'] - base['peak_rss_bytes']) * mb:.1f} MB over the baseline; "
-          f"goal < {GOAL_MB:.0f} MB: {'met' if run['peak_rss_bytes'] * mb < GOAL_MB else 'NOT met'})")
+    print(
+        f"baseline: {base['cells']} cells × {base['steps']} steps, peak RSS "
+        f"{base['peak_rss_bytes'] * mb:.1f} MB (interpreter, numpy, Numba, kernel, h5py)"
+    )
+    print(
+        f"run: {run['cells']} cells × {run['steps']:,} steps ({run['node_steps']:.3g} node-steps), "
+        f"history every step, 1 probe, fields every {args.field_stride} steps, streamed to HDF5"
+    )
+    print(
+        f"  peak RSS          {run['peak_rss_bytes'] * mb:8.1f} MB "
+        f"({(run['peak_rss_bytes'] - base['peak_rss_bytes']) * mb:.1f} MB over the baseline; "
+        f"goal < {GOAL_MB:.0f} MB: {'met' if run['peak_rss_bytes'] * mb < GOAL_MB else 'NOT met'})"
+    )
     print(f"  outputs if held   {run['held_bytes'] * mb:8.1f} MB")
     print(f"  file size         {run['file_bytes'] * mb:8.1f} MB")
     print(f"  wall time         {run['wall']:8.1f} s")

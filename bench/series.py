@@ -45,8 +45,10 @@ def main() -> None:
     parser.add_argument("--field-stride", type=int, default=200)
     parser.add_argument("--repeat", type=int, default=3)
     args = parser.parse_args()
-    case = merge(preset_json("fig9"), {"numerics": {"duration": args.duration},
-                                       "outputs": {"fields": True, "field_stride": args.field_stride}})
+    case = merge(
+        preset_json("fig9"),
+        {"numerics": {"duration": args.duration}, "outputs": {"fields": True, "field_stride": args.field_stride}},
+    )
     warm_up()
     with tempfile.TemporaryDirectory() as folder:
         path = Path(folder) / "long.h5"

@@ -13,8 +13,8 @@ import statistics
 import time
 from pathlib import Path
 
-from percussim.solver.presets import load_preset
 from percussim.solver.controller import simulate_rod, warm_up
+from percussim.solver.presets import load_preset
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -34,14 +34,16 @@ def main() -> None:
     num = result.numerics
     node_steps = (num.cells + 1) * num.steps
     best, median = min(times), statistics.median(times)
-    print(f"case: {case.name}, {num.cells} cells, tau = {num.time_step:.3g} s, {num.steps} steps, "
-          f"{node_steps:,} node-steps")
-    print(f"wall time after compilation: best {best * 1e3:.2f} ms, median {median * 1e3:.2f} ms "
-          f"({args.repeat} runs)")
-    print(f"cost per node-step: best {best / node_steps * 1e9:.2f} ns, "
-          f"median {median / node_steps * 1e9:.2f} ns")
-    print(f"co-impact time {result.summary['co_impact_time'] * 1e6:.1f} us, "
-          f"peak contact force {result.summary['peak_contact_force']['value'] / 1e3:.1f} kN")
+    print(
+        f"case: {case.name}, {num.cells} cells, tau = {num.time_step:.3g} s, {num.steps} steps, "
+        f"{node_steps:,} node-steps"
+    )
+    print(f"wall time after compilation: best {best * 1e3:.2f} ms, median {median * 1e3:.2f} ms ({args.repeat} runs)")
+    print(f"cost per node-step: best {best / node_steps * 1e9:.2f} ns, median {median / node_steps * 1e9:.2f} ns")
+    print(
+        f"co-impact time {result.summary['co_impact_time'] * 1e6:.1f} us, "
+        f"peak contact force {result.summary['peak_contact_force']['value'] / 1e3:.1f} kN"
+    )
 
 
 if __name__ == "__main__":

@@ -32,15 +32,18 @@ from percussim.solver.sweep import Sweep  # noqa: E402
 
 CASES = {
     "preset numerics": preset_json("fig5"),
-    "tolerance 1e-2": merge(preset_json("fig5"), {"numerics": {"cells": None, "time_step": None,
-                                                              "gamma": None, "tolerance": 1e-2}}),
+    "tolerance 1e-2": merge(
+        preset_json("fig5"), {"numerics": {"cells": None, "time_step": None, "gamma": None, "tolerance": 1e-2}}
+    ),
 }
 
 
 def parameters(variants: int) -> dict[str, list[float]]:
     side = round(math.sqrt(variants))
-    return {"striker.velocity": [2.0 + 8.0 * k / (side - 1) for k in range(side)],
-            "contact.stiffness": [1e11 * 16 ** (k / (side - 1)) for k in range(side)]}
+    return {
+        "striker.velocity": [2.0 + 8.0 * k / (side - 1) for k in range(side)],
+        "contact.stiffness": [1e11 * 16 ** (k / (side - 1)) for k in range(side)],
+    }
 
 
 def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], float]:
@@ -48,8 +51,7 @@ def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], f
     answer = stack.client.post("/v1/sweeps", json={"case": case, "parameters": grid})
     assert answer.status_code == 202, answer.text
     url = f"/v1/sweeps/{answer.json()['id']}"
-    sweep = wait_for(lambda: (v := stack.client.get(url).json())["finished"] and v, 600, "the sweep",
-                     interval=0.02)
+    sweep = wait_for(lambda: (v := stack.client.get(url).json())["finished"] and v, 600, "the sweep", interval=0.02)
     return sweep["rows"], time.perf_counter() - start
 
 
@@ -69,13 +71,17 @@ def main() -> None:
                     start = time.perf_counter()
                     rows = run_sweep(sweep, processes=processes)
                     figures[f"run_sweep, {processes} process{'es' if processes > 1 else ''}"] = (
-                        rows, time.perf_counter() - start)
+                        rows,
+                        time.perf_counter() - start,
+                    )
                 figures["service, Redis, 2 workers"] = through_service(stack, case, grid)
                 print(f"\nFig. 5, {label}:")
                 for how, (rows, seconds) in figures.items():
                     failed = [r for r in rows if r.get("error")]
-                    print(f"  {how:28s} {len(rows):5d} variants in {seconds:7.2f} s: "
-                          f"{len(rows) / seconds:8.1f} variants/s, {len(failed)} failed")
+                    print(
+                        f"  {how:28s} {len(rows):5d} variants in {seconds:7.2f} s: "
+                        f"{len(rows) / seconds:8.1f} variants/s, {len(failed)} failed"
+                    )
                     for row in failed[:3]:
                         values = row.get("values") or {k: row[k] for k in grid}
                         print(f"    {values}: {row['error']}")

@@ -24,7 +24,6 @@ import json
 from pathlib import Path
 
 import numpy as np
-
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.presets import preset_json
@@ -49,8 +48,11 @@ def true_case() -> dict:
 def measured(case: dict, gauge: float, noise: float, seed: int) -> Record:
     """The stress at `gauge` (m from the struck end) by another solver setting than a fit's,
     sampled at 1 MHz, with Gaussian noise of `noise` × its peak."""
-    fine = {**case, "numerics": {"duration": DURATION, "scheme": "sigma", "cells": 1200, "time_step": 1e-7},
-            "outputs": {"probes": [gauge]}}
+    fine = {
+        **case,
+        "numerics": {"duration": DURATION, "scheme": "sigma", "cells": 1200, "time_step": 1e-7},
+        "outputs": {"probes": [gauge]},
+    }
     run = simulate_rod(parse_case(fine))
     t = np.arange(0.0, DURATION, SAMPLING)
     stress = np.interp(t, run.history["time"], run.probe_stress[:, 0])
@@ -63,8 +65,9 @@ def main() -> None:
     parser.add_argument("--out-dir", default="demo", help="where to write record.csv and case.json (default demo)")
     parser.add_argument("--noise", type=float, default=0.02, help="noise as a share of the peak (default 0.02)")
     parser.add_argument("--seed", type=int, default=1, help="of the noise (default 1)")
-    parser.add_argument("--gauge", type=float, default=0.3,
-                        help="the gauge's station, m from the struck end (default 0.3)")
+    parser.add_argument(
+        "--gauge", type=float, default=0.3, help="the gauge's station, m from the struck end (default 0.3)"
+    )
     args = parser.parse_args()
 
     out = Path(args.out_dir)
@@ -79,8 +82,10 @@ def main() -> None:
     (out / "case.json").write_text(json.dumps(start, indent=2) + "\n")
 
     peak = max(abs(v) for v in record.values)
-    print(f"{out / 'record.csv'}: {record.label} (Pa), {len(record.time)} samples at 1 MHz over "
-          f"{DURATION * 1e3:g} ms, peak {peak / 1e6:.1f} MPa, noise {args.noise:.0%} of the peak (seed {args.seed})")
+    print(
+        f"{out / 'record.csv'}: {record.label} (Pa), {len(record.time)} samples at 1 MHz over "
+        f"{DURATION * 1e3:g} ms, peak {peak / 1e6:.1f} MPa, noise {args.noise:.0%} of the peak (seed {args.seed})"
+    )
     print(f"{out / 'case.json'}: the fit's start")
     for name, true in TRUE.items():
         print(f"  {name:18s} start {START[name]:.3g}, true {true:.3g} ({true / START[name]:g}× the start)")

@@ -21,14 +21,20 @@ import time
 from pathlib import Path
 
 import httpx
-from playwright.sync_api import Page, expect, sync_playwright
-
 from percussim.solver.presets import preset_json
+from playwright.sync_api import Page, expect, sync_playwright
 
 WIDTHS = {"1280": {"width": 1280, "height": 900}, "390": {"width": 390, "height": 844}}
 CHROMIUM = "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-        "--disable-component-update", "--disable-sync"]
+ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 
 
 def free_port() -> int:
@@ -56,8 +62,9 @@ def run_jobs(client: httpx.Client) -> tuple[list[str], str]:
     base["outputs"] = {**base.get("outputs", {}), "fields": True, "field_stride": 8}
     faster = {**base, "name": "fig9, W1 = 8 m/s", "striker": {**base["striker"], "velocity": 8.0}}
     jobs = [client.post("/v1/jobs", json=case).json()["id"] for case in (base, faster)]
-    sweep = client.post("/v1/sweeps", json={"case": preset_json("fig9"),
-                                             "parameters": {"striker.velocity": [3.0, 4.5, 6.0, 7.5, 9.0]}}).json()["id"]
+    sweep = client.post(
+        "/v1/sweeps", json={"case": preset_json("fig9"), "parameters": {"striker.velocity": [3.0, 4.5, 6.0, 7.5, 9.0]}}
+    ).json()["id"]
     wait_until(lambda: all(client.get(f"/v1/jobs/{j}").json()["status"] == "succeeded" for j in jobs), "the jobs")
     wait_until(lambda: client.get(f"/v1/sweeps/{sweep}").json()["finished"], "the sweep")
     return jobs, sweep
@@ -85,9 +92,16 @@ def main() -> None:
     port = free_port()
     url = f"http://127.0.0.1:{port}"
     with tempfile.TemporaryDirectory() as results:
-        env = {k: v for k, v in os.environ.items() if not k.startswith("PERCUSSIM_")} | {"PERCUSSIM_RESULTS_DIR": results}
-        server = subprocess.Popen([sys.executable, "-m", "percussim", "serve", "--port", str(port)], env=env,
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, start_new_session=True)
+        env = {k: v for k, v in os.environ.items() if not k.startswith("PERCUSSIM_")} | {
+            "PERCUSSIM_RESULTS_DIR": results
+        }
+        server = subprocess.Popen(
+            [sys.executable, "-m", "percussim", "serve", "--port", str(port)],
+            env=env,
+            stdout=subprocess.DEVNULL,
+            stderr=subprocess.DEVNULL,
+            start_new_session=True,
+        )
         try:
             with httpx.Client(base_url=url, timeout=30) as client:
                 wait_until(lambda: client.get("/readyz").status_code == 200, "the service")

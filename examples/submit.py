@@ -31,19 +31,34 @@ def main() -> None:
         job = api.submit(api.preset(args.preset))
         print(f"submitted {args.preset} as job {job['id']}")
         # Raises JobFailed, with the job's error, if the job fails or is cancelled.
-        api.wait(job["id"], progress=lambda fraction, record: print(
-            f"  {record['status']:9s} {100 * fraction:5.1f} %"))
+        api.wait(job["id"], progress=lambda fraction, record: print(f"  {record['status']:9s} {100 * fraction:5.1f} %"))
         summary = api.summary(job["id"])
-        print(json.dumps({k: summary[k] for k in (
-            "co_impact_time", "peak_contact_force", "max_compressive_stress", "max_tensile_stress",
-            "striker_rebound_velocity", "energy", "warnings")}, indent=2))
+        print(
+            json.dumps(
+                {
+                    k: summary[k]
+                    for k in (
+                        "co_impact_time",
+                        "peak_contact_force",
+                        "max_compressive_stress",
+                        "max_tensile_stress",
+                        "striker_rebound_velocity",
+                        "energy",
+                        "warnings",
+                    )
+                },
+                indent=2,
+            )
+        )
 
         # The full histories, as NumPy arrays under their HDF5 paths: the same Result a local run gives.
         result = api.result(job["id"])
         time, force = result.history["time"], result.history["contact/force"]
         peak = force.argmax()
-        print(f"/contact/force: {len(force)} samples, the largest {force[peak]:.6g} N at t = {time[peak]:.6g} s; "
-              f"the summary's peak, refined between samples: {summary['peak_contact_force']['value']:.6g} N")
+        print(
+            f"/contact/force: {len(force)} samples, the largest {force[peak]:.6g} N at t = {time[peak]:.6g} s; "
+            f"the summary's peak, refined between samples: {summary['peak_contact_force']['value']:.6g} N"
+        )
 
         if args.output:
             print(f"result written to {api.download(job['id'], args.output)}")

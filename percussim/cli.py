@@ -7,21 +7,28 @@ import csv
 import json
 import os
 import sys
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Iterator, TypeVar
+from typing import TypeVar
 
 EXIT_FAILED, EXIT_INVALID, EXIT_INTERRUPTED, EXIT_BROKEN_PIPE = 1, 2, 130, 141
 T = TypeVar("T")
 PROGRESS_DELAY = 2.0  # s: a run done sooner shows no progress bar
 # What the optional installs bring (pyproject.toml's extras): a command needing one says which.
-EXTRA_OF = {"fastapi": "service", "starlette": "service", "uvicorn": "service", "celery": "service",
-            "kombu": "service", "redis": "service", "matplotlib": "plots"}
+EXTRA_OF = {
+    "fastapi": "service",
+    "starlette": "service",
+    "uvicorn": "service",
+    "celery": "service",
+    "kombu": "service",
+    "redis": "service",
+    "matplotlib": "plots",
+}
 
 
 def _no_such_file(path: str) -> int:
-    print(f"percussim: no such case file or preset: {path} (`percussim presets` lists the presets)",
-          file=sys.stderr)
+    print(f"percussim: no such case file or preset: {path} (`percussim presets` lists the presets)", file=sys.stderr)
     return EXIT_INVALID
 
 
@@ -47,9 +54,13 @@ def _progress_bar(forced: bool) -> Iterator[Callable[[float], None]]:
     a terminal and once the run has taken PROGRESS_DELAY, unless `forced`; stdout is left to the summary."""
     from tqdm import tqdm
 
-    with tqdm(total=1.0, file=sys.stderr, delay=0 if forced else PROGRESS_DELAY,
-              disable=not (forced or sys.stderr.isatty()),
-              bar_format="percussim: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}") as bar:
+    with tqdm(
+        total=1.0,
+        file=sys.stderr,
+        delay=0 if forced else PROGRESS_DELAY,
+        disable=not (forced or sys.stderr.isatty()),
+        bar_format="percussim: {percentage:3.0f}%|{bar}| {elapsed}<{remaining}",
+    ) as bar:
         yield lambda fraction: bar.update(fraction - bar.n)
 
 
@@ -81,8 +92,7 @@ def _run(args: argparse.Namespace) -> int:
         case = _case_source(args.case)
         with _progress_bar(args.progress) as advance:
             # The result file is streamed to as the run goes: a long run's outputs never sit in memory.
-            result = simulate(case, model=args.model, result_path=args.output, progress=advance,
-                              limits=_limits())
+            result = simulate(case, model=args.model, result_path=args.output, progress=advance, limits=_limits())
     except FileNotFoundError:
         return _no_such_file(args.case)
     except CaseError as error:
@@ -229,8 +239,12 @@ def _sweep_on_service(args: argparse.Namespace) -> list[dict]:
     with Client(args.url, api_key=args.api_key) as api:
         sweep = api.submit_sweep(_case_source(args.case), dict(args.vary))
         try:
-            done = api.wait_sweep(sweep["id"], progress=lambda fraction, s: _variants_done(
-                sum(s["counts"].get(status, 0) for status in FINISHED), s["total"]))
+            done = api.wait_sweep(
+                sweep["id"],
+                progress=lambda fraction, s: _variants_done(
+                    sum(s["counts"].get(status, 0) for status in FINISHED), s["total"]
+                ),
+            )
         except KeyboardInterrupt:
             api.cancel_sweep(sweep["id"])
             print(f"\npercussim: cancelled sweep {sweep['id']}", file=sys.stderr)
@@ -274,8 +288,13 @@ def _plots(args: argparse.Namespace) -> int:
         print(f"percussim: no such result file: {result}", file=sys.stderr)
         return EXIT_INVALID
     try:
-        written, skipped = write_plots(result, args.out or result.with_name(f"{result.stem}-plots"),
-                                       formats=args.format, names=args.only, times=args.times)
+        written, skipped = write_plots(
+            result,
+            args.out or result.with_name(f"{result.stem}-plots"),
+            formats=args.format,
+            names=args.only,
+            times=args.times,
+        )
     except ValueError as error:  # not a result, an unknown plot or format, a time outside the run
         print(f"percussim: {error}", file=sys.stderr)
         return EXIT_INVALID
@@ -296,7 +315,8 @@ def _bounds(text: str) -> tuple[str, list[float]]:
         return path, [float(low), float(high)]
     except ValueError:
         raise argparse.ArgumentTypeError(
-            f"expected FIELD=LOW:HIGH (e.g. contact.stiffness=1e9:1e13), not {text!r}") from None
+            f"expected FIELD=LOW:HIGH (e.g. contact.stiffness=1e9:1e13), not {text!r}"
+        ) from None
 
 
 def _limit(text: str) -> tuple[str, dict]:
@@ -309,7 +329,8 @@ def _limit(text: str) -> tuple[str, dict]:
             except ValueError:
                 break
     raise argparse.ArgumentTypeError(
-        f"expected QUANTITY<=VALUE or QUANTITY>=VALUE (e.g. max_compressive_stress<=250e6), not {text!r}")
+        f"expected QUANTITY<=VALUE or QUANTITY>=VALUE (e.g. max_compressive_stress<=250e6), not {text!r}"
+    )
 
 
 def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict) -> None:
@@ -327,10 +348,10 @@ def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict)
     print(json.dumps(shown, indent=2))
 
 
-def _study(args: argparse.Namespace, what: str, request: Callable[[], dict],
-           solve: Callable[..., dict]) -> dict | int:
+def _study(args: argparse.Namespace, what: str, request: Callable[[], dict], solve: Callable[..., dict]) -> dict | int:
     """Run a calibration or an optimisation (`what`) here, or on the service at `args.url`;
     the answer, or the exit status of a refusal or a failure."""
+
     def work() -> dict:
         if args.url:
             return _study_on_service(args, what, request())
@@ -361,15 +382,34 @@ def _calibrate(args: argparse.Namespace) -> int:
 
     def request() -> dict:
         clock = {name: getattr(args, name) for name in CLOCK_FIELDS if getattr(args, name) is not None}
-        return {"case": as_case(_case_source(args.case)), "record": read_record(args.record, **clock),
-                "parameters": dict(args.fit)}
+        return {
+            "case": as_case(_case_source(args.case)),
+            "record": read_record(args.record, **clock),
+            "parameters": dict(args.fit),
+        }
 
     fit = _study(args, "calibration", request, calibrate)
     if isinstance(fit, int):
         return fit
-    _write_study(fit, args, "fit", {key: fit[key] for key in (
-        "parameters", "correlation", "nrmse", "noise", "evaluations", "warnings", "record", "grid",
-        "seconds")})
+    _write_study(
+        fit,
+        args,
+        "fit",
+        {
+            key: fit[key]
+            for key in (
+                "parameters",
+                "correlation",
+                "nrmse",
+                "noise",
+                "evaluations",
+                "warnings",
+                "record",
+                "grid",
+                "seconds",
+            )
+        },
+    )
     return 0
 
 
@@ -378,16 +418,26 @@ def _optimize(args: argparse.Namespace) -> int:
     from .solver.optimize import optimize
 
     def request() -> dict:
-        return {"case": as_case(_case_source(args.case)), "variables": dict(args.vary),
-                "objective": {"maximize": args.maximize} if args.maximize else {"minimize": args.minimize},
-                "limits": {name: bound for name, bound in (args.limit or [])},
-                "max_evaluations": args.evaluations}
+        return {
+            "case": as_case(_case_source(args.case)),
+            "variables": dict(args.vary),
+            "objective": {"maximize": args.maximize} if args.maximize else {"minimize": args.minimize},
+            "limits": {name: bound for name, bound in (args.limit or [])},
+            "max_evaluations": args.evaluations,
+        }
 
     answer = _study(args, "optimisation", request, optimize)
     if isinstance(answer, int):
         return answer
-    _write_study(answer, args, "convergence", {key: answer[key] for key in (
-        "objective", "values", "quantities", "evaluations", "stopped", "warnings", "grid", "seconds")})
+    _write_study(
+        answer,
+        args,
+        "convergence",
+        {
+            key: answer[key]
+            for key in ("objective", "values", "quantities", "evaluations", "stopped", "warnings", "grid", "seconds")
+        },
+    )
     return 0 if answer["values"] is not None else EXIT_FAILED
 
 
@@ -424,8 +474,11 @@ def _here_or_on_service(command: argparse.ArgumentParser, on_service: str) -> No
     where = command.add_mutually_exclusive_group()
     where.add_argument("--processes", type=_count, help="processes here (default: one a core)")
     where.add_argument("--url", help=on_service)
-    command.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
-                         help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+    command.add_argument(
+        "--api-key",
+        default=os.environ.get("PERCUSSIM_API_KEY"),
+        help="with --url: sent as X-API-Key (default: $PERCUSSIM_API_KEY)",
+    )
 
 
 def parser() -> argparse.ArgumentParser:
@@ -435,33 +488,55 @@ def parser() -> argparse.ArgumentParser:
     run.add_argument("case", help="impact case JSON, or a preset's name")
     run.add_argument("--summary", metavar="OUT.json", help="also write the summary here")
     run.add_argument("--output", metavar="RESULT.h5", help="write the full result (HDF5) here")
-    run.add_argument("--model", choices=["rod", "lumped"],
-                     help="override numerics.model: the elastic rod or the two-mass model problem")
-    run.add_argument("--progress", action="store_true",
-                     help="show the progress bar on stderr even when it is not a terminal or the run is short")
+    run.add_argument(
+        "--model",
+        choices=["rod", "lumped"],
+        help="override numerics.model: the elastic rod or the two-mass model problem",
+    )
+    run.add_argument(
+        "--progress",
+        action="store_true",
+        help="show the progress bar on stderr even when it is not a terminal or the run is short",
+    )
     run.set_defaults(handler=_run)
     submit = commands.add_parser("submit", help="run a case on a percussim service and print its pulse summary")
     submit.add_argument("case", help="impact case JSON, or a preset's name")
-    submit.add_argument("--url", default=os.environ.get("PERCUSSIM_URL", "http://127.0.0.1:8000"),
-                        help="the service (default: $PERCUSSIM_URL, else http://127.0.0.1:8000)")
-    submit.add_argument("--api-key", default=os.environ.get("PERCUSSIM_API_KEY"),
-                        help="sent as X-API-Key (default: $PERCUSSIM_API_KEY)")
+    submit.add_argument(
+        "--url",
+        default=os.environ.get("PERCUSSIM_URL", "http://127.0.0.1:8000"),
+        help="the service (default: $PERCUSSIM_URL, else http://127.0.0.1:8000)",
+    )
+    submit.add_argument(
+        "--api-key", default=os.environ.get("PERCUSSIM_API_KEY"), help="sent as X-API-Key (default: $PERCUSSIM_API_KEY)"
+    )
     submit.add_argument("--summary", metavar="OUT.json", help="also write the summary here")
     submit.add_argument("--output", metavar="RESULT.h5", help="download the full result (HDF5) here")
     submit.add_argument("--no-wait", action="store_true", help="print the queued job's record and return")
-    submit.add_argument("--progress", action="store_true",
-                        help="show the progress bar on stderr even when it is not a terminal or the job is short")
+    submit.add_argument(
+        "--progress",
+        action="store_true",
+        help="show the progress bar on stderr even when it is not a terminal or the job is short",
+    )
     submit.set_defaults(handler=_submit)
-    sweep = commands.add_parser("sweep", help="solve every combination of some fields' values, on every "
-                                              "core or on a percussim service's workers")
+    sweep = commands.add_parser(
+        "sweep",
+        help="solve every combination of some fields' values, on every core or on a percussim service's workers",
+    )
     sweep.add_argument("case", help="the base impact case JSON, or a preset's name")
-    sweep.add_argument("--vary", type=_parameter, action="append", required=True, metavar="FIELD=V1,V2,...",
-                       help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7")
+    sweep.add_argument(
+        "--vary",
+        type=_parameter,
+        action="append",
+        required=True,
+        metavar="FIELD=V1,V2,...",
+        help="a field path and its values (repeat for a grid), e.g. striker.velocity=3,5,7",
+    )
     _here_or_on_service(sweep, "run every variant as a job on this service instead (each keeps its result there)")
     sweep.add_argument("--csv", metavar="OUT.csv", help="also write the table here")
     sweep.set_defaults(handler=_sweep)
     presets = commands.add_parser(
-        "presets", help="list the presets (the paper's cases, a rock drill, a pile), or give one's case JSON")
+        "presets", help="list the presets (the paper's cases, a rock drill, a pile), or give one's case JSON"
+    )
     which = presets.add_mutually_exclusive_group()
     which.add_argument("name", nargs="?", help="print this preset's case JSON")
     which.add_argument("--write", metavar="DIR", help="write every preset's case JSON into DIR as NAME.json")
@@ -469,52 +544,103 @@ def parser() -> argparse.ArgumentParser:
     presets.set_defaults(handler=_presets)
     fit = commands.add_parser("calibrate", help="fit a case's parameters to a measured record (CSV)")
     fit.add_argument("case", help="impact case JSON, or a preset's name")
-    fit.add_argument("--record", required=True, metavar="RECORD.csv",
-                     help="header time,<quantity> (contact_force, medium_force, stress@X, "
-                          "struck_end_velocity, working_end_velocity), then samples in SI units; "
-                          "or a header <quantity> alone, one value a line, with --sample-rate (or "
-                          "comment lines '# sample_rate = HZ' and '# time_start = S' before the header)")
-    fit.add_argument("--sample-rate", dest="sample_rate", type=float, metavar="HZ",
-                     help="an evenly sampled record's samples a second (its file then has no time column)")
-    fit.add_argument("--time-start", dest="time_start", type=float, metavar="S",
-                     help="with --sample-rate: the first sample's time (default 0)")
-    fit.add_argument("--time-offset", dest="time_offset", type=float, metavar="S",
-                     help="the model's time at the record's time 0 (a record triggered at its gauge: "
-                          "about x/c after the impact); left out, 0 for a record that starts at rest, "
-                          "else fitted (or fit it within bounds: --fit record.time_offset=LOW:HIGH)")
-    fit.add_argument("--fit", type=_bounds, action="append", required=True, metavar="FIELD=LOW:HIGH",
-                     help="a parameter and its bounds (repeat), e.g. contact.stiffness=1e9:1e13")
-    optimise = commands.add_parser("optimize", help="find the fields' values that maximise or minimise "
-                                                    "a summary quantity within limits")
+    fit.add_argument(
+        "--record",
+        required=True,
+        metavar="RECORD.csv",
+        help="header time,<quantity> (contact_force, medium_force, stress@X, "
+        "struck_end_velocity, working_end_velocity), then samples in SI units; "
+        "or a header <quantity> alone, one value a line, with --sample-rate (or "
+        "comment lines '# sample_rate = HZ' and '# time_start = S' before the header)",
+    )
+    fit.add_argument(
+        "--sample-rate",
+        dest="sample_rate",
+        type=float,
+        metavar="HZ",
+        help="an evenly sampled record's samples a second (its file then has no time column)",
+    )
+    fit.add_argument(
+        "--time-start",
+        dest="time_start",
+        type=float,
+        metavar="S",
+        help="with --sample-rate: the first sample's time (default 0)",
+    )
+    fit.add_argument(
+        "--time-offset",
+        dest="time_offset",
+        type=float,
+        metavar="S",
+        help="the model's time at the record's time 0 (a record triggered at its gauge: "
+        "about x/c after the impact); left out, 0 for a record that starts at rest, "
+        "else fitted (or fit it within bounds: --fit record.time_offset=LOW:HIGH)",
+    )
+    fit.add_argument(
+        "--fit",
+        type=_bounds,
+        action="append",
+        required=True,
+        metavar="FIELD=LOW:HIGH",
+        help="a parameter and its bounds (repeat), e.g. contact.stiffness=1e9:1e13",
+    )
+    optimise = commands.add_parser(
+        "optimize", help="find the fields' values that maximise or minimise a summary quantity within limits"
+    )
     optimise.add_argument("case", help="impact case JSON, or a preset's name")
-    optimise.add_argument("--vary", type=_bounds, action="append", required=True, metavar="FIELD=LOW:HIGH",
-                          help="a field and its bounds (repeat), e.g. striker.length=0.1:0.8")
+    optimise.add_argument(
+        "--vary",
+        type=_bounds,
+        action="append",
+        required=True,
+        metavar="FIELD=LOW:HIGH",
+        help="a field and its bounds (repeat), e.g. striker.length=0.1:0.8",
+    )
     goal = optimise.add_mutually_exclusive_group(required=True)
     goal.add_argument("--maximize", metavar="QUANTITY", help="e.g. energy.transfer_efficiency")
     goal.add_argument("--minimize", metavar="QUANTITY", help="e.g. max_compressive_stress")
-    optimise.add_argument("--limit", type=_limit, action="append", metavar="QUANTITY<=VALUE",
-                          help="a limit on a summary quantity (repeat; <= or >=), e.g. "
-                               "max_compressive_stress<=250e6")
-    optimise.add_argument("--evaluations", type=int, default=1000, metavar="N",
-                          help="the budget of model runs, both stages (default 1000)")
+    optimise.add_argument(
+        "--limit",
+        type=_limit,
+        action="append",
+        metavar="QUANTITY<=VALUE",
+        help="a limit on a summary quantity (repeat; <= or >=), e.g. max_compressive_stress<=250e6",
+    )
+    optimise.add_argument(
+        "--evaluations",
+        type=int,
+        default=1000,
+        metavar="N",
+        help="the budget of model runs, both stages (default 1000)",
+    )
     for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
         study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
         study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")
-        _here_or_on_service(study, "run it as a job on this service instead, its runs spread over the "
-                                   "service's workers")
-        study.add_argument("--progress", action="store_true",
-                           help="show the progress bar on stderr even when it is not a terminal")
+        _here_or_on_service(
+            study, "run it as a job on this service instead, its runs spread over the service's workers"
+        )
+        study.add_argument(
+            "--progress", action="store_true", help="show the progress bar on stderr even when it is not a terminal"
+        )
     fit.set_defaults(handler=_calibrate)
     optimise.set_defaults(handler=_optimize)
     plot = commands.add_parser("plot", help="draw the plots of a result file (PNG, SVG)")
     plot.add_argument("result", help="an HDF5 result of percussim run --output or the service")
     plot.add_argument("--out", metavar="DIR", help="folder for the plots (default: RESULT-plots next to the file)")
     plot.add_argument("--format", nargs="+", default=["png", "svg"], metavar="FORMAT", help="png, svg or both")
-    plot.add_argument("--only", nargs="+", metavar="NAME",
-                      help="these plots only: force, displacements, probes, stress_along, spacetime, energy, "
-                           "force_penetration, blows")
-    plot.add_argument("--times", type=_times, metavar="T1,T2,...",
-                      help="times (s) of the stress_along curves (default: over the first contact)")
+    plot.add_argument(
+        "--only",
+        nargs="+",
+        metavar="NAME",
+        help="these plots only: force, displacements, probes, stress_along, spacetime, energy, "
+        "force_penetration, blows",
+    )
+    plot.add_argument(
+        "--times",
+        type=_times,
+        metavar="T1,T2,...",
+        help="times (s) of the stress_along curves (default: over the first contact)",
+    )
     plot.set_defaults(handler=_plots)
     warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
     warm.set_defaults(handler=_warmup)
@@ -527,8 +653,12 @@ def parser() -> argparse.ArgumentParser:
     serve.add_argument("--host", default="127.0.0.1")
     serve.add_argument("--port", type=int, default=8000)
     started = serve.add_mutually_exclusive_group()
-    started.add_argument("--workers", type=_count, metavar="N",
-                         help="queue workers to start (default: 1 embedded, 0 with PERCUSSIM_BROKER_URL)")
+    started.add_argument(
+        "--workers",
+        type=_count,
+        metavar="N",
+        help="queue workers to start (default: 1 embedded, 0 with PERCUSSIM_BROKER_URL)",
+    )
     started.add_argument("--no-worker", action="store_true", help="run the API alone")
     serve.set_defaults(handler=_serve)
     return p
@@ -550,8 +680,11 @@ def main(argv: list[str] | None = None) -> int:
         extra = EXTRA_OF.get((error.name or "").partition(".")[0])
         if extra is None:
             raise
-        print(f"percussim: {args.command} needs the {extra!r} extra, which is not installed "
-              f"({error.name} is missing): pip install 'percussim[{extra}]'", file=sys.stderr)
+        print(
+            f"percussim: {args.command} needs the {extra!r} extra, which is not installed "
+            f"({error.name} is missing): pip install 'percussim[{extra}]'",
+            file=sys.stderr,
+        )
         return EXIT_FAILED
     except BrokenPipeError:
         # stdout closed early (`| head`): the files asked for are written; end quietly, as a

@@ -26,8 +26,9 @@ import os
 import secrets
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, BinaryIO, Callable, NamedTuple
+from typing import TYPE_CHECKING, Any, BinaryIO, NamedTuple
 from urllib.parse import quote
 
 import httpx
@@ -62,8 +63,9 @@ class Refused(ServiceError):
     names each offending field."""
 
     def __init__(self, errors: list[FieldError], status: int):
-        super().__init__("the service refused the request:\n" +
-                         "\n".join(f"  {e.field}: {e.message}" for e in errors), status)
+        super().__init__(
+            "the service refused the request:\n" + "\n".join(f"  {e.field}: {e.message}" for e in errors), status
+        )
         self.errors = errors
 
 
@@ -83,8 +85,7 @@ class JobFailed(ServiceError):
     """The job failed or was cancelled; `record` is its job record (`status`, `error`)."""
 
     def __init__(self, record: dict):
-        reason = (f"failed: {record.get('error')}" if record["status"] == "failed"
-                  else "was cancelled")
+        reason = f"failed: {record.get('error')}" if record["status"] == "failed" else "was cancelled"
         super().__init__(f"job {record['id']} {reason}")
         self.record = record
 
@@ -96,8 +97,9 @@ def _error(response: httpx.Response) -> ServiceError:
     except (ValueError, KeyError, TypeError):
         detail = response.text or response.reason_phrase
     if isinstance(detail, list) and all(isinstance(d, dict) for d in detail):
-        return Refused([FieldError(d.get("field", "?"), d.get("message", str(d))) for d in detail],
-                       response.status_code)
+        return Refused(
+            [FieldError(d.get("field", "?"), d.get("message", str(d))) for d in detail], response.status_code
+        )
     kind = {401: Unauthorized, 404: NotFound, 503: Unavailable}.get(response.status_code, ServiceError)
     return kind(f"{detail} (HTTP {response.status_code} from {response.request.url})", response.status_code)
 
@@ -124,8 +126,14 @@ class Client:
     the `Retry-After` the service asks for. `transport` is passed to httpx (for tests, proxies).
     """
 
-    def __init__(self, url: str, api_key: str | None = None, timeout: float = 30.0, retries: int = 3,
-                 transport: httpx.BaseTransport | None = None):
+    def __init__(
+        self,
+        url: str,
+        api_key: str | None = None,
+        timeout: float = 30.0,
+        retries: int = 3,
+        transport: httpx.BaseTransport | None = None,
+    ):
         headers = {"X-API-Key": api_key} if api_key else {}
         self.url = url
         self.retries = retries
@@ -159,8 +167,9 @@ class Client:
         if isinstance(case, dict):
             return self._json("POST", "/v1/jobs", json=case)
         # A file is sent as read: the service validates it and names what is wrong, even bad JSON.
-        text = (Path(case).read_bytes() if isinstance(case, (str, os.PathLike))
-                else case.model_dump_json(exclude_none=True))
+        text = (
+            Path(case).read_bytes() if isinstance(case, (str, os.PathLike)) else case.model_dump_json(exclude_none=True)
+        )
         return self._json("POST", "/v1/jobs", content=text, headers={"content-type": "application/json"})
 
     def job(self, job_id: str) -> dict:
@@ -168,20 +177,33 @@ class Client:
         `progress` 0..1, `created`, `started`, `finished`, `error`."""
         return self._json("GET", self._job_path(job_id))
 
-    def jobs(self, offset: int = 0, limit: int = 50, status: str | None = None, name: str | None = None,
-             sweep: str | None = None) -> list[dict]:
+    def jobs(
+        self,
+        offset: int = 0,
+        limit: int = 50,
+        status: str | None = None,
+        name: str | None = None,
+        sweep: str | None = None,
+    ) -> list[dict]:
         """Records of recent jobs, newest first, from `offset`, at most `limit` (≤ 500); only those
         of `status`, of cases named `name`, or the variants of `sweep`, when given."""
         query = {"offset": offset, "limit": limit, "status": status, "name": name, "sweep": sweep}
         return self._json("GET", "/v1/jobs", params={k: v for k, v in query.items() if v is not None})["jobs"]
 
-    def wait(self, job_id: str, progress: Progress | None = None, poll: float = 0.2,
-             timeout: float | None = None) -> dict:
+    def wait(
+        self, job_id: str, progress: Progress | None = None, poll: float = 0.2, timeout: float | None = None
+    ) -> dict:
         """Wait for the job to finish, asking every `poll` seconds, and return its record once it
         has succeeded. `progress(fraction, record)` is called with each record polled. Raises
         `JobFailed` if the job failed or was cancelled, `TimeoutError` after `timeout` seconds."""
-        record = self._poll(lambda: self.job(job_id), lambda r: r["status"] in FINISHED, progress,
-                            poll, timeout, lambda r: f"job {job_id} is still {r['status']}")
+        record = self._poll(
+            lambda: self.job(job_id),
+            lambda r: r["status"] in FINISHED,
+            progress,
+            poll,
+            timeout,
+            lambda r: f"job {job_id} is still {r['status']}",
+        )
         if record["status"] != "succeeded":
             raise JobFailed(record)
         return record
@@ -241,8 +263,9 @@ class Client:
             raise ServiceError(f"job {job_id} has not finished: cancel it first", status=409)
         self._send("DELETE", self._job_path(job_id))
 
-    def run(self, case: dict | str | os.PathLike | Case, progress: Progress | None = None,
-            timeout: float | None = None) -> dict:
+    def run(
+        self, case: dict | str | os.PathLike | Case, progress: Progress | None = None, timeout: float | None = None
+    ) -> dict:
         """Submit `case`, wait for it (see `wait`) and return its pulse summary."""
         job_id = self.submit(case)["id"]
         self.wait(job_id, progress=progress, timeout=timeout)
@@ -263,14 +286,21 @@ class Client:
         `error` once it failed)."""
         return self._json("GET", self._sweep_path(sweep_id))
 
-    def wait_sweep(self, sweep_id: str, progress: Progress | None = None, poll: float = 0.5,
-                   timeout: float | None = None) -> dict:
+    def wait_sweep(
+        self, sweep_id: str, progress: Progress | None = None, poll: float = 0.5, timeout: float | None = None
+    ) -> dict:
         """Wait until every variant has finished, asking every `poll` seconds, and return the
         sweep. A variant that failed is a row with its `error`: the others go on.
         `progress(fraction, sweep)` is called with each sweep polled; `TimeoutError` after
         `timeout` seconds."""
-        return self._poll(lambda: self.sweep(sweep_id), lambda s: s["finished"], progress, poll,
-                          timeout, lambda s: f"sweep {sweep_id} is still at {s['counts']}")
+        return self._poll(
+            lambda: self.sweep(sweep_id),
+            lambda s: s["finished"],
+            progress,
+            poll,
+            timeout,
+            lambda s: f"sweep {sweep_id} is still at {s['counts']}",
+        )
 
     def cancel_sweep(self, sweep_id: str) -> dict:
         """Cancel every variant of the sweep that has not finished; returns the sweep."""
@@ -280,8 +310,13 @@ class Client:
         """Remove a finished sweep with its jobs and files (409 while a variant has not finished)."""
         self._send("DELETE", self._sweep_path(sweep_id), params={"purge": "true"})
 
-    def run_sweep(self, case: dict | str | os.PathLike | Case, parameters: dict[str, list],
-                  progress: Progress | None = None, timeout: float | None = None) -> list[dict]:
+    def run_sweep(
+        self,
+        case: dict | str | os.PathLike | Case,
+        parameters: dict[str, list],
+        progress: Progress | None = None,
+        timeout: float | None = None,
+    ) -> list[dict]:
         """Submit a sweep (see `submit_sweep`), wait for it (see `wait_sweep`) and return its
         table, a row per variant in the order of the parameters' combinations."""
         sweep_id = self.submit_sweep(case, parameters)["id"]
@@ -305,8 +340,9 @@ class Client:
             record = read_record(record)
         if not isinstance(record, dict):
             record = record.model_dump(mode="json", exclude_none=True)
-        return self._json("POST", "/v1/calibrations",
-                          json=request | {"case": _case_json(request["case"]), "record": record})
+        return self._json(
+            "POST", "/v1/calibrations", json=request | {"case": _case_json(request["case"]), "record": record}
+        )
 
     def calibration(self, study_id: str) -> dict:
         """The calibration's record, with its `fit` once it has succeeded (None before)."""
@@ -336,15 +372,22 @@ class Client:
         study_id = self.submit_optimization(request)["id"]
         return self._answer(study_id, self.optimization, "optimum", progress, timeout)
 
-    def _answer(self, study_id: str, view: Callable[[str], dict], name: str, progress: Progress | None,
-                timeout: float | None) -> dict:
+    def _answer(
+        self, study_id: str, view: Callable[[str], dict], name: str, progress: Progress | None, timeout: float | None
+    ) -> dict:
         """The study's answer `name` from its `view`, once `wait` has seen it succeed."""
         self.wait(study_id, progress=progress, timeout=timeout)
         return view(study_id)[name]
 
     @staticmethod
-    def _poll(fetch: Callable[[], dict], finished: Callable[[dict], bool], progress: Progress | None,
-              poll: float, timeout: float | None, still: Callable[[dict], str]) -> dict:
+    def _poll(
+        fetch: Callable[[], dict],
+        finished: Callable[[dict], bool],
+        progress: Progress | None,
+        poll: float,
+        timeout: float | None,
+        still: Callable[[dict], str],
+    ) -> dict:
         """`fetch()` every `poll` seconds until what it returns is `finished`, which is returned;
         `progress(fraction, record)` with each; `TimeoutError` (`still(record)` says how far) after
         `timeout` seconds."""

@@ -9,8 +9,8 @@ from __future__ import annotations
 from fastapi import Depends, FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse
-
-from percussim.worker.settings import Settings, settings as env_settings
+from percussim.worker.settings import Settings
+from percussim.worker.settings import settings as env_settings
 from percussim.worker.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
 
 from . import errors, page, presets, retention
@@ -34,17 +34,21 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         title="percussim",
         summary="Simulation of percussive impact devices: striker, tool, contact and medium.",
         description="Submit an impact case (SI units) as a job, follow it, then fetch its pulse "
-                    "summary and its HDF5 result. The presets are the paper's cases, a rock drill and a pile. "
-                    "In a browser, [the job page](/) does all of this.",
+        "summary and its HDF5 result. The presets are the paper's cases, a rock drill and a pile. "
+        "In a browser, [the job page](/) does all of this.",
         version="1",
         lifespan=retention.lifespan(settings),
     )
     errors.install(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     if settings.cors_origin_list():
-        app.add_middleware(CORSMiddleware, allow_origins=settings.cors_origin_list(),
-                           allow_methods=["GET", "POST", "DELETE"], allow_headers=["Content-Type", "X-API-Key"],
-                           expose_headers=["Location", "Retry-After"])
+        app.add_middleware(
+            CORSMiddleware,
+            allow_origins=settings.cors_origin_list(),
+            allow_methods=["GET", "POST", "DELETE"],
+            allow_headers=["Content-Type", "X-API-Key"],
+            expose_headers=["Location", "Retry-After"],
+        )
     keyed = [Depends(authenticate(settings))]
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
     app.include_router(cases_router(settings), dependencies=keyed)
@@ -66,11 +70,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         workers = WorkerRegistry(settings.results_dir).alive(within=READY_WITHIN)
         reason = queue.problem()
         if reason is None and not workers:
-            reason = (f"no worker has reported in the last {READY_WITHIN:g} s "
-                      "(start one with `percussim worker`)")
+            reason = f"no worker has reported in the last {READY_WITHIN:g} s (start one with `percussim worker`)"
         if reason:
-            return JSONResponse(status_code=503, content={
-                "status": "unavailable", "reason": reason, "broker": queue.describe(), "workers": workers})
+            return JSONResponse(
+                status_code=503,
+                content={"status": "unavailable", "reason": reason, "broker": queue.describe(), "workers": workers},
+            )
         return {"status": "ready", "broker": queue.describe(), "workers": workers}
 
     return app

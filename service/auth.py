@@ -11,7 +11,6 @@ import hmac
 from typing import Annotated
 
 from fastapi import Header, HTTPException, Request
-
 from percussim.worker.settings import Settings
 
 
@@ -24,16 +23,23 @@ def authenticate(settings: Settings):
     """A dependency that sets `request.state.owner`: the caller's key id, or None with no keys."""
     keys = settings.api_key_list()
 
-    def check(request: Request, x_api_key: Annotated[str | None, Header(
-            description="an API key, when the service is configured with PERCUSSIM_API_KEYS")] = None) -> None:
+    def check(
+        request: Request,
+        x_api_key: Annotated[
+            str | None, Header(description="an API key, when the service is configured with PERCUSSIM_API_KEYS")
+        ] = None,
+    ) -> None:
         if not keys:
             request.state.owner = None
             return
         # Compared in constant time: the answer's timing must not leak a key's prefix.
         if x_api_key is None or not any(hmac.compare_digest(x_api_key.encode(), k.encode()) for k in keys):
-            raise HTTPException(status_code=401, headers={"WWW-Authenticate": "X-API-Key"},
-                                detail="this service needs an API key in the X-API-Key header"
-                                       + ("" if x_api_key is None else "; the one given is not known"))
+            raise HTTPException(
+                status_code=401,
+                headers={"WWW-Authenticate": "X-API-Key"},
+                detail="this service needs an API key in the X-API-Key header"
+                + ("" if x_api_key is None else "; the one given is not known"),
+            )
         request.state.owner = key_id(x_api_key)
 
     return check

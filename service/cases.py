@@ -12,11 +12,10 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Body
 from fastapi.exceptions import RequestValidationError
-from pydantic import BaseModel, ValidationError
-
 from percussim.solver.case import Case, CaseError, FieldError
 from percussim.solver.limits import check_case
 from percussim.worker.settings import Settings
+from pydantic import BaseModel, ValidationError
 
 from .errors import FieldErrors, request_errors
 
@@ -46,8 +45,11 @@ def case_problems(body: Any, settings: Settings) -> list[FieldError]:
 def cases_router(settings: Settings) -> APIRouter:
     router = APIRouter(prefix="/v1/cases", tags=["cases"])
 
-    @router.post("/check", response_model=CaseCheck, responses={
-        422: {"model": FieldErrors, "description": "the body is not JSON"}})
+    @router.post(
+        "/check",
+        response_model=CaseCheck,
+        responses={422: {"model": FieldErrors, "description": "the body is not JSON"}},
+    )
     def check_a_case(body: Annotated[Any, Body(description="a case, valid or not")] = None) -> dict:
         """Check a case as `POST /v1/jobs` would, its fields and the service's limits, and queue
         nothing: `problems` is what that 422 would name, empty when the case would be taken."""

@@ -13,11 +13,10 @@ from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel
-from starlette.exceptions import HTTPException
-
 from percussim.solver.case import CaseError, FieldError, describe, field_path
 from percussim.worker.store import StoreFull, StoreUnavailable, UnknownJob, UnknownSweep
+from pydantic import BaseModel
+from starlette.exceptions import HTTPException
 
 RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker or the database is down
 
@@ -47,8 +46,9 @@ def request_errors(exc: RequestValidationError) -> list[FieldError]:
     for e in exc.errors():
         loc = tuple(e["loc"])
         if e["type"] == "json_invalid":
-            described.append(FieldError(
-                field="body", message=f"is not valid JSON: {e['ctx']['error']} (at character {loc[1]})"))
+            described.append(
+                FieldError(field="body", message=f"is not valid JSON: {e['ctx']['error']} (at character {loc[1]})")
+            )
         elif loc[:1] == ("body",):
             body.append(e)
         else:  # a query or path parameter: "query.limit"
@@ -80,8 +80,11 @@ async def _http_error(request: Request, exc: HTTPException) -> JSONResponse:
     # than as invalid JSON (a body nested deeper than the parser goes): name the body instead.
     if exc.status_code == 400 and exc.__cause__ is not None:
         cause = exc.__cause__
-        reason = ("is nested too deeply to read" if isinstance(cause, RecursionError)
-                  else f"could not be read: {type(cause).__name__}")
+        reason = (
+            "is nested too deeply to read"
+            if isinstance(cause, RecursionError)
+            else f"could not be read: {type(cause).__name__}"
+        )
         return _field_errors([FieldError(field="body", message=reason)])
     return await http_exception_handler(request, exc)
 
@@ -91,13 +94,18 @@ async def _unknown_sweep(request: Request, exc: UnknownSweep) -> JSONResponse:
 
 
 async def _store_full(request: Request, exc: StoreFull) -> JSONResponse:
-    return JSONResponse(status_code=507, content={"detail": (
-        f"{exc.strerror}: nothing was stored; free space in the results store, then submit again")})
+    return JSONResponse(
+        status_code=507,
+        content={"detail": (f"{exc.strerror}: nothing was stored; free space in the results store, then submit again")},
+    )
 
 
 async def _store_unavailable(request: Request, exc: StoreUnavailable) -> JSONResponse:
-    return JSONResponse(status_code=503, headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
-                        content={"detail": f"{exc.args[0]}; try again later"})
+    return JSONResponse(
+        status_code=503,
+        headers={"Retry-After": str(RETRY_AFTER_SECONDS)},
+        content={"detail": f"{exc.args[0]}; try again later"},
+    )
 
 
 def install(app: FastAPI) -> None:

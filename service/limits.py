@@ -32,8 +32,11 @@ class BodySizeLimit:
             if declared.isdigit() and int(declared) <= self.max_bytes:
                 await self.app(scope, receive, send)  # the server delivers no more than it declared
                 return
-            if (not declared.isdigit() or int(declared) > DRAIN_BYTES
-                    or headers.get(b"expect", b"").lower() == b"100-continue"):
+            if (
+                not declared.isdigit()
+                or int(declared) > DRAIN_BYTES
+                or headers.get(b"expect", b"").lower() == b"100-continue"
+            ):
                 await self._refuse(send)  # malformed, too much to read, or not sent yet
                 return
         messages, size, more = [], 0, True
@@ -53,10 +56,25 @@ class BodySizeLimit:
         await self.app(scope, replay, send)
 
     async def _refuse(self, send: Send) -> None:
-        body = json.dumps({"detail": [{"field": "body", "message": (
-            f"is larger than the limit of {self.max_bytes} bytes (PERCUSSIM_MAX_BODY_BYTES)")}]}).encode()
-        await send({"type": "http.response.start", "status": 413,
-                    "headers": [(b"content-type", b"application/json"),
-                                (b"content-length", str(len(body)).encode()),
-                                (b"connection", b"close")]})
+        body = json.dumps(
+            {
+                "detail": [
+                    {
+                        "field": "body",
+                        "message": (f"is larger than the limit of {self.max_bytes} bytes (PERCUSSIM_MAX_BODY_BYTES)"),
+                    }
+                ]
+            }
+        ).encode()
+        await send(
+            {
+                "type": "http.response.start",
+                "status": 413,
+                "headers": [
+                    (b"content-type", b"application/json"),
+                    (b"content-length", str(len(body)).encode()),
+                    (b"connection", b"close"),
+                ],
+            }
+        )
         await send({"type": "http.response.body", "body": body})

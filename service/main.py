@@ -18,7 +18,6 @@ import threading
 import time
 
 import uvicorn
-
 from percussim.worker.settings import Settings, settings
 from percussim.worker.store import FAILED, QUEUED, RUNNING, JobStore
 
@@ -48,10 +47,15 @@ def _back_to_queue(jobs: JobStore, worker: str, death: str) -> list[str]:
     for job_id in jobs.ids(RUNNING, worker=worker):
         attempts = jobs.get(job_id)["attempts"]
         if attempts >= MAX_ATTEMPTS:
-            jobs.finish(job_id, FAILED, error=(
-                f"its worker died {attempts} times while running it (the last time: {death}): "
-                "a case that needs more memory than the machine has, or a crash; try a coarser grid "
-                "or fewer outputs"))
+            jobs.finish(
+                job_id,
+                FAILED,
+                error=(
+                    f"its worker died {attempts} times while running it (the last time: {death}): "
+                    "a case that needs more memory than the machine has, or a crash; try a coarser grid "
+                    "or fewer outputs"
+                ),
+            )
         elif jobs.requeue(job_id, worker):
             again.append(job_id)
     return again
@@ -67,8 +71,11 @@ def queue_again(settings: Settings, worker: str, death: str) -> list[str]:
     none if the broker could not take them (they are then failed, saying why)."""
     jobs = JobStore(settings)
     again = _back_to_queue(jobs, worker, death)
-    if again and JobQueue(settings).enqueue_or_fail(
-            jobs, again, "its worker died and the job could not be queued again") is not None:
+    if (
+        again
+        and JobQueue(settings).enqueue_or_fail(jobs, again, "its worker died and the job could not be queued again")
+        is not None
+    ):
         return []
     _say_queued_again(again, worker, death)
     return again
@@ -87,8 +94,11 @@ def restore_queue(settings: Settings, workers: list[str]) -> list[str]:
     queue = JobQueue(settings)
     queue.purge()
     waiting = jobs.ids(QUEUED)
-    if waiting and queue.enqueue_or_fail(jobs, waiting, "the job could not be queued again when "
-                                                        "the service started") is not None:
+    if (
+        waiting
+        and queue.enqueue_or_fail(jobs, waiting, "the job could not be queued again when the service started")
+        is not None
+    ):
         return []
     for name, again in cut_off.items():
         _say_queued_again(again, name, death)
@@ -113,8 +123,9 @@ class _Workers:
         while not self._stopping.wait(WATCH_SECONDS):
             for name, process in self.processes.items():
                 if process.poll() is not None:
-                    print(f"percussim: worker {name} exited (status {process.returncode}); "
-                          "starting it again", flush=True)
+                    print(
+                        f"percussim: worker {name} exited (status {process.returncode}); starting it again", flush=True
+                    )
                     if self.settings.embedded:
                         queue_again(self.settings, name, f"exit status {process.returncode}")
                     self.processes[name] = _start_worker(name)
@@ -147,8 +158,9 @@ def _stop_workers(workers: list[subprocess.Popen]) -> None:
             worker.wait()
 
 
-def run_service(host: str = "127.0.0.1", port: int = 8000, workers: int | None = None,
-                start_workers: bool = True) -> None:
+def run_service(
+    host: str = "127.0.0.1", port: int = 8000, workers: int | None = None, start_workers: bool = True
+) -> None:
     """Serve the API on `host:port`. Embedded mode starts `workers` queue workers (default 1);
     Redis mode starts none unless `workers` is given, since they run as `percussim worker`."""
     s = settings()
@@ -158,8 +170,11 @@ def run_service(host: str = "127.0.0.1", port: int = 8000, workers: int | None =
         count = workers
     else:
         count = 1 if s.embedded else 0
-    print(f"percussim: job page and API on http://{host}:{port}/ (API docs at /docs), queue {JobQueue(s).describe()}"
-          f" with {count} worker(s) started here, results in {s.results_dir.resolve()}", flush=True)
+    print(
+        f"percussim: job page and API on http://{host}:{port}/ (API docs at /docs), queue {JobQueue(s).describe()}"
+        f" with {count} worker(s) started here, results in {s.results_dir.resolve()}",
+        flush=True,
+    )
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, _stop_requested)
     children = _Workers(count, s)

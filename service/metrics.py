@@ -10,20 +10,21 @@ import shutil
 
 from fastapi import APIRouter
 from fastapi.responses import Response
-from prometheus_client import CONTENT_TYPE_LATEST, CollectorRegistry, generate_latest
-from prometheus_client.core import GaugeMetricFamily, HistogramMetricFamily
-from prometheus_client.registry import Collector
-
 from percussim.worker.metrics import Counters
 from percussim.worker.settings import Settings
 from percussim.worker.store import STATUSES, JobStore
+from prometheus_client import CONTENT_TYPE_LATEST, CollectorRegistry, generate_latest
+from prometheus_client.core import GaugeMetricFamily, HistogramMetricFamily
+from prometheus_client.registry import Collector
 
 from .queue import BROKER_ERRORS, JobQueue
 
 HISTOGRAMS = {
     "job_seconds": ("percussim_job_duration_seconds", "time a succeeded job ran in its worker"),
-    "solver_seconds_per_node_step": ("percussim_solver_seconds_per_node_step",
-                                     "the solver's time per node-step of a succeeded run"),
+    "solver_seconds_per_node_step": (
+        "percussim_solver_seconds_per_node_step",
+        "the solver's time per node-step of a succeeded run",
+    ),
 }
 
 
@@ -42,16 +43,21 @@ class _Service(Collector):
             depth = self.queue.depth()
         except BROKER_ERRORS:
             depth = math.nan  # the broker is away: /readyz says so; the other metrics still count
-        yield GaugeMetricFamily("percussim_queue_depth", "messages waiting in the broker for a worker",
-                                value=depth)
+        yield GaugeMetricFamily("percussim_queue_depth", "messages waiting in the broker for a worker", value=depth)
         counters = Counters(self.settings)
         for key, (name, documentation) in HISTOGRAMS.items():
             buckets, total = counters.histogram(key)
             yield HistogramMetricFamily(name, documentation, buckets=buckets, sum_value=total)
-        yield GaugeMetricFamily("percussim_results_bytes", "bytes of the finished jobs' files in the results store",
-                                value=jobs.result_bytes())
-        yield GaugeMetricFamily("percussim_results_disk_free_bytes", "free bytes on the results store's disk",
-                                value=shutil.disk_usage(self.settings.results_dir).free)
+        yield GaugeMetricFamily(
+            "percussim_results_bytes",
+            "bytes of the finished jobs' files in the results store",
+            value=jobs.result_bytes(),
+        )
+        yield GaugeMetricFamily(
+            "percussim_results_disk_free_bytes",
+            "free bytes on the results store's disk",
+            value=shutil.disk_usage(self.settings.results_dir).free,
+        )
 
 
 def metrics_router(settings: Settings, queue: JobQueue) -> APIRouter:
@@ -59,8 +65,11 @@ def metrics_router(settings: Settings, queue: JobQueue) -> APIRouter:
     registry.register(_Service(settings, queue))
     router = APIRouter(tags=["health"])
 
-    @router.get("/metrics", response_class=Response, responses={
-        200: {"content": {CONTENT_TYPE_LATEST: {}}, "description": "the metrics"}})
+    @router.get(
+        "/metrics",
+        response_class=Response,
+        responses={200: {"content": {CONTENT_TYPE_LATEST: {}}, "description": "the metrics"}},
+    )
     def metrics() -> Response:
         """The service's metrics, in Prometheus' text format."""
         return Response(generate_latest(registry), media_type=CONTENT_TYPE_LATEST)

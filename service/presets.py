@@ -6,9 +6,8 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, HTTPException
-from pydantic import BaseModel
-
 from percussim.solver.presets import preset_json, preset_names
+from pydantic import BaseModel
 
 from .errors import Problem
 
@@ -32,8 +31,7 @@ def openapi_examples() -> dict[str, Any] | None:
 @router.get("", response_model=list[PresetInfo])
 def list_presets() -> list[dict]:
     """The presets' names and what each one is."""
-    return [{"name": name, "description": preset_json(name).get("description", "")}
-            for name in preset_names()]
+    return [{"name": name, "description": preset_json(name).get("description", "")} for name in preset_names()]
 
 
 @router.get("/{name}", responses={404: {"model": Problem, "description": "no preset of this name"}})

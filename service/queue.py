@@ -15,14 +15,12 @@ import redis.exceptions
 from celery import Celery, group
 from kombu.exceptions import OperationalError
 from kombu.utils.url import maybe_sanitize_url
-
 from percussim.worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
 from percussim.worker.settings import Settings
 from percussim.worker.store import FAILED, JobStore
 
 # What publishing raises when the broker cannot be reached (kombu wraps most of them).
-BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError,
-                 OSError)
+BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError, OSError)
 
 
 class JobQueue:
@@ -53,8 +51,7 @@ class JobQueue:
         """Publish the jobs, fanned out over the workers as one Celery group; raises one of
         `BROKER_ERRORS` if the broker cannot take them."""
         self._folder_made()
-        group(self.app.signature(RUN_JOB, args=[job_id], ignore_result=True)
-              for job_id in job_ids).apply_async()
+        group(self.app.signature(RUN_JOB, args=[job_id], ignore_result=True) for job_id in job_ids).apply_async()
 
     def purge(self) -> int:
         """Drop every message waiting in the queue; returns how many."""

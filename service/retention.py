@@ -43,6 +43,7 @@ def lifespan(settings: Settings):
     async def running(app):
         stop = threading.Event()
         if settings.result_ttl:
+
             def work():
                 while not stop.wait(interval(settings)):
                     try:

@@ -6,18 +6,18 @@ spreads its runs over the others. Its answer (the fit, the optimum) and its plot
 here. No `from __future__ import annotations`: FastAPI reads the signatures.
 """
 
-from typing import Annotated, Callable, Literal
+from collections.abc import Callable
+from typing import Annotated, Literal
 
 from fastapi import APIRouter, Body, Request, Response
 from fastapi.responses import FileResponse
-from pydantic import BaseModel, ConfigDict
-
 from percussim.solver.limits import check_case
-from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization, study_case
-from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.plots import FORMATS
+from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization, study_case
 from percussim.worker.settings import Settings
 from percussim.worker.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
+from pydantic import BaseModel, ConfigDict
 
 from .errors import FieldErrors, Problem
 from .jobs import cancel_or_delete, queue_jobs, succeeded
@@ -46,13 +46,19 @@ class Study(BaseModel):
 def _optimization_example() -> dict | None:
     if "rock_drill" not in preset_names():
         return None
-    return {"rock-drill-piston": {
-        "summary": "Rock drill: the piston length and speed that put the most energy into the rock "
-                   "with the rod's stress at most 250 MPa",
-        "value": {"case": preset_json("rock_drill"),
-                  "variables": {"striker.length": [0.1, 0.6], "striker.velocity": [5.0, 20.0]},
-                  "objective": {"maximize": "energy.to_medium"},
-                  "limits": {"max_compressive_stress": {"max": 2.5e8}}, "max_evaluations": 300}}}
+    return {
+        "rock-drill-piston": {
+            "summary": "Rock drill: the piston length and speed that put the most energy into the rock "
+            "with the rod's stress at most 250 MPa",
+            "value": {
+                "case": preset_json("rock_drill"),
+                "variables": {"striker.length": [0.1, 0.6], "striker.velocity": [5.0, 20.0]},
+                "objective": {"maximize": "energy.to_medium"},
+                "limits": {"max_compressive_stress": {"max": 2.5e8}},
+                "max_evaluations": 300,
+            },
+        }
+    }
 
 
 # kind → (route prefix, the answer's name in the view, request model, its check, its plot)
@@ -81,30 +87,46 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
         jobs = store(request)
         answer = jobs.answer(record["id"]) if record["status"] == SUCCEEDED else None
         links = {"self": request.app.url_path_for(f"get_{kind}", study_id=record["id"])}
-        links |= {f"plot_{fmt}": request.app.url_path_for(f"get_{kind}_plot", study_id=record["id"], fmt=fmt)
-                  for fmt in FORMATS}
+        links |= {
+            f"plot_{fmt}": request.app.url_path_for(f"get_{kind}_plot", study_id=record["id"], fmt=fmt)
+            for fmt in FORMATS
+        }
         return record | {"links": links, answer_name: answer}
 
     examples = _optimization_example() if kind == OPTIMIZATION else None
 
-    @router.post("", status_code=202, response_model=Study, name=f"submit_{kind}", responses={
-        422: {"model": FieldErrors, "description": "the request is invalid, naming the field"},
-        503: {"model": Problem, "description": "the broker is unreachable; retry later"}})
-    def submit(request: Request, response: Response,
-               study: Annotated[model, Body(openapi_examples=examples)]) -> dict:
+    @router.post(
+        "",
+        status_code=202,
+        response_model=Study,
+        name=f"submit_{kind}",
+        responses={
+            422: {"model": FieldErrors, "description": "the request is invalid, naming the field"},
+            503: {"model": Problem, "description": "the broker is unreachable; retry later"},
+        },
+    )
+    def submit(request: Request, response: Response, study: Annotated[model, Body(openapi_examples=examples)]) -> dict:
         check_case(study_case(study.case), settings.limits())
         check(study, settings.limits())
         jobs = store(request)
-        record = jobs.create(study.case.model_dump(mode="json", exclude_none=True), kind=kind,
-                             request=study.model_dump(mode="json", exclude_none=True))
+        record = jobs.create(
+            study.case.model_dump(mode="json", exclude_none=True),
+            kind=kind,
+            request=study.model_dump(mode="json", exclude_none=True),
+        )
         queue_jobs(jobs, queue, [record["id"]])
         response.headers["Location"] = request.app.url_path_for(f"get_{kind}", study_id=record["id"])
         return view(request, record)
 
-    submit.__doc__ = (f"Queue a {kind}: checked first (the request's fields, the case's limits"
-                      + (", the record against the case and its units" if kind == CALIBRATION else
-                         ", the variables and the summary quantities named")
-                      + "), each refusal naming its field; then a job on the workers.")
+    submit.__doc__ = (
+        f"Queue a {kind}: checked first (the request's fields, the case's limits"
+        + (
+            ", the record against the case and its units"
+            if kind == CALIBRATION
+            else ", the variables and the summary quantities named"
+        )
+        + "), each refusal naming its field; then a job on the workers."
+    )
 
     @router.get("/{study_id}", response_model=Study, name=f"get_{kind}", responses=not_found)
     def get(request: Request, study_id: str) -> dict:
@@ -112,21 +134,36 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
 
     get.__doc__ = f"The {kind}'s status and progress, then its answer (`{answer_name}`)."
 
-    @router.get("/{study_id}/plot.{fmt}", response_class=FileResponse, name=f"get_{kind}_plot",
-                responses=not_found | {409: {"model": Problem, "description": "not succeeded"}})
+    @router.get(
+        "/{study_id}/plot.{fmt}",
+        response_class=FileResponse,
+        name=f"get_{kind}_plot",
+        responses=not_found | {409: {"model": Problem, "description": "not succeeded"}},
+    )
     def get_plot(request: Request, study_id: str, fmt: Literal["png", "svg"]) -> FileResponse:
         succeeded(record_of(request, study_id), "plot")
         return FileResponse(store(request).plot_path(study_id, plot, fmt), media_type=FORMATS[fmt])
 
-    get_plot.__doc__ = ("The record against the fitted model, and the residual." if kind == CALIBRATION
-                        else "Every evaluation of the objective, and the best so far.")
+    get_plot.__doc__ = (
+        "The record against the fitted model, and the residual."
+        if kind == CALIBRATION
+        else "Every evaluation of the objective, and the best so far."
+    )
 
-    @router.delete("/{study_id}", status_code=202, response_model=Study, name=f"delete_{kind}",
-                   responses=not_found | {204: {"description": "it had finished: it and its files are removed"}})
+    @router.delete(
+        "/{study_id}",
+        status_code=202,
+        response_model=Study,
+        name=f"delete_{kind}",
+        responses=not_found | {204: {"description": "it had finished: it and its files are removed"}},
+    )
     def delete_study(request: Request, study_id: str):
-        return cancel_or_delete(store(request), record_of(request, study_id),
-                                lambda record: view(request, record), kind)
+        return cancel_or_delete(
+            store(request), record_of(request, study_id), lambda record: view(request, record), kind
+        )
 
-    delete_study.__doc__ = (f"Cancel the {kind} if it has not finished (202): a queued one at once, a running "
-                            "one between two batches. A finished one is removed with its files (204).")
+    delete_study.__doc__ = (
+        f"Cancel the {kind} if it has not finished (202): a queued one at once, a running "
+        "one between two batches. A finished one is removed with its files (204)."
+    )
     return router

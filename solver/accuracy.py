@@ -13,8 +13,14 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-HEADLINE = ("co_impact_time", "peak_contact_force", "max_compressive_stress", "max_tensile_stress",
-            "energy.to_medium", "striker_rebound_velocity")
+HEADLINE = (
+    "co_impact_time",
+    "peak_contact_force",
+    "max_compressive_stress",
+    "max_tensile_stress",
+    "energy.to_medium",
+    "striker_rebound_velocity",
+)
 
 # Below these fractions of its scale a quantity is left out of the estimate
 TENSION_FRACTION = 0.02  # of the maximum compressive stress
@@ -34,8 +40,9 @@ def headline(summary: dict) -> dict[str, float | None]:
     }
 
 
-def left_out(values: dict[str, float | None], impact_velocity: float, input_energy: float,
-             has_medium: bool) -> dict[str, str]:
+def left_out(
+    values: dict[str, float | None], impact_velocity: float, input_energy: float, has_medium: bool
+) -> dict[str, str]:
     """The headline quantities without a meaningful relative error, each with the reason."""
     reasons = {}
     if values["co_impact_time"] is None:
@@ -44,18 +51,20 @@ def left_out(values: dict[str, float | None], impact_velocity: float, input_ener
     elif abs(values["striker_rebound_velocity"]) < REBOUND_FRACTION * abs(impact_velocity):
         reasons["striker_rebound_velocity"] = (
             f"the striker leaves at {values['striker_rebound_velocity']:.3g} m/s, under "
-            f"{100 * REBOUND_FRACTION:g}% of its impact velocity")
+            f"{100 * REBOUND_FRACTION:g}% of its impact velocity"
+        )
     compression = values["max_compressive_stress"] or 0.0
     tension = values["max_tensile_stress"] or 0.0
     if tension <= TENSION_FRACTION * compression:
         reasons["max_tensile_stress"] = (
-            f"the tension, {tension / 1e6:.3g} MPa, is under {100 * TENSION_FRACTION:g}% of the "
-            "compression" if tension > 0 else "the tool is never in tension")
+            f"the tension, {tension / 1e6:.3g} MPa, is under {100 * TENSION_FRACTION:g}% of the compression"
+            if tension > 0
+            else "the tool is never in tension"
+        )
     if not has_medium:
         reasons["energy.to_medium"] = "no medium"
     elif values["energy.to_medium"] < MEDIUM_FRACTION * input_energy:
-        reasons["energy.to_medium"] = (
-            f"under {100 * MEDIUM_FRACTION:g}% of the input energy reaches the medium")
+        reasons["energy.to_medium"] = f"under {100 * MEDIUM_FRACTION:g}% of the input energy reaches the medium"
     if not values["peak_contact_force"]:
         reasons["peak_contact_force"] = "the striker never presses on the tool"
         reasons["max_compressive_stress"] = "the tool is never in compression"
@@ -138,8 +147,9 @@ def quantity_error(h: list[float], values: list[float | None], formal_order: flo
     if order is None or order < LOWEST_ORDER:
         # Each difference read at the lowest order relied on (refinement r: error d/(r^p − 1)),
         # the finer grid's error not taken to be smaller than the coarser's.
-        rough = max(abs(d1) / ((h3[0] / h3[1]) ** LOWEST_ORDER - 1.0),
-                    abs(d2) / ((h3[1] / h3[2]) ** LOWEST_ORDER - 1.0))
+        rough = max(
+            abs(d1) / ((h3[0] / h3[1]) ** LOWEST_ORDER - 1.0), abs(d2) / ((h3[1] / h3[2]) ** LOWEST_ORDER - 1.0)
+        )
         return QuantityError(SAFETY_FACTOR * rough / scale, order, False)
     used, confirmed = min(order, formal_order), True
     if len(values) >= 4 and values[-4] is not None:
@@ -186,21 +196,24 @@ def estimated_values(summary: dict) -> dict[str, float | None]:
 def not_estimated(summary: dict, impact_velocity: float, has_medium: bool) -> dict[str, str]:
     """The estimated quantities a run leaves out (`left_out`), the efficiency with the energy."""
     energy = summary["energy"]
-    skip = left_out(headline(summary), impact_velocity,
-                    energy["initial"] + max(energy["external_work"], 0.0), has_medium)
+    skip = left_out(
+        headline(summary), impact_velocity, energy["initial"] + max(energy["external_work"], 0.0), has_medium
+    )
     if "energy.to_medium" in skip:
         skip["energy.transfer_efficiency"] = skip["energy.to_medium"]
     return skip
 
 
-def estimate(h: list[float], summaries: list[dict], formal_order: float, impact_velocity: float,
-             has_medium: bool) -> Estimate:
+def estimate(
+    h: list[float], summaries: list[dict], formal_order: float, impact_velocity: float, has_medium: bool
+) -> Estimate:
     """The error of the finest of the runs `summaries` on grids of cell size `h` (coarse to
     fine). What is left out is decided on the finest run."""
     values = [estimated_values(s) for s in summaries]
     skip = not_estimated(summaries[-1], impact_velocity, has_medium)
-    errors = {name: quantity_error(h, [v[name] for v in values], formal_order)
-              for name in ESTIMATED if name not in skip}
+    errors = {
+        name: quantity_error(h, [v[name] for v in values], formal_order) for name in ESTIMATED if name not in skip
+    }
     # the two finest grids must agree: a grazing contact that a coarse grid still sees or misses
     # changes none of the quantities estimated by more than their differences show
     contacts = tuple(s["contacts_total"] for s in summaries[-3:])
@@ -222,44 +235,60 @@ def _listed(errors: dict[str, QuantityError], limit: float) -> str:
     return ", ".join(f"{name} {_percent(error)}" for error, name in over)
 
 
-def accuracy_warnings(found: Estimate, summary: dict, tolerance: float | None, unmet: str = ""
-                      ) -> list[str]:
+def accuracy_warnings(found: Estimate, summary: dict, tolerance: float | None, unmet: str = "") -> list[str]:
     """The warnings an estimate calls for: a tolerance not met, an estimated error over 1% on a
     fixed grid (with the grid that would meet 1%), grids that disagree on the contacts, and energy
     the scheme lost or created beyond 1% of the input; each with the numbers and what to change."""
     out = []
     if tolerance is not None:
         if unmet or found.worst > tolerance or not found.same_contacts:
-            reason = unmet or ("the grids disagree on the contacts" if found.worst <= tolerance
-                               else "the estimate stays above it")
-            out.append(f"the tolerance of {tolerance:g} is not met ({reason}): estimated errors "
-                       f"{_listed(found.errors, tolerance) or 'within it'}; the values are the finest "
-                       "grid's")
+            reason = unmet or (
+                "the grids disagree on the contacts" if found.worst <= tolerance else "the estimate stays above it"
+            )
+            out.append(
+                f"the tolerance of {tolerance:g} is not met ({reason}): estimated errors "
+                f"{_listed(found.errors, tolerance) or 'within it'}; the values are the finest "
+                "grid's"
+            )
     elif found.worst > ERROR_WARNING:
         cells = summary["numerics"]["cells"]
-        order = min((e.order or found.formal_order) if e.asymptotic else 1.0
-                    for e in found.errors.values() if e.error > ERROR_WARNING)
-        needed = math.ceil(cells * (found.worst / (0.5 * ERROR_WARNING)) ** (1.0 / max(order, 0.5))) \
-            if found.worst < math.inf else None
+        order = min(
+            (e.order or found.formal_order) if e.asymptotic else 1.0
+            for e in found.errors.values()
+            if e.error > ERROR_WARNING
+        )
+        needed = (
+            math.ceil(cells * (found.worst / (0.5 * ERROR_WARNING)) ** (1.0 / max(order, 0.5)))
+            if found.worst < math.inf
+            else None
+        )
         grid = f" or about {needed} cells with the time step scaled alike" if needed else ""
-        out.append(f"estimated errors over {_percent(ERROR_WARNING)}: {_listed(found.errors, ERROR_WARNING)}; "
-                   f"leave out numerics.cells, time_step and scheme for the default accuracy (1%), give "
-                   f"numerics.tolerance{grid}")
+        out.append(
+            f"estimated errors over {_percent(ERROR_WARNING)}: {_listed(found.errors, ERROR_WARNING)}; "
+            f"leave out numerics.cells, time_step and scheme for the default accuracy (1%), give "
+            f"numerics.tolerance{grid}"
+        )
     if not found.same_contacts:
-        out.append(f"the grids this estimate rests on saw different numbers of contacts "
-                   f"({', '.join(map(str, found.contacts))}, coarse to fine): the later impacts, and "
-                   "the stresses they make, may be off by more than the estimate")
+        out.append(
+            f"the grids this estimate rests on saw different numbers of contacts "
+            f"({', '.join(map(str, found.contacts))}, coarse to fine): the later impacts, and "
+            "the stresses they make, may be off by more than the estimate"
+        )
     energy = summary["energy"]
     budget = energy["initial"] + max(energy["external_work"], 0.0)
     if budget > 0:
         lost = energy["numerical"] / budget
         created = energy["max_excess_fraction"]
-        fix = ("give numerics.tolerance or a finer grid" if tolerance is None
-               else "a tighter numerics.tolerance reduces it")
+        fix = (
+            "give numerics.tolerance or a finer grid"
+            if tolerance is None
+            else "a tighter numerics.tolerance reduces it"
+        )
         if lost > ENERGY_WARNING:
-            out.append(f"the scheme dissipated {_percent(lost)} of the input energy "
-                       f"(energy.numerical = {energy['numerical']:.4g} J): {fix}")
+            out.append(
+                f"the scheme dissipated {_percent(lost)} of the input energy "
+                f"(energy.numerical = {energy['numerical']:.4g} J): {fix}"
+            )
         if max(-lost, created) > ENERGY_WARNING:
-            out.append(f"the scheme created {_percent(max(-lost, created))} of the input energy at "
-                       f"some instant: {fix}")
+            out.append(f"the scheme created {_percent(max(-lost, created))} of the input energy at some instant: {fix}")
     return out

@@ -24,9 +24,9 @@ its estimate the same way (`fixed_estimate`).
 from __future__ import annotations
 
 import math
-from typing import Callable
+from collections.abc import Callable
 
-from .accuracy import SAFETY_FACTOR, ESTIMATED, Estimate, QuantityError, estimate, not_estimated
+from .accuracy import ESTIMATED, SAFETY_FACTOR, Estimate, QuantityError, estimate, not_estimated
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import simulate_rod
 from .grid import MIN_CELLS, ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, rigidity
@@ -62,21 +62,36 @@ def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
 
 
 def _estimate(case: Case, runs: list[tuple[ResolvedNumerics, dict]], order: float) -> Estimate:
-    return estimate([case.tool.length / n.cells for n, _ in runs], [s for _, s in runs], order,
-                    case.striker.velocity, case.medium is not None)
+    return estimate(
+        [case.tool.length / n.cells for n, _ in runs],
+        [s for _, s in runs],
+        order,
+        case.striker.velocity,
+        case.medium is not None,
+    )
 
 
 def _limit_refusal(tol: float, numerics: ResolvedNumerics, error: CaseError) -> CaseError:
-    return CaseError([FieldError(
-        field="numerics.tolerance",
-        message=f"a tolerance of {tol:g} needs at least {numerics.cells} cells and {numerics.steps} "
+    return CaseError(
+        [
+            FieldError(
+                field="numerics.tolerance",
+                message=f"a tolerance of {tol:g} needs at least {numerics.cells} cells and {numerics.steps} "
                 f"steps, beyond the limits ({error}): loosen it, shorten numerics.duration, or "
-                "raise the limit")])
+                "raise the limit",
+            )
+        ]
+    )
 
 
-def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None = None,
-                       cancelled: CancelCheck | None = None, limits: Limits = Limits(),
-                       recorder: Recorder | None = None) -> Result:
+def solve_to_tolerance(
+    case: Case,
+    tol: float,
+    progress: ProgressCallback | None = None,
+    cancelled: CancelCheck | None = None,
+    limits: Limits = Limits(),
+    recorder: Recorder | None = None,
+) -> Result:
     """Meet `tol` on every estimated quantity (see the module's docstring); the summary reports the
     estimate, the grids and why.
 
@@ -99,11 +114,17 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
         except CaseError as error:
             if result is None:
                 raise _limit_refusal(tol, numerics, error) from None
-            stopped = (f"the next grid, {numerics.cells} cells and {numerics.steps} steps, is beyond "
-                       f"the limits ({error})")
+            stopped = (
+                f"the next grid, {numerics.cells} cells and {numerics.steps} steps, is beyond the limits ({error})"
+            )
             break
-        candidate = simulate_rod(run_case, numerics=numerics, progress=_staged(progress, stage),
-                                 cancelled=cancelled, recorder=recorder if final_candidate else None)
+        candidate = simulate_rod(
+            run_case,
+            numerics=numerics,
+            progress=_staged(progress, stage),
+            cancelled=cancelled,
+            recorder=recorder if final_candidate else None,
+        )
         runs.append((numerics, candidate.summary))
         if len(runs) < MIN_RUNS:
             cells = math.ceil(cells * CLIMB)
@@ -114,21 +135,27 @@ def solve_to_tolerance(case: Case, tol: float, progress: ProgressCallback | None
         if found.worst <= tol and found.same_contacts and closed:
             break
         if unsettled([s["contacts_total"] for _, s in runs], worst):
-            stopped = (f"the number of contacts keeps changing with the grid ("
-                       f"{', '.join(str(s['contacts_total']) for _, s in runs[-UNSETTLED_GRIDS:])} on "
-                       f"{', '.join(str(n.cells) for n, _ in runs[-UNSETTLED_GRIDS:])} cells) while the "
-                       "estimate does not shrink: the sequence of impacts is sensitive to the smallest "
-                       "change, and finer grids do not settle it")
+            stopped = (
+                f"the number of contacts keeps changing with the grid ("
+                f"{', '.join(str(s['contacts_total']) for _, s in runs[-UNSETTLED_GRIDS:])} on "
+                f"{', '.join(str(n.cells) for n, _ in runs[-UNSETTLED_GRIDS:])} cells) while the "
+                "estimate does not shrink: the sequence of impacts is sensitive to the smallest "
+                "change, and finer grids do not settle it"
+            )
             break
         cells = math.ceil(cells * (next_refinement(found, tol) if closed else CLIMB))
     else:
         stopped = f"{MAX_RUNS} grids did not reach it"
-    why = ("the default accuracy (numerics gives neither a grid nor a scheme), as if "
-           f"numerics.tolerance were {tol:g}: " if case.numerics.tolerance is None else "")
-    why += ("the explicit scheme at Courant number 1, its ends integrating their own equations, on "
-            "grids refined until the error estimated from the last three is within the tolerance")
-    return annotate(result, found, tolerance=tol, runs=[n for n, _ in runs], why=why,
-                    unmet=stopped if stopped else "")
+    why = (
+        f"the default accuracy (numerics gives neither a grid nor a scheme), as if numerics.tolerance were {tol:g}: "
+        if case.numerics.tolerance is None
+        else ""
+    )
+    why += (
+        "the explicit scheme at Courant number 1, its ends integrating their own equations, on "
+        "grids refined until the error estimated from the last three is within the tolerance"
+    )
+    return annotate(result, found, tolerance=tol, runs=[n for n, _ in runs], why=why, unmet=stopped if stopped else "")
 
 
 def energy_closed(summary: dict, tol: float) -> bool:
@@ -146,8 +173,11 @@ def unsettled(contacts: list[int], worst: list[float]) -> bool:
     of contacts (`contacts`, each grid's) and the estimate (`worst`, each estimate's) is no smaller
     than `UNSETTLED_GRIDS − 1` grids before. Repeated impacts whose sequence turns on the smallest
     change (a chaotic rattle) settle on no grid."""
-    return (len(worst) >= UNSETTLED_GRIDS and len(set(contacts[-UNSETTLED_GRIDS:])) > 1
-            and worst[-1] >= worst[-UNSETTLED_GRIDS])
+    return (
+        len(worst) >= UNSETTLED_GRIDS
+        and len(set(contacts[-UNSETTLED_GRIDS:])) > 1
+        and worst[-1] >= worst[-UNSETTLED_GRIDS]
+    )
 
 
 def next_refinement(found: Estimate, tol: float) -> float:
@@ -169,8 +199,9 @@ def next_refinement(found: Estimate, tol: float) -> float:
     return min(needed, cap)
 
 
-def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,
-                   run: Callable[[Case, ResolvedNumerics], Result], why: str) -> Result:
+def fixed_estimate(
+    case: Case, numerics: ResolvedNumerics, result: Result, run: Callable[[Case, ResolvedNumerics], Result], why: str
+) -> Result:
     """The error of a run on a fixed grid, from companion runs `COMPANIONS` times coarser in h and
     τ (as many of them as the grid allows) at the scheme's order; `run` solves a case on given
     numerics, `why` says why the grid is the one it is."""
@@ -181,18 +212,34 @@ def fixed_estimate(case: Case, numerics: ResolvedNumerics, result: Result,
             missing.append(f"{factor}× coarser: fewer than {MIN_CELLS} cells")
             continue
         try:
-            coarse = resolve_numerics(case, model="rod", scheme=numerics.scheme, cells=cells,
-                                      time_step=numerics.time_step * numerics.cells / cells)
+            coarse = resolve_numerics(
+                case,
+                model="rod",
+                scheme=numerics.scheme,
+                cells=cells,
+                time_step=numerics.time_step * numerics.cells / cells,
+            )
             companions.append((coarse, run(_summary_only(case, coarse), coarse).summary))
         except CaseError as error:  # a grid too coarse for a stiff contact or medium
             missing.append(f"{factor}× coarser: {error.errors[0].message.split(':')[0]}")
     if not companions:
-        return annotate(result, None, tolerance=None, runs=[numerics], why=why, notes=[
-            f"no error estimate: no coarser grid to compare {numerics.cells} cells with "
-            f"({'; '.join(missing)}); leave numerics.cells, time_step and scheme out for the "
-            "default accuracy, which estimates its error, or give numerics.tolerance"])
-    notes = [f"the error estimate rests on one coarser grid, at the scheme's order "
-             f"({'; '.join(missing)})"] if missing else []
+        return annotate(
+            result,
+            None,
+            tolerance=None,
+            runs=[numerics],
+            why=why,
+            notes=[
+                f"no error estimate: no coarser grid to compare {numerics.cells} cells with "
+                f"({'; '.join(missing)}); leave numerics.cells, time_step and scheme out for the "
+                "default accuracy, which estimates its error, or give numerics.tolerance"
+            ],
+        )
+    notes = (
+        [f"the error estimate rests on one coarser grid, at the scheme's order ({'; '.join(missing)})"]
+        if missing
+        else []
+    )
     runs = companions + [(numerics, result.summary)]
     found = _estimate(case, runs, numerics.weights().order)
     return annotate(result, found, tolerance=None, runs=[n for n, _ in runs], why=why, notes=notes)
@@ -203,16 +250,27 @@ def lumped_estimate(case: Case, result: Result) -> Result:
     eps = rigidity(case)
     error = LUMPED_ERROR * eps**2
     skip = not_estimated(result.summary, case.striker.velocity, case.medium is not None)
-    found = Estimate({name: QuantityError(error, None, False) for name in ESTIMATED
-                      if name not in skip}, skip, True)
-    return annotate(result, found, tolerance=case.numerics.tolerance, runs=[result.numerics],
-                    why=f"numerics.model = 'lumped' as asked: the two-mass model problem (21)–(25); "
-                        f"its modelling error estimated as ε² = {error:.2g} (ε = {eps:.3g}, the "
-                        "two-mass system's highest frequency over the tool's lowest elastic one)")
+    found = Estimate({name: QuantityError(error, None, False) for name in ESTIMATED if name not in skip}, skip, True)
+    return annotate(
+        result,
+        found,
+        tolerance=case.numerics.tolerance,
+        runs=[result.numerics],
+        why=f"numerics.model = 'lumped' as asked: the two-mass model problem (21)–(25); "
+        f"its modelling error estimated as ε² = {error:.2g} (ε = {eps:.3g}, the "
+        "two-mass system's highest frequency over the tool's lowest elastic one)",
+    )
 
 
-def annotate(result: Result, found: Estimate | None, tolerance: float | None,
-             runs: list[ResolvedNumerics], why: str, unmet: str = "", notes: list[str] = ()) -> Result:
+def annotate(
+    result: Result,
+    found: Estimate | None,
+    tolerance: float | None,
+    runs: list[ResolvedNumerics],
+    why: str,
+    unmet: str = "",
+    notes: list[str] = (),
+) -> Result:
     """Complete the result's summary with the estimate, the tolerance, the grids and why, and as
     warnings `notes` and what the estimate calls for (`accuracy.accuracy_warnings`)."""
     from .accuracy import accuracy_warnings
@@ -220,7 +278,13 @@ def annotate(result: Result, found: Estimate | None, tolerance: float | None,
     warnings = list(notes)
     if found is not None:
         warnings += accuracy_warnings(found, result.summary, tolerance, unmet)
-    add_accuracy(result.summary, tolerance=tolerance, error_estimate=found.relative() if found else None,
-                 not_estimated=dict(found.left_out) if found else {}, why=why, runs=runs,
-                 warnings=warnings)
+    add_accuracy(
+        result.summary,
+        tolerance=tolerance,
+        error_estimate=found.relative() if found else None,
+        not_estimated=dict(found.left_out) if found else {},
+        why=why,
+        runs=runs,
+        warnings=warnings,
+    )
     return result

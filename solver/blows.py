@@ -14,11 +14,12 @@ from . import layout as L
 from .summary import to_medium
 
 # Each extreme with the slots that go with it (where, when)
-_LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETRATION,
-            L.X_ENERGY_EXCESS)
-_WITH = {L.X_PEAK_FORCE: (L.X_PEAK_FORCE_TIME,),
-         L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
-         L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME)}
+_LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETRATION, L.X_ENERGY_EXCESS)
+_WITH = {
+    L.X_PEAK_FORCE: (L.X_PEAK_FORCE_TIME,),
+    L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
+    L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME),
+}
 
 
 class BlowLog:
@@ -41,18 +42,20 @@ class BlowLog:
         medium = to_medium(energy) - to_medium(self._start)
         supplied = self.launch_energy + energy[L.E_EXTERNAL_WORK] - self._start[L.E_EXTERNAL_WORK]
         count = int(x[L.X_CONTACTS])
-        self.blows.append({
-            "row": {
-                "peak_contact_force": float(x[L.X_PEAK_FORCE]),
-                "max_compressive_stress": float(x[L.X_MAX_COMPRESSION]),
-                "to_medium": medium,
-                "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
-                "permanent_penetration": float(permanent_penetration),
-                "set": float(permanent_penetration - self._set),
-            },
-            "extremes": x.copy(),
-            "contacts": observed.contacts[:min(count, len(observed.contacts))].copy(),
-        })
+        self.blows.append(
+            {
+                "row": {
+                    "peak_contact_force": float(x[L.X_PEAK_FORCE]),
+                    "max_compressive_stress": float(x[L.X_MAX_COMPRESSION]),
+                    "to_medium": medium,
+                    "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
+                    "permanent_penetration": float(permanent_penetration),
+                    "set": float(permanent_penetration - self._set),
+                },
+                "extremes": x.copy(),
+                "contacts": observed.contacts[: min(count, len(observed.contacts))].copy(),
+            }
+        )
         self._set = permanent_penetration
 
     def table(self) -> list[dict]:

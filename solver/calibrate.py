@@ -33,16 +33,25 @@ from typing import Any
 
 import numpy as np
 from scipy.optimize import least_squares
-from scipy.stats import qmc, t as student
+from scipy.stats import qmc
+from scipy.stats import t as student
 
 from .case import Case, CaseError, FieldError
 from .errors import Cancelled
 from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
 from .limits import Limits
 from .record import Record, record_noise
-from .study import (GRID_REMEDY, OFFSET, Calibration, check_calibration, parse_calibration, run_span,
-                    set_aside, study_case)
 from .result import CancelCheck, ProgressCallback
+from .study import (
+    GRID_REMEDY,
+    OFFSET,
+    Calibration,
+    check_calibration,
+    parse_calibration,
+    run_span,
+    set_aside,
+    study_case,
+)
 
 POINTS_PER_PARAMETER = 8
 STARTS = 3  # least-squares starts a round, from the global stage's best points not yet tried
@@ -64,8 +73,15 @@ class _Problem:
     time_offset, when fitted, moves the instants the model is read at, not the run: points that
     differ in it alone share one run. `cells` is the grid of every run, once chosen."""
 
-    def __init__(self, base: dict, space: Space, record: Record, evaluator: Evaluator,
-                 cancelled: CancelCheck | None, cells: int = 0):
+    def __init__(
+        self,
+        base: dict,
+        space: Space,
+        record: Record,
+        evaluator: Evaluator,
+        cancelled: CancelCheck | None,
+        cells: int = 0,
+    ):
         self.base, self.space, self.record, self.cells = base, space, record, cells
         self.evaluator, self.cancelled = evaluator, cancelled
         self.case_space = space.without(OFFSET)
@@ -97,19 +113,36 @@ class _Problem:
         wanted = {key: fields for key, (fields, _) in zip(keys, points) if key not in self._runs}
         fitted = self.offset_at is not None
         if wanted:
-            answers = self.evaluator(Batch(
-                cases=[self.case_space.tree(self.base, fields) for fields in wanted.values()],
-                cells=self.cells, duration=self.duration,
-                series={"quantity": self.record.quantity,
-                        "times": None if fitted else (self.times + points[0][1]).tolist()},
-                quantities=None))
+            answers = self.evaluator(
+                Batch(
+                    cases=[self.case_space.tree(self.base, fields) for fields in wanted.values()],
+                    cells=self.cells,
+                    duration=self.duration,
+                    series={
+                        "quantity": self.record.quantity,
+                        "times": None if fitted else (self.times + points[0][1]).tolist(),
+                    },
+                    quantities=None,
+                )
+            )
             self.runs += len(answers)
             for (key, fields), answer in zip(wanted.items(), answers):
                 if "error" in answer:
-                    raise CaseError([FieldError(field="parameters", message=(
-                        f"the model fails at {self.describe(fields, self.case_space)}: {answer['error']}"))])
-                self._runs[key] = ((np.asarray(answer["time"]), np.asarray(answer["series"])) if fitted
-                                   else np.asarray(answer["series"]))
+                    raise CaseError(
+                        [
+                            FieldError(
+                                field="parameters",
+                                message=(
+                                    f"the model fails at {self.describe(fields, self.case_space)}: {answer['error']}"
+                                ),
+                            )
+                        ]
+                    )
+                self._runs[key] = (
+                    (np.asarray(answer["time"]), np.asarray(answer["series"]))
+                    if fitted
+                    else np.asarray(answer["series"])
+                )
         if not fitted:
             return [self._runs[key] for key in keys]
         # before the impact (a record's lead-in) the model is at rest: its first sample
@@ -140,18 +173,33 @@ class _Problem:
         behind = [np.maximum(u - STEP * eye[k], 0.0) for k in range(len(u))]
         series = self.model(ahead + behind)
         n = len(u)
-        return np.column_stack([(series[k] - series[n + k]) / self.scale / (ahead[k][k] - behind[k][k])
-                                for k in range(n)])
+        return np.column_stack(
+            [(series[k] - series[n + k]) / self.scale / (ahead[k][k] - behind[k][k]) for k in range(n)]
+        )
 
     def solve(self, start: np.ndarray) -> Any:
-        return least_squares(self.residual, start, jac=self.jacobian, bounds=(0.0, 1.0),
-                             method="trf", x_scale="jac", ftol=1e-10, xtol=1e-7, gtol=1e-10,
-                             max_nfev=MAX_RUNS_PER_START // (len(start) + 1))
+        return least_squares(
+            self.residual,
+            start,
+            jac=self.jacobian,
+            bounds=(0.0, 1.0),
+            method="trf",
+            x_scale="jac",
+            ftol=1e-10,
+            xtol=1e-7,
+            gtol=1e-10,
+            max_nfev=MAX_RUNS_PER_START // (len(start) + 1),
+        )
 
 
-def calibrate(calibration: Calibration | dict, evaluator: Evaluator | None = None,
-              processes: int | None = None, progress: ProgressCallback | None = None,
-              cancelled: CancelCheck | None = None, limits: Limits = Limits()) -> dict:
+def calibrate(
+    calibration: Calibration | dict,
+    evaluator: Evaluator | None = None,
+    processes: int | None = None,
+    progress: ProgressCallback | None = None,
+    cancelled: CancelCheck | None = None,
+    limits: Limits = Limits(),
+) -> dict:
     """Fit `calibration.parameters` so that the case reproduces the record (see the module's
     docstring). `evaluator` runs the batches (default: a pool over `processes`, one a core).
     Returns the fit as JSON: parameters with standard errors and confidence bounds, correlation,
@@ -162,8 +210,13 @@ def calibrate(calibration: Calibration | dict, evaluator: Evaluator | None = Non
         return _calibrate(calibration, run, progress, cancelled, limits)
 
 
-def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: ProgressCallback | None,
-               cancelled: CancelCheck | None, limits: Limits) -> dict:
+def _calibrate(
+    calibration: Calibration,
+    evaluator: Evaluator,
+    progress: ProgressCallback | None,
+    cancelled: CancelCheck | None,
+    limits: Limits,
+) -> dict:
     started = time.monotonic()
     case, record = study_case(calibration.case), calibration.record
     space = check_calibration(calibration, limits)
@@ -184,7 +237,7 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
     costs: list[float] = []
     solutions, tried = [], set()
     for round_ in range(ROUNDS):
-        models = problem.model(points[len(costs):])
+        models = problem.model(points[len(costs) :])
         costs += [float(np.sum(problem.misfit(m) ** 2)) for m in models]
         fresh = [k for k in np.argsort(costs) if k not in tried][:STARTS]
         for k in fresh:
@@ -219,22 +272,24 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
             f"the misfit (nrmse {fit['nrmse']:.3g}) is {fit['nrmse'] / max(noise, 1e-300):.3g}× the "
             f"record's noise ({noise:.3g}, from its sample-to-sample scatter) after {len(solutions)} "
             "starts: the model does not reproduce the record within its noise (a parameter not "
-            "fitted, something the model lacks, or an optimum the starts did not find)")
+            "fitted, something the model lacks, or an optimum the starts did not find)"
+        )
     if moved > GRID_SHARE:
         warnings.append(
             f"the grid is not fine enough for this record: on {problem.cells} cells, twice as fine "
             f"as the last, the values moved by {moved:.2g} of their standard errors (more than "
-            f"{GRID_SHARE:.2g}); the uncertainty does not include the grid's error")
+            f"{GRID_SHARE:.2g}); the uncertainty does not include the grid's error"
+        )
     values = space.values(fit["unit"])
     fields, offset = problem.split(fit["unit"])
     fitted = problem.case_space.tree(calibration.case.model_dump(mode="json", exclude_none=True), fields)
     model = problem.model([fit["unit"]])[0]
     report(1.0)
     return {
-        "parameters": {path: {"value": float(v), "standard_error": _finite(se), "low": _finite(lo),
-                              "high": _finite(hi)}
-                       for path, v, se, lo, hi in zip(space.paths, values, fit["standard_error"],
-                                                      fit["low"], fit["high"])},
+        "parameters": {
+            path: {"value": float(v), "standard_error": _finite(se), "low": _finite(lo), "high": _finite(hi)}
+            for path, v, se, lo, hi in zip(space.paths, values, fit["standard_error"], fit["low"], fit["high"])
+        },
         "correlation": fit["correlation"],
         "nrmse": fit["nrmse"],
         "evaluations": problem.runs,
@@ -245,9 +300,14 @@ def _calibrate(calibration: Calibration, evaluator: Evaluator, progress: Progres
         "record": {"quantity": record.quantity, "x": record.x, "unit": record.unit, "time_offset": offset},
         "series": {"time": problem.times.tolist(), "record": record.values, "model": model.tolist()},
         "grid": {"cells": problem.cells, "refinements": refinements, "moved": moved},
-        "starts": [{"values": dict(zip(space.paths, space.values(s.x).tolist())),
-                    "nrmse": _nrmse(s.cost, record), "stopped": s.message}
-                   for s in solutions],
+        "starts": [
+            {
+                "values": dict(zip(space.paths, space.values(s.x).tolist())),
+                "nrmse": _nrmse(s.cost, record),
+                "stopped": s.message,
+            }
+            for s in solutions
+        ],
         "seconds": time.monotonic() - started,
     }
 
@@ -294,10 +354,18 @@ def _uncertainty(problem: _Problem, u: np.ndarray) -> dict:
         low = np.where(space.logarithmic, values * np.exp(-reach), values - spread * (space.high - space.low))
         high = np.where(space.logarithmic, values * np.exp(reach), values + spread * (space.high - space.low))
     low, high = np.where(undetermined, -np.inf, low), np.where(undetermined, np.inf, high)
-    return {"unit": u, "unit_error": unit_error, "standard_error": standard_error, "low": low,
-            "high": high, "correlation": correlation.tolist(),
-            "nrmse": math.sqrt(float(residual @ residual) / m), "spread": spread, "variance": variance,
-            "undetermined": undetermined}
+    return {
+        "unit": u,
+        "unit_error": unit_error,
+        "standard_error": standard_error,
+        "low": low,
+        "high": high,
+        "correlation": correlation.tolist(),
+        "nrmse": math.sqrt(float(residual @ residual) / m),
+        "spread": spread,
+        "variance": variance,
+        "undetermined": undetermined,
+    }
 
 
 def _warnings(space: Space, fit: dict, solutions: list, problem: _Problem) -> list[str]:
@@ -311,31 +379,43 @@ def _warnings(space: Space, fit: dict, solutions: list, problem: _Problem) -> li
                 warnings.append(
                     f"{paths[i]} and {paths[j]} are strongly correlated ({corr[i, j]:+.3f}): the "
                     "record does not tell them apart, and other pairs of values fit it as well; the "
-                    "fit is not unique")
+                    "fit is not unique"
+                )
     values = space.values(u)
     for k, path in enumerate(paths):
         if u[k] <= AT_BOUND or u[k] >= 1.0 - AT_BOUND:
             side, bound = ("lower", space.low[k]) if u[k] <= AT_BOUND else ("upper", space.high[k])
-            warnings.append(f"{path} ended at its {side} bound ({bound:.6g}): the best fit may lie "
-                            "beyond it; widen the bounds or fix the parameter")
+            warnings.append(
+                f"{path} ended at its {side} bound ({bound:.6g}): the best fit may lie "
+                "beyond it; widen the bounds or fix the parameter"
+            )
         elif fit["undetermined"][k]:
-            warnings.append(f"{path} is not determined by the record: changing it does not change the "
-                            "model at the record's instants; the fit is not unique")
+            warnings.append(
+                f"{path} is not determined by the record: changing it does not change the "
+                "model at the record's instants; the fit is not unique"
+            )
         elif 2.0 * fit["spread"][k] >= UNDETERMINED:
             warnings.append(
                 f"{path} is poorly determined by the record: its {CONFIDENCE:.0%} interval "
                 f"[{fit['low'][k]:.4g}, {fit['high'][k]:.4g}] around {values[k]:.4g} spans more than "
-                f"{UNDETERMINED:.0%} of the bounds' range (on their scale); the fit is not unique")
+                f"{UNDETERMINED:.0%} of the bounds' range (on their scale); the fit is not unique"
+            )
     # Another start as good within the noise (its sum of squares within `SAME_MISFIT` residual
     # variances of the best), yet over three standard errors away: no single basin has both.
     # The starts ran on the first grid: they are compared with the best of them, not with the fit.
     best = min(solutions, key=lambda s: s.cost)
     error = np.maximum(fit["unit_error"], 1e-12)
-    apart = [s for s in solutions if 2.0 * (s.cost - best.cost) <= SAME_MISFIT * fit["variance"]
-             and np.any(np.abs(s.x - best.x) > 3.0 * error)]
+    apart = [
+        s
+        for s in solutions
+        if 2.0 * (s.cost - best.cost) <= SAME_MISFIT * fit["variance"] and np.any(np.abs(s.x - best.x) > 3.0 * error)
+    ]
     if apart:
         warnings.append(
             "starts ended at different values with the same misfit ("
-            + problem.describe(space.values(apart[0].x)) + " against " + problem.describe(space.values(best.x))
-            + "): the record has more than one best fit; the fit is not unique")
+            + problem.describe(space.values(apart[0].x))
+            + " against "
+            + problem.describe(space.values(best.x))
+            + "): the record has more than one best fit; the fit is not unique"
+        )
     return warnings

@@ -10,7 +10,7 @@ from __future__ import annotations
 import json
 import os
 from pathlib import Path
-from typing import Annotated, Any, Literal, TypeVar, Union
+from typing import Annotated, Any, Literal, TypeVar
 
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError
@@ -54,9 +54,7 @@ class _Model(BaseModel):
 
 def field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationError:
     """A validation error attached to `loc` below the model being validated."""
-    detail = InitErrorDetails(
-        type=PydanticCustomError("value_error", message), loc=loc, input=value
-    )
+    detail = InitErrorDetails(type=PydanticCustomError("value_error", message), loc=loc, input=value)
     return ValidationError.from_exception_data(model, [detail])
 
 
@@ -81,10 +79,11 @@ class Profile(_Model):
         return x
 
     @model_validator(mode="after")
-    def _same_length(self) -> "Profile":
+    def _same_length(self) -> Profile:
         if len(self.area) != len(self.x):
             raise field_error(
-                "Profile", ("area",),
+                "Profile",
+                ("area",),
                 f"must have one area per station: {len(self.area)} areas for {len(self.x)} stations",
                 self.area,
             )
@@ -104,21 +103,24 @@ class Tool(_Model):
     profile: Profile | None = None
 
     @model_validator(mode="after")
-    def _one_shape(self) -> "Tool":
+    def _one_shape(self) -> Tool:
         _check_shape(self, "tool")
         return self
 
 
-def _check_shape(rod: "Tool | Striker", name: str) -> None:
+def _check_shape(rod: Tool | Striker, name: str) -> None:
     """A rod has a uniform `area` or a `profile` whose last station is its length."""
     if (rod.area is None) == (rod.profile is None):
-        raise field_error(name, ("area",),
-                           f"give exactly one of {name}.area (uniform) or {name}.profile", rod.area)
+        raise field_error(name, ("area",), f"give exactly one of {name}.area (uniform) or {name}.profile", rod.area)
     if rod.profile is not None:
         last = rod.profile.x[-1]
         if abs(last - rod.length) > 1e-9 * rod.length:
-            raise field_error(name, ("profile", "x", len(rod.profile.x) - 1),
-                               f"the last station must equal {name}.length = {rod.length} m", last)
+            raise field_error(
+                name,
+                ("profile", "x", len(rod.profile.x) - 1),
+                f"the last station must equal {name}.length = {rod.length} m",
+                last,
+            )
 
 
 class Striker(_Model):
@@ -135,30 +137,37 @@ class Striker(_Model):
     profile: Profile | None = None
 
     @model_validator(mode="after")
-    def _lumped_or_rod(self) -> "Striker":
+    def _lumped_or_rod(self) -> Striker:
         if self.mass is not None and self.length is not None:
             raise field_error(
-                "Striker", ("mass",),
+                "Striker",
+                ("mass",),
                 "cannot be given with striker.length: striker.mass makes a lumped striker, "
-                "striker.length an elastic rod; give one of them", self.mass)
+                "striker.length an elastic rod; give one of them",
+                self.mass,
+            )
         if self.mass is None and self.length is None:
             raise field_error(
-                "Striker", ("mass",),
+                "Striker",
+                ("mass",),
                 "is required (a lumped striker), unless the striker is an elastic rod "
-                "(striker.length, youngs_modulus, density and area or profile)", None)
+                "(striker.length, youngs_modulus, density and area or profile)",
+                None,
+            )
         rod_fields = ("youngs_modulus", "density", "area", "profile")
         if self.mass is not None:
             for name in rod_fields:
                 if getattr(self, name) is not None:
                     raise field_error(
-                        "Striker", (name,),
-                        "belongs to an elastic striker (with striker.length), not a lumped one "
-                        "(striker.mass)", getattr(self, name))
+                        "Striker",
+                        (name,),
+                        "belongs to an elastic striker (with striker.length), not a lumped one (striker.mass)",
+                        getattr(self, name),
+                    )
             return self
         for name in ("youngs_modulus", "density"):
             if getattr(self, name) is None:
-                raise field_error("Striker", (name,),
-                                   "is required for an elastic striker (striker.length)", None)
+                raise field_error("Striker", (name,), "is required for an elastic striker (striker.length)", None)
         _check_shape(self, "striker")
         return self
 
@@ -167,10 +176,15 @@ class Striker(_Model):
         """Whether the striker is an elastic rod (else lumped)."""
         return self.length is not None
 
-    def rod(self) -> "Tool":
+    def rod(self) -> Tool:
         """The elastic striker as a rod (its x from the impact face)."""
-        return Tool(length=self.length, youngs_modulus=self.youngs_modulus, density=self.density,
-                    area=self.area, profile=self.profile)
+        return Tool(
+            length=self.length,
+            youngs_modulus=self.youngs_modulus,
+            density=self.density,
+            area=self.area,
+            profile=self.profile,
+        )
 
 
 class Contact(_Model):
@@ -200,8 +214,11 @@ MEDIUM_FIELDS = {
     "bilinear": ("stiffness", "unloading_stiffness", "damping"),
     "smith": ("ultimate_resistance", "quake", "damping_factor"),
 }
-MEDIUM_REQUIRED = {"linear": ("stiffness",), "bilinear": ("stiffness", "unloading_stiffness"),
-                   "smith": ("ultimate_resistance", "quake")}
+MEDIUM_REQUIRED = {
+    "linear": ("stiffness",),
+    "bilinear": ("stiffness", "unloading_stiffness"),
+    "smith": ("ultimate_resistance", "quake"),
+}
 
 
 class Medium(_Model):
@@ -225,24 +242,28 @@ class Medium(_Model):
     damping_factor: Annotated[float, Field(ge=0, le=1e3)] = 0.0
 
     @model_validator(mode="after")
-    def _fields_of_kind(self) -> "Medium":
+    def _fields_of_kind(self) -> Medium:
         allowed = MEDIUM_FIELDS[self.kind]
         for name, spec in type(self).model_fields.items():
             value = getattr(self, name)
             # given: a value other than the field's default (a stored case spells out defaults)
             if name != "kind" and value is not None and value != spec.default and name not in allowed:
                 raise field_error(
-                    "Medium", (name,),
+                    "Medium",
+                    (name,),
                     f"is not a field of a {self.kind} medium (its fields: {', '.join(allowed)})",
-                    getattr(self, name))
+                    getattr(self, name),
+                )
         for name in MEDIUM_REQUIRED[self.kind]:
             if getattr(self, name) is None:
                 raise field_error("Medium", (name,), f"is required for a {self.kind} medium", None)
         if self.kind == "bilinear" and self.unloading_stiffness < self.stiffness:
             raise field_error(
-                "Medium", ("unloading_stiffness",),
-                f"must be ≥ medium.stiffness = {self.stiffness:.6g} N/m: rock unloads at least as "
-                "stiffly as it loads", self.unloading_stiffness)
+                "Medium",
+                ("unloading_stiffness",),
+                f"must be ≥ medium.stiffness = {self.stiffness:.6g} N/m: rock unloads at least as stiffly as it loads",
+                self.unloading_stiffness,
+            )
         return self
 
     @property
@@ -284,7 +305,7 @@ class PulseForce(_Model):
     duration: Duration
 
 
-Force = Annotated[Union[SineForce, AbsSineForce, PulseForce], Field(discriminator="kind")]
+Force = Annotated[SineForce | AbsSineForce | PulseForce, Field(discriminator="kind")]
 
 
 class Numerics(_Model):
@@ -294,42 +315,46 @@ class Numerics(_Model):
     another is named), its error estimated from two coarser companion runs."""
 
     duration: Duration
-    time_step: Duration | None = Field(
-        default=None, description="τ (s) of a fixed grid; default from the case itself")
+    time_step: Duration | None = Field(default=None, description="τ (s) of a fixed grid; default from the case itself")
     cells: Whole | None = Field(  # the service limits are far lower than the bound
-        default=None, ge=1, le=2**31, description="N = L/h of a fixed grid; default 100 once a grid is asked")
+        default=None, ge=1, le=2**31, description="N = L/h of a fixed grid; default 100 once a grid is asked"
+    )
     tolerance: float | None = Field(
-        default=None, ge=1e-5, le=0.2,
+        default=None,
+        ge=1e-5,
+        le=0.2,
         description="relative accuracy asked on every headline quantity (co-impact time, peak "
-                    "contact force, maximum compressive and tensile stress, energy to the medium, "
-                    "rebound velocity, transfer efficiency); the solver chooses the grid and reports "
-                    "its error estimate. Default 0.01 when numerics gives no cells, time_step or scheme",
+        "contact force, maximum compressive and tensile stress, energy to the medium, "
+        "rebound velocity, transfer efficiency); the solver chooses the grid and reports "
+        "its error estimate. Default 0.01 when numerics gives no cells, time_step or scheme",
     )
     scheme: Literal["paper", "sigma", "explicit"] | None = Field(
         default=None,
         description="a fixed grid's scheme: 'paper', the weighted scheme (8) with γ (first order); "
-                    "'sigma', the symmetric σ-scheme (second order, energy-conserving); 'explicit', "
-                    "central differences (second order, Courant number a·τ/h ≤ 1; at 1, its default, "
-                    "exact along a uniform tool, with ends that integrate their own equations). "
-                    "Default 'paper' when a grid is given; chosen by the solver otherwise",
+        "'sigma', the symmetric σ-scheme (second order, energy-conserving); 'explicit', "
+        "central differences (second order, Courant number a·τ/h ≤ 1; at 1, its default, "
+        "exact along a uniform tool, with ends that integrate their own equations). "
+        "Default 'paper' when a grid is given; chosen by the solver otherwise",
     )
     gamma: float = Field(
-        default=0.5, le=1.0,
+        default=0.5,
+        le=1.0,
         description="weight γ of the new time layer in the paper's scheme (8); 0.5 ≤ γ ≤ 1",
     )
     sigma: float = Field(
-        default=0.25, le=1.0,
+        default=0.25,
+        le=1.0,
         description="weight σ of layers n±1 in the σ-scheme; 1/4 ≤ σ ≤ 1",
     )
     end_masses: bool | None = Field(
         default=None,
         description="keep the half-cell mass at each end of the tool (second-order end conditions); "
-                    "default: yes for 'sigma' and 'explicit', no for 'paper' (its massless ends (9), (10))",
+        "default: yes for 'sigma' and 'explicit', no for 'paper' (its massless ends (9), (10))",
     )
     model: Literal["rod", "lumped"] | None = Field(
         default=None,
         description="'rod': the tool as an elastic rod (8)–(13), the default; 'lumped': the two-mass "
-                    "model problem (21)–(25), its modelling error estimated as ε²",
+        "model problem (21)–(25), its modelling error estimated as ε²",
     )
 
     @field_validator("gamma")
@@ -355,14 +380,16 @@ class Numerics(_Model):
         return sigma
 
     @model_validator(mode="after")
-    def _tolerance_or_grid(self) -> "Numerics":
+    def _tolerance_or_grid(self) -> Numerics:
         if self.tolerance is not None:
             given = [name for name in ("time_step", "cells") if getattr(self, name) is not None]
             if given:
                 raise field_error(
-                    "Numerics", ("tolerance",),
+                    "Numerics",
+                    ("tolerance",),
                     f"cannot be combined with numerics.{given[0]}: under a tolerance the solver "
-                    "chooses the grid; give one or the other", self.tolerance,
+                    "chooses the grid; give one or the other",
+                    self.tolerance,
                 )
         return self
 
@@ -393,22 +420,27 @@ class Case(_Model):
     outputs: Outputs = Field(default_factory=Outputs)
 
     @model_validator(mode="after")
-    def _probes_on_tool(self) -> "Case":
+    def _probes_on_tool(self) -> Case:
         for i, x in enumerate(self.outputs.probes):
             if not 0.0 <= x <= self.tool.length:
                 raise field_error(
-                    "Case", ("outputs", "probes", i),
-                    f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m", x,
+                    "Case",
+                    ("outputs", "probes", i),
+                    f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m",
+                    x,
                 )
         return self
 
     @model_validator(mode="after")
-    def _force_on_a_lumped_striker(self) -> "Case":
+    def _force_on_a_lumped_striker(self) -> Case:
         if self.force is not None and self.striker.elastic:
             raise field_error(
-                "Case", ("force",),
+                "Case",
+                ("force",),
                 "acts on a lumped striker (striker.mass); an elastic striker (striker.length) is "
-                "driven by its velocity at impact only", self.force.kind)
+                "driven by its velocity at impact only",
+                self.force.kind,
+            )
         return self
 
     @property
@@ -513,8 +545,12 @@ def validated(model: type[_M], data: Any, field: str = "") -> _M:
     try:
         return model.model_validate(data)
     except ValidationError as error:
-        raise CaseError([FieldError(field=f"{field}.{e.field}" if field else e.field, message=e.message)
-                         for e in describe_errors(error)]) from None
+        raise CaseError(
+            [
+                FieldError(field=f"{field}.{e.field}" if field else e.field, message=e.message)
+                for e in describe_errors(error)
+            ]
+        ) from None
 
 
 def parse_case(data: dict | str | bytes) -> Case:

@@ -37,9 +37,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from .compiled import compiled
 
 from .case import Case
+from .compiled import compiled
 from .grid import area_integral, tool_area, wave_speed
 
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
@@ -88,7 +88,7 @@ def _next_break(t, kind, omega, start, duration):
 def _spring(delta, c1, alpha, c0):
     """G(δ)·δ and its derivative in δ."""
     if delta >= 0.0:
-        return c1 * delta ** (alpha + 1.0), (alpha + 1.0) * c1 * delta ** alpha
+        return c1 * delta ** (alpha + 1.0), (alpha + 1.0) * c1 * delta**alpha
     return c0 * delta, c0
 
 
@@ -186,8 +186,7 @@ def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
     # the force just after the step's start, under the wave arriving now (a front arrives on a
     # step's boundary, and the force can jump there)
     p[11], p[14] = t_step, tau
-    _observe_struck(t, _contact_force(s[0], s[1], s[2], _arriving(t, p, wave), p[0], p[1], p[2],
-                                      p[3], z), area0, obs)
+    _observe_struck(t, _contact_force(s[0], s[1], s[2], _arriving(t, p, wave), p[0], p[1], p[2], p[3], z), area0, obs)
     while t < t_end:
         rate = _struck_rate_bound(s, _arriving(t, p, wave), p)
         n = min(MAX_SUBSTEPS, max(MIN_SUBSTEPS, math.ceil(tau * rate / STIFFNESS_STEP)))
@@ -227,19 +226,21 @@ def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
             else:
                 obs[O_IN_CONTACT] = 1.0
                 obs[O_CONTACT_START] = stop
-        force = _contact_force(out[0], out[1], out[2], _arriving(stop, p, wave), p[0], p[1], p[2],
-                               p[3], z)
+        force = _contact_force(out[0], out[1], out[2], _arriving(stop, p, wave), p[0], p[1], p[2], p[3], z)
         _observe_struck(stop, force, area0, obs)
         # the extreme force between substeps of equal length
         h_prev, f_prev, f_prev2, f_prev3 = prev[0], prev[1], prev[2], prev[3]
-        if (abs(h_prev - (stop - t)) <= 1e-9 * h_prev and abs(prev[4] - h_prev) <= 1e-9 * h_prev
-                and f_prev >= f_prev2 and f_prev > force):
+        if (
+            abs(h_prev - (stop - t)) <= 1e-9 * h_prev
+            and abs(prev[4] - h_prev) <= 1e-9 * h_prev
+            and f_prev >= f_prev2
+            and f_prev > force
+        ):
             value, when = _vertex(t, h_prev, f_prev3, f_prev2, f_prev, force)
             if value > obs[O_PEAK_FORCE]:
                 obs[O_PEAK_FORCE], obs[O_PEAK_FORCE_TIME] = value, when
             if value / area0 > obs[O_COMPRESSION]:
-                obs[O_COMPRESSION], obs[O_COMPRESSION_X], obs[O_COMPRESSION_TIME] = (
-                    value / area0, 0.0, when)
+                obs[O_COMPRESSION], obs[O_COMPRESSION_X], obs[O_COMPRESSION_TIME] = (value / area0, 0.0, when)
         prev[4], prev[0], prev[1], prev[2], prev[3] = h_prev, stop - t, force, f_prev, f_prev2
         for q in range(5):
             s[q] = out[q]
@@ -315,8 +316,12 @@ def _run(h, tau, steps, last_fraction, cell_area, cell_z, striker, medium, obs, 
     last_in = last_far = 0.0
     c2, b2 = medium[0], medium[1]
     length = n * h
-    _observe_struck(0.0, _contact_force(0.0, striker[13], 0.0, 0.0, striker[0], striker[1],
-                                        striker[2], striker[3], cell_z[0]), striker[12], obs)
+    _observe_struck(
+        0.0,
+        _contact_force(0.0, striker[13], 0.0, 0.0, striker[0], striker[1], striker[2], striker[3], cell_z[0]),
+        striker[12],
+        obs,
+    )
     obs[O_IN_CONTACT] = 1.0
     kept = 0
     for m in range(steps + 1):
@@ -346,8 +351,7 @@ def _run(h, tau, steps, last_fraction, cell_area, cell_z, striker, medium, obs, 
         impulse = struck[4]
         end_force = _struck_end_step(t, span, struck, wave, striker, obs, prev)
         far_impulse = working[2]
-        medium_force = _working_end_step(span, working, far_wave, c2, b2, cell_z[n - 1],
-                                         medium[2], t, length, obs)
+        medium_force = _working_end_step(span, working, far_wave, c2, b2, cell_z[n - 1], medium[2], t, length, obs)
         if not whole:
             break
         # each wave crosses its cell; at each joint it is transmitted and reflected
@@ -363,8 +367,7 @@ def _run(h, tau, steps, last_fraction, cell_area, cell_z, striker, medium, obs, 
         for j in range(n):
             stress = (new_right[j] + new_left[j]) / cell_area[j]
             if -stress > obs[O_COMPRESSION]:
-                obs[O_COMPRESSION], obs[O_COMPRESSION_X], obs[O_COMPRESSION_TIME] = (
-                    -stress, (j + 0.5) * h, t_new)
+                obs[O_COMPRESSION], obs[O_COMPRESSION_X], obs[O_COMPRESSION_TIME] = (-stress, (j + 0.5) * h, t_new)
             if stress > obs[O_TENSION]:
                 obs[O_TENSION], obs[O_TENSION_X], obs[O_TENSION_TIME] = stress, (j + 0.5) * h, t_new
         if stride > 0 and (m + 1) % stride == 0 and kept < history.shape[1]:
@@ -446,11 +449,28 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
     c = case.contact
     kind, amplitude, omega, start, pulse = _force_code(case)
     end_areas = tool_area(tool, np.array([0.0, tool.length]))
-    striker = np.array([c.stiffness, c.exponent, c.tension_stiffness, c.damping, case.striker.mass,
-                        cell_z[0], kind, amplitude, omega, start, pulse,
-                        0.0, end_areas[0], case.striker.velocity, 0.0])
-    medium = np.array([case.medium.stiffness if case.medium else 0.0,
-                       case.medium.damping if case.medium else 0.0, end_areas[1]])
+    striker = np.array(
+        [
+            c.stiffness,
+            c.exponent,
+            c.tension_stiffness,
+            c.damping,
+            case.striker.mass,
+            cell_z[0],
+            kind,
+            amplitude,
+            omega,
+            start,
+            pulse,
+            0.0,
+            end_areas[0],
+            case.striker.velocity,
+            0.0,
+        ]
+    )
+    medium = np.array(
+        [case.medium.stiffness if case.medium else 0.0, case.medium.damping if case.medium else 0.0, end_areas[1]]
+    )
     obs = np.zeros(OBSERVED)
     obs[O_CO_IMPACT] = obs[O_REBOUND] = np.nan
     stride = max(1, steps // history_points) if history_points else 0
@@ -471,8 +491,9 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
         max_tensile_stress_x=float(obs[O_TENSION_X]),
         to_medium=float(to_medium),
         external_work=float(obs[O_EXTERNAL_WORK]),
-        initial=0.5 * case.striker.mass * case.striker.velocity ** 2,
+        initial=0.5 * case.striker.mass * case.striker.velocity**2,
         contacts=contacts,
-        history={name: history[k, :kept].copy() for k, name in
-                 enumerate(("time", "contact", "medium", "striker_velocity"))},
+        history={
+            name: history[k, :kept].copy() for k, name in enumerate(("time", "contact", "medium", "striker_velocity"))
+        },
     )

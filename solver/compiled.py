@@ -35,7 +35,8 @@ def cache_folder() -> str:
     is set (a read-only install's), else in the solver's `__pycache__` when the solver's folder can
     be written, else in the user's cache."""
     base = os.environ.get("NUMBA_CACHE_DIR") or (
-        str(SOLVER / "__pycache__") if os.access(SOLVER, os.W_OK) else str(Path.home() / ".cache" / "percussim"))
+        str(SOLVER / "__pycache__") if os.access(SOLVER, os.W_OK) else str(Path.home() / ".cache" / "percussim")
+    )
     return os.path.join(base, f"percussim-{sources_hash()}")
 
 
@@ -43,6 +44,7 @@ def compiled(**options):
     """`numba.njit(cache=True, **options)` with its cache in `cache_folder()`. Numba reads the
     cache's folder when a function is decorated, so it is set for that moment only: other Numba
     code in the process keeps its own."""
+
     def decorate(function):
         previous = config.CACHE_DIR
         config.CACHE_DIR = cache_folder()
@@ -50,4 +52,5 @@ def compiled(**options):
             return njit(cache=True, **options)(function)
         finally:
             config.CACHE_DIR = previous
+
     return decorate

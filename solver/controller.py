@@ -14,11 +14,9 @@ from . import layout as L
 from .blows import BlowLog
 from .case import Case, Medium
 from .errors import Cancelled, NumericalFailure
-from .grid import (Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass,
-                   wave_speed)
+from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass, wave_speed
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
-from .summary import (FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows,
-                      launch_energy)
+from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows, launch_energy
 
 CHUNK_NODE_STEPS = 2_000_000  # work between two progress reports (about 10 ms)
 
@@ -96,8 +94,7 @@ def force_law(case: Case) -> K.ForceLaw:
     if f is None:
         return K.ForceLaw(kind=K.FORCE_NONE, amplitude=0.0, omega=0.0, start=0.0, duration=0.0)
     if f.kind == "pulse":
-        return K.ForceLaw(kind=K.FORCE_PULSE, amplitude=f.amplitude, omega=0.0, start=f.start,
-                          duration=f.duration)
+        return K.ForceLaw(kind=K.FORCE_PULSE, amplitude=f.amplitude, omega=0.0, start=f.start, duration=f.duration)
     kind = K.FORCE_SINE if f.kind == "sine" else K.FORCE_ABS_SINE
     return K.ForceLaw(kind=kind, amplitude=f.amplitude, omega=f.omega, start=0.0, duration=0.0)
 
@@ -109,17 +106,26 @@ def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
     """The striker and contact, and the medium, with the impedances of the tool's end cells."""
     c, m = case.contact, case.medium
     impedance = grid.density * wave_speed(case.tool)
-    contact = K.Contact(striker_mass=striker_mass(case.striker), striker_velocity=case.striker.velocity,
-                        stiffness=c.stiffness, exponent=c.exponent,
-                        tension_stiffness=c.tension_stiffness, damping=c.damping,
-                        impedance=impedance * grid.end_area[0])
+    contact = K.Contact(
+        striker_mass=striker_mass(case.striker),
+        striker_velocity=case.striker.velocity,
+        stiffness=c.stiffness,
+        exponent=c.exponent,
+        tension_stiffness=c.tension_stiffness,
+        damping=c.damping,
+        impedance=impedance * grid.end_area[0],
+    )
     if m is None:
         m = Medium(stiffness=0.0)
-    medium = K.Medium(kind=MEDIUM_KINDS[m.kind], stiffness=m.loading_stiffness, damping=m.damping,
-                      impedance=impedance * grid.end_area[1],
-                      unloading_stiffness=m.unloading_stiffness or 0.0,
-                      ultimate_resistance=m.ultimate_resistance or 0.0,
-                      damping_factor=m.damping_factor)
+    medium = K.Medium(
+        kind=MEDIUM_KINDS[m.kind],
+        stiffness=m.loading_stiffness,
+        damping=m.damping,
+        impedance=impedance * grid.end_area[1],
+        unloading_stiffness=m.unloading_stiffness or 0.0,
+        ultimate_resistance=m.ultimate_resistance or 0.0,
+        damping_factor=m.damping_factor,
+    )
     return contact, medium
 
 
@@ -128,14 +134,20 @@ def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K
     one as `elastic = False` (its mass is the `Contact`'s; the tool's bundles fill the rest)."""
     striker = case.striker
     if not striker.elastic:
-        return K.Striker(elastic=False, tool=tool, rod=rod, impedance=1.0, back_impedance=1.0,
-                         mass=striker.mass, back_delay=0.0)
+        return K.Striker(
+            elastic=False, tool=tool, rod=rod, impedance=1.0, back_impedance=1.0, mass=striker.mass, back_delay=0.0
+        )
     grid, back_delay = striker_grid(striker, num.time_step)
     impedance = grid.density * wave_speed(striker.rod())
     return K.Striker(
-        elastic=True, tool=tool_on(grid), rod=rod_on(grid, num.time_step, 1.0),
-        impedance=impedance * grid.end_area[0], back_impedance=impedance * grid.end_area[1],
-        mass=striker_mass(striker), back_delay=back_delay)
+        elastic=True,
+        tool=tool_on(grid),
+        rod=rod_on(grid, num.time_step, 1.0),
+        impedance=impedance * grid.end_area[0],
+        back_impedance=impedance * grid.end_area[1],
+        mass=striker_mass(striker),
+        back_delay=back_delay,
+    )
 
 
 def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
@@ -145,17 +157,33 @@ def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
     if anvil is None:
         return K.Anvil(present=False, mass=1.0, velocity=0.0, contact=contact)
     c = anvil.contact
-    return K.Anvil(present=True, mass=anvil.mass, velocity=anvil.velocity, contact=K.Contact(
-        striker_mass=anvil.mass, striker_velocity=anvil.velocity, stiffness=c.stiffness,
-        exponent=c.exponent, tension_stiffness=c.tension_stiffness, damping=c.damping,
-        impedance=contact.impedance))
+    return K.Anvil(
+        present=True,
+        mass=anvil.mass,
+        velocity=anvil.velocity,
+        contact=K.Contact(
+            striker_mass=anvil.mass,
+            striker_velocity=anvil.velocity,
+            stiffness=c.stiffness,
+            exponent=c.exponent,
+            tension_stiffness=c.tension_stiffness,
+            damping=c.damping,
+            impedance=contact.impedance,
+        ),
+    )
 
 
 def tool_on(grid: Grid) -> K.Tool:
     """The tool on its grid, as the kernel takes it."""
-    return K.Tool(lower=grid.lower, upper=grid.upper, node_area=grid.node_area,
-                  area_mid=grid.area_mid, uniform=grid.uniform,
-                  struck_end_area=float(grid.area[0]), working_end_area=float(grid.area[-1]))
+    return K.Tool(
+        lower=grid.lower,
+        upper=grid.upper,
+        node_area=grid.node_area,
+        area_mid=grid.area_mid,
+        uniform=grid.uniform,
+        struck_end_area=float(grid.area[0]),
+        working_end_area=float(grid.area[-1]),
+    )
 
 
 def rod_constants(case: Case, num: ResolvedNumerics, grid: Grid) -> K.Rod:
@@ -170,21 +198,32 @@ def rod_constants(case: Case, num: ResolvedNumerics, grid: Grid) -> K.Rod:
 def rod_on(grid: Grid, tau: float, courant_squared: float) -> K.Rod:
     """A rod's constants on its grid (h, E, ρ, the end cells' S·E/h), time step and (a·τ/h)²."""
     h, modulus = grid.h, grid.youngs_modulus
-    return K.Rod(cell_length=h, time_step=tau, courant_squared=courant_squared,
-                 youngs_modulus=modulus, density=grid.density,
-                 struck_end_stiffness=grid.end_area[0] * modulus / h,
-                 working_end_stiffness=grid.end_area[1] * modulus / h)
+    return K.Rod(
+        cell_length=h,
+        time_step=tau,
+        courant_squared=courant_squared,
+        youngs_modulus=modulus,
+        density=grid.density,
+        struck_end_stiffness=grid.end_area[0] * modulus / h,
+        working_end_stiffness=grid.end_area[1] * modulus / h,
+    )
 
 
 def scheme_weights(num: ResolvedNumerics) -> K.Weights:
     """The scheme as the kernel takes it."""
     scheme = num.weights()
-    return K.Weights(new=scheme.weight_new, old=scheme.weight_old, centered=scheme.centered,
-                     end_masses=scheme.end_masses, impedance_ends=num.ends == "impedance")
+    return K.Weights(
+        new=scheme.weight_new,
+        old=scheme.weight_old,
+        centered=scheme.centered,
+        end_masses=scheme.end_masses,
+        impedance_ends=num.ends == "impedance",
+    )
 
 
-def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool,
-              elastic_striker: bool = False) -> np.ndarray:
+def energy_at(
+    energy: np.ndarray, last: int, tau: float, duration: float, ends_at_layer: bool, elastic_striker: bool = False
+) -> np.ndarray:
     """The energy terms at `duration`, interpolated between the kernel's last two layers (`energy`
     row 0 after layer `last`, row 1 before it): the run's last layer can lie up to a step beyond
     the duration. The terms are at layer m − ½ in the scheme's own form, but for the ends that
@@ -192,9 +231,18 @@ def energy_at(energy: np.ndarray, last: int, tau: float, duration: float, ends_a
     at layer m (but for an elastic striker's, at m − ½ as the tool's)."""
     at = np.full(L.ENERGY_SLOTS, (last - 0.5) * tau)
     if ends_at_layer:
-        at[[L.E_EXTERNAL_WORK, L.E_DISSIPATED_CONTACT, L.E_DISSIPATED_MEDIUM, L.E_STRIKER_KINETIC,
-            L.E_CONTACT_POTENTIAL, L.E_MEDIUM_POTENTIAL, L.E_MEDIUM_PLASTIC,
-            L.E_ANVIL_KINETIC]] = last * tau
+        at[
+            [
+                L.E_EXTERNAL_WORK,
+                L.E_DISSIPATED_CONTACT,
+                L.E_DISSIPATED_MEDIUM,
+                L.E_STRIKER_KINETIC,
+                L.E_CONTACT_POTENTIAL,
+                L.E_MEDIUM_POTENTIAL,
+                L.E_MEDIUM_PLASTIC,
+                L.E_ANVIL_KINETIC,
+            ]
+        ] = last * tau
         if elastic_striker:
             at[L.E_STRIKER_KINETIC] = (last - 0.5) * tau
     if last < 2:
@@ -278,14 +326,20 @@ def simulate_rod(
         kept_rows = _kept(*recorded, out.history_stride)
         frames = _kept(*recorded, field_stride)
         recorders = K.Recorders(
-            history=np.empty((L.HISTORY_COLUMNS, kept_rows)), history_stride=out.history_stride,
-            probe_node=probe_node, probe_weight=probe_weight,
+            history=np.empty((L.HISTORY_COLUMNS, kept_rows)),
+            history_stride=out.history_stride,
+            probe_node=probe_node,
+            probe_weight=probe_weight,
             probes=np.empty((kept_rows, len(probe_node))),
-            field_u=np.empty((frames, n + 1)), field_stress=np.empty((frames, n + 1)),
-            field_stride=field_stride, striker_u=np.empty((frames, striker_nodes)),
-            striker_stress=np.empty((frames, striker_nodes)))
-        status, n_hist, n_field = K.advance(first, last, tool, rows, rod, weights, contact, striker,
-                                            anvil, medium, force, state, observed, recorders)
+            field_u=np.empty((frames, n + 1)),
+            field_stress=np.empty((frames, n + 1)),
+            field_stride=field_stride,
+            striker_u=np.empty((frames, striker_nodes)),
+            striker_stress=np.empty((frames, striker_nodes)),
+        )
+        status, n_hist, n_field = K.advance(
+            first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders
+        )
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
         history = recorders.history
@@ -297,10 +351,11 @@ def simulate_rod(
         row += n_hist
         if n_field:
             lo, hi = recorded
-            recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride,
-                                                     hi + 1, field_stride) * tau)
-            layers = {"": (recorders.field_u, recorders.field_stress),
-                      "striker_": (recorders.striker_u, recorders.striker_stress)}
+            recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride, hi + 1, field_stride) * tau)
+            layers = {
+                "": (recorders.field_u, recorders.field_stress),
+                "striker_": (recorders.striker_u, recorders.striker_stress),
+            }
             for prefix in along:
                 displacement, stress = layers[prefix]
                 recorder.append(f"fields/{prefix}displacement", displacement[:n_field])
@@ -320,20 +375,33 @@ def simulate_rod(
 
     table = np.concatenate(summary_table, axis=1)
     ends = state.ends
-    energy = energy_at(state.energy, last_layer, tau, blows * case.numerics.duration,
-                       weights.impedance_ends, striker.elastic)
+    energy = energy_at(
+        state.energy, last_layer, tau, blows * case.numerics.duration, weights.impedance_ends, striker.elastic
+    )
     log.finish(energy, observed, ends[K.S_MEDIUM_SET])
     summary = build_summary(
-        case=case, numerics=num, extremes=log.extremes(), contacts=log.contacts(),
+        case=case,
+        numerics=num,
+        extremes=log.extremes(),
+        contacts=log.contacts(),
         open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
-        energy=energy, history=dict(zip(FORCE_HISTORY.values(), table)),
-        permanent_penetration=ends[K.S_MEDIUM_SET], blows=log.table() if case.blows else None,
+        energy=energy,
+        history=dict(zip(FORCE_HISTORY.values(), table)),
+        permanent_penetration=ends[K.S_MEDIUM_SET],
+        blows=log.table() if case.blows else None,
     )
     held = recorder.held()
     if held is None:
-        return Result(case=case, numerics=num, history={}, probe_x=probe_x,
-                      probe_stress=np.empty((0, len(probe_x))), fields=None, summary=summary,
-                      streamed=True)
+        return Result(
+            case=case,
+            numerics=num,
+            history={},
+            probe_x=probe_x,
+            probe_stress=np.empty((0, len(probe_x))),
+            fields=None,
+            summary=summary,
+            streamed=True,
+        )
     return Result.from_arrays(case, num, held, summary)
 
 
@@ -341,11 +409,15 @@ def warm_up() -> None:
     """Compile the kernel into Numba's on-disk cache (a no-op when it is there already)."""
     from .case import parse_case
 
-    simulate_rod(parse_case({
-        "striker": {"mass": 1.0, "velocity": 1.0},
-        "tool": {"length": 1.0, "youngs_modulus": 1e9, "density": 1e3, "area": 1e-3},
-        "contact": {"stiffness": 1e8, "exponent": 0.5},
-        "force": {"kind": "pulse", "amplitude": 1.0, "duration": 1e-5},
-        "numerics": {"duration": 1e-4, "cells": 4},
-        "outputs": {"probes": [0.5], "fields": True},
-    }))
+    simulate_rod(
+        parse_case(
+            {
+                "striker": {"mass": 1.0, "velocity": 1.0},
+                "tool": {"length": 1.0, "youngs_modulus": 1e9, "density": 1e3, "area": 1e-3},
+                "contact": {"stiffness": 1e8, "exponent": 0.5},
+                "force": {"kind": "pulse", "amplitude": 1.0, "duration": 1e-5},
+                "numerics": {"duration": 1e-4, "cells": 4},
+                "outputs": {"probes": [0.5], "fields": True},
+            }
+        )
+    )

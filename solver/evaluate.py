@@ -22,10 +22,11 @@ import itertools
 import math
 import os
 import time
+from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
 from contextlib import contextmanager
-from typing import Any, Callable, Iterable, Iterator, TypedDict
+from dataclasses import dataclass
+from typing import Any, TypedDict
 
 import numpy as np
 
@@ -65,8 +66,7 @@ def _evaluate(tree: dict, batch: Batch) -> dict:
 
     try:
         case = parse_case(tree)
-        case = case.model_copy(update={"numerics": case.numerics.model_copy(
-            update={"duration": batch["duration"]})})
+        case = case.model_copy(update={"numerics": case.numerics.model_copy(update={"duration": batch["duration"]})})
         result = simulate_rod(case, numerics=explicit_numerics(case, batch["cells"]))
     except (CaseError, NumericalFailure) as error:
         return {"error": str(error)}
@@ -76,8 +76,7 @@ def _evaluate(tree: dict, batch: Batch) -> dict:
             times = result.history["time"]
             values = series(wanted["quantity"], result.history, result.probe_stress, times)
             return {"time": times.tolist(), "series": values.tolist()}
-        values = series(wanted["quantity"], result.history, result.probe_stress,
-                        np.asarray(wanted["times"]))
+        values = series(wanted["quantity"], result.history, result.probe_stress, np.asarray(wanted["times"]))
         return {"series": values.tolist()}
     return {"quantities": {path: quantity(result.summary, path) for path in batch["quantities"]}}
 
@@ -95,7 +94,7 @@ class LocalEvaluator:
         self.pool: ProcessPoolExecutor | None = None
         self.run_seconds = 0.0
 
-    def __enter__(self) -> "LocalEvaluator":
+    def __enter__(self) -> LocalEvaluator:
         return self
 
     def __exit__(self, *exc) -> None:
@@ -136,7 +135,7 @@ def split(cases: list[dict], pieces: int) -> list[list[dict]]:
         return []
     pieces = max(1, min(pieces, len(cases)))
     size = math.ceil(len(cases) / pieces)
-    return [cases[i:i + size] for i in range(0, len(cases), size)]
+    return [cases[i : i + size] for i in range(0, len(cases), size)]
 
 
 @dataclass(frozen=True)
@@ -149,19 +148,24 @@ class Space:
     logarithmic: np.ndarray  # per field: both bounds > 0
 
     @classmethod
-    def of(cls, bounds: dict[str, Any], field: str) -> "Space":
+    def of(cls, bounds: dict[str, Any], field: str) -> Space:
         """The space of `bounds` ({path: [low, high]}); `CaseError` names a bad pair as
         `field[path]`."""
         errors = []
         for path, pair in bounds.items():
-            if (not isinstance(pair, (list, tuple)) or len(pair) != 2
-                    or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in pair)
-                    or not all(math.isfinite(v) for v in pair)):
-                errors.append(FieldError(field=f"{field}[{path!r}]",
-                                         message="must be [low, high]: two finite numbers"))
+            if (
+                not isinstance(pair, (list, tuple))
+                or len(pair) != 2
+                or not all(isinstance(v, (int, float)) and not isinstance(v, bool) for v in pair)
+                or not all(math.isfinite(v) for v in pair)
+            ):
+                errors.append(FieldError(field=f"{field}[{path!r}]", message="must be [low, high]: two finite numbers"))
             elif not pair[0] < pair[1]:
-                errors.append(FieldError(field=f"{field}[{path!r}]",
-                                         message=f"must have low < high, not [{pair[0]:g}, {pair[1]:g}]"))
+                errors.append(
+                    FieldError(
+                        field=f"{field}[{path!r}]", message=f"must have low < high, not [{pair[0]:g}, {pair[1]:g}]"
+                    )
+                )
         if not bounds:
             errors.append(FieldError(field=field, message="give at least one field and its bounds"))
         if errors:
@@ -179,8 +183,7 @@ class Space:
     def values(self, unit: np.ndarray) -> np.ndarray:
         """The fields' values at a point of the unit cube."""
         u = np.clip(unit, 0.0, 1.0)
-        return np.where(self.logarithmic, self.low * np.exp(self.log_span * u),
-                        self.low + (self.high - self.low) * u)
+        return np.where(self.logarithmic, self.low * np.exp(self.log_span * u), self.low + (self.high - self.low) * u)
 
     def unit(self, values: np.ndarray) -> np.ndarray:
         """The point of the unit cube of the fields' values."""
@@ -201,17 +204,18 @@ class Space:
         values = np.array([v if isinstance(v, float) else m for v, m in zip(found, middle)])
         return self.unit(np.clip(values, self.low, self.high))
 
-    def without(self, path: str) -> "Space":
+    def without(self, path: str) -> Space:
         """The space of the other fields."""
         keep = [k for k, p in enumerate(self.paths) if p != path]
-        return Space(tuple(self.paths[k] for k in keep), self.low[keep], self.high[keep],
-                     self.logarithmic[keep])
+        return Space(tuple(self.paths[k] for k in keep), self.low[keep], self.high[keep], self.logarithmic[keep])
 
     def corners(self, case: Case) -> list[Case]:
         """The case at every corner of the bounds (validated: `check` refuses a corner first)."""
         base = case.model_dump(mode="json", exclude_none=True)
-        return [Case.model_validate(self.tree(base, self.values(np.array(corner, dtype=float))))
-                for corner in itertools.product((0.0, 1.0), repeat=len(self.paths))]
+        return [
+            Case.model_validate(self.tree(base, self.values(np.array(corner, dtype=float))))
+            for corner in itertools.product((0.0, 1.0), repeat=len(self.paths))
+        ]
 
     def fewest_cells(self, case: Case) -> int:
         """The fewest cells every point within the bounds takes (`grid.fewest_cells`, the most of
@@ -230,14 +234,21 @@ class Space:
         """Refuse a corner of the bounds the case cannot take (naming `field[path][0 or 1]`), and
         a field that is not a continuous number of the case, before any run. The limits are the
         study's grid's to check (`check_grid`): a corner's own grid is never run."""
-        corners = Sweep(case=case, parameters={p: [float(lo), float(hi)] for p, lo, hi
-                                               in zip(self.paths, self.low, self.high)})
+        corners = Sweep(
+            case=case, parameters={p: [float(lo), float(hi)] for p, lo, hi in zip(self.paths, self.low, self.high)}
+        )
         _, corner = variants(corners, limits=None, field=field)[0]
         tree = corner.model_dump(mode="json", exclude_none=True)
-        errors = [FieldError(field=f"{field}[{path!r}]", message=(
-                      f"is {value_at(tree, path)!r} in the case, not a continuous number: only such "
-                      "fields can vary"))
-                  for path in self.paths if not isinstance(value_at(tree, path), float)]
+        errors = [
+            FieldError(
+                field=f"{field}[{path!r}]",
+                message=(
+                    f"is {value_at(tree, path)!r} in the case, not a continuous number: only such fields can vary"
+                ),
+            )
+            for path in self.paths
+            if not isinstance(value_at(tree, path), float)
+        ]
         if errors:
             raise CaseError(errors)
 
@@ -259,6 +270,15 @@ def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: s
     short = case.model_copy(update={"numerics": case.numerics.model_copy(update={"duration": duration})})
     found = excesses(short, explicit_numerics(short, cells), limits)
     if found:
-        raise CaseError([FieldError(field=field, message=(
-            f"a run on the study's grid of {cells} cells over {duration:.4g} s is beyond the limits: "
-            + "; ".join(e.what for e in found) + f": {remedy}"))])
+        raise CaseError(
+            [
+                FieldError(
+                    field=field,
+                    message=(
+                        f"a run on the study's grid of {cells} cells over {duration:.4g} s is beyond the limits: "
+                        + "; ".join(e.what for e in found)
+                        + f": {remedy}"
+                    ),
+                )
+            ]
+        )

@@ -74,7 +74,7 @@ def fewest_cells(case: Case) -> int:
     return cells
 
 
-def striker_grid(striker: Striker, tau: float) -> tuple["Grid", float]:
+def striker_grid(striker: Striker, tau: float) -> tuple[Grid, float]:
     """An elastic striker on its grid (`striker_cells`, cells of `a_s·τ` from its face) and the
     back delay: twice the transit time of its part beyond the last node (< 2τ)."""
     rod = striker.rod()
@@ -82,8 +82,12 @@ def striker_grid(striker: Striker, tau: float) -> tuple["Grid", float]:
     gridded = cells * wave_speed(rod) * tau
     if rod.profile is not None:
         x = [xi for xi in rod.profile.x if xi < gridded] + [gridded]
-        part = rod.model_copy(update={"length": gridded, "profile": Profile(
-            x=x, area=list(np.interp(x, rod.profile.x, rod.profile.area)))})
+        part = rod.model_copy(
+            update={
+                "length": gridded,
+                "profile": Profile(x=x, area=list(np.interp(x, rod.profile.x, rod.profile.area))),
+            }
+        )
     else:
         part = rod.model_copy(update={"length": gridded})
     return make_grid(part, cells, True), max(0.0, 2.0 * (striker_transit(striker) - cells * tau))
@@ -137,25 +141,31 @@ def check_stiff_ends(case: Case, weights: Scheme, cells: int, end_areas: tuple[f
     naming the field and what to do (`STIFF_END`)."""
     limit = STIFF_END["mass" if weights.end_masses else "massless"]
     h = case.tool.length / cells
-    fix = ("leave numerics.cells, time_step and scheme out (the default accuracy takes any "
-           "stiffness), or give numerics.scheme = 'explicit' with numerics.cells only (Courant "
-           "number 1, whose ends integrate their own equations)")
+    fix = (
+        "leave numerics.cells, time_step and scheme out (the default accuracy takes any "
+        "stiffness), or give numerics.scheme = 'explicit' with numerics.cells only (Courant "
+        "number 1, whose ends integrate their own equations)"
+    )
     errors = []
     for field, stiffness, area in (
-            ("contact.stiffness", contact_stiffness_estimate(case), end_areas[0]),
-            ("medium.stiffness", case.medium.loading_stiffness if case.medium else 0.0, end_areas[1])):
+        ("contact.stiffness", contact_stiffness_estimate(case), end_areas[0]),
+        ("medium.stiffness", case.medium.loading_stiffness if case.medium else 0.0, end_areas[1]),
+    ):
         end_cell = case.tool.youngs_modulus * area / h
         if stiffness > limit * end_cell:
             needed = cells * stiffness / (limit * end_cell)
             # Extreme inputs (a velocity of 1e-300 m/s) overflow the estimate: no grid would do.
             cells_hint = f"at least {math.ceil(needed)} cells" if needed < 1e15 else "a gentler case"
             what = "the contact's" if field.startswith("contact") else "the medium's"
-            errors.append(FieldError(
-                field=field,
-                message=f"{what} stiffness, about {stiffness:.3g} N/m, is {stiffness / end_cell:.3g}× "
-                        f"that of the tool's end cell on {cells} cells ({end_cell:.3g} N/m): the "
-                        f"scheme '{weights.name}' would ring against it and the contact chatter. "
-                        f"{fix[0].upper() + fix[1:]}, or use {cells_hint}"))
+            errors.append(
+                FieldError(
+                    field=field,
+                    message=f"{what} stiffness, about {stiffness:.3g} N/m, is {stiffness / end_cell:.3g}× "
+                    f"that of the tool's end cell on {cells} cells ({end_cell:.3g} N/m): the "
+                    f"scheme '{weights.name}' would ring against it and the contact chatter. "
+                    f"{fix[0].upper() + fix[1:]}, or use {cells_hint}",
+                )
+            )
     if errors:
         raise CaseError(errors)
 
@@ -167,10 +177,15 @@ class ResolvedNumerics:
 
     __pydantic_config__ = ConfigDict(extra="forbid")
 
-    model: Annotated[Literal["rod", "lumped"], Field(
-        description="the tool as an elastic rod, or the two-mass model (21)–(25)")]
-    scheme: Annotated[str, Field(
-        description="'paper' (the weighted scheme (8), γ), 'sigma' (σ), 'explicit'; 'dop853' for the lumped model")]
+    model: Annotated[
+        Literal["rod", "lumped"], Field(description="the tool as an elastic rod, or the two-mass model (21)–(25)")
+    ]
+    scheme: Annotated[
+        str,
+        Field(
+            description="'paper' (the weighted scheme (8), γ), 'sigma' (σ), 'explicit'; 'dop853' for the lumped model"
+        ),
+    ]
     time_step: Annotated[float, Field(description="τ, s")]
     cells: Annotated[int, Field(description="N, cells along the tool (0 for the lumped model)")]
     gamma: Annotated[float, Field(description="γ, the paper's weight of the new layer")]
@@ -180,8 +195,13 @@ class ResolvedNumerics:
     courant: Annotated[float, Field(description="a·τ/h, 1")]
     # "impedance": the explicit scheme at Courant number 1, each end integrating its own equations
     # (`kernel.struck_end_step`).
-    ends: Annotated[str, Field(description="how the tool's ends are solved: 'impedance', 'mass' (half-cell "
-                                           "end masses), 'massless' (quasi-static) or 'none' (lumped)")] = "mass"
+    ends: Annotated[
+        str,
+        Field(
+            description="how the tool's ends are solved: 'impedance', 'mass' (half-cell "
+            "end masses), 'massless' (quasi-static) or 'none' (lumped)"
+        ),
+    ] = "mass"
 
     def as_dict(self) -> dict:
         return dict(vars(self))  # its fields are scalars: dataclasses.asdict's deep copy is not needed
@@ -190,8 +210,13 @@ class ResolvedNumerics:
         return make_scheme(self.scheme, self.gamma, self.sigma, self.end_masses)
 
 
-def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = None,
-                     cells: int | None = None, time_step: float | None = None) -> ResolvedNumerics:
+def resolve_numerics(
+    case: Case,
+    model: str | None = None,
+    scheme: str | None = None,
+    cells: int | None = None,
+    time_step: float | None = None,
+) -> ResolvedNumerics:
     """Fill in the defaults (arguments override the case): N = 100 cells; τ the smaller of h/a
     (Courant 1, for the rod) and the estimated contact time / 200, so that both the wave and the
     contact are resolved; for the explicit scheme h/a, where it is exact along a uniform tool and
@@ -205,11 +230,16 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
     a = wave_speed(case.tool)
     if not (h > 0.0 and 0.0 < a < math.inf and math.isfinite(a / h)):
         # Extremes that pass each field's own check but leave no grid to compute on.
-        raise CaseError([FieldError(
-            field="tool",
-            message=f"length {case.tool.length:.3g} m on {cells} cells and a wave speed "
+        raise CaseError(
+            [
+                FieldError(
+                    field="tool",
+                    message=f"length {case.tool.length:.3g} m on {cells} cells and a wave speed "
                     f"sqrt(youngs_modulus/density) = {a:.3g} m/s leave no usable grid: give "
-                    "values of a real tool")])
+                    "values of a real tool",
+                )
+            ]
+        )
     # The lumped model has no wave to resolve: τ only samples its histories.
     wave_limit = h / a if model == "rod" else math.inf
     if weights.name == "explicit" and model == "rod":
@@ -219,17 +249,27 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
     tau = time_step or num.time_step or default_tau
     steps = num.duration / tau if tau > 0 else math.inf
     if not math.isfinite(steps):
-        raise CaseError([FieldError(
-            field="numerics.time_step",
-            message=f"no time step can be chosen for this case (the estimated contact time is "
-                    f"{tau * STEPS_PER_CONTACT:.3g} s): give numerics.time_step")])
+        raise CaseError(
+            [
+                FieldError(
+                    field="numerics.time_step",
+                    message=f"no time step can be chosen for this case (the estimated contact time is "
+                    f"{tau * STEPS_PER_CONTACT:.3g} s): give numerics.time_step",
+                )
+            ]
+        )
     courant = a * tau / h
     if model == "rod" and courant > weights.courant_limit * (1.0 + 1e-9):
-        raise CaseError([FieldError(
-            field="numerics.time_step",
-            message=f"the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = {tau:.4g} s on "
+        raise CaseError(
+            [
+                FieldError(
+                    field="numerics.time_step",
+                    message=f"the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = {tau:.4g} s on "
                     f"{cells} cells gives {courant:.4g}: set numerics.time_step ≤ {h / a:.4g} s, "
-                    "use fewer cells, or numerics.scheme = 'sigma'")])
+                    "use fewer cells, or numerics.scheme = 'sigma'",
+                )
+            ]
+        )
     # every blow has the same steps
     steps = max(1, math.ceil(steps - 1e-9)) * (case.blows.count if case.blows else 1)
     ends = None
@@ -239,26 +279,42 @@ def resolve_numerics(case: Case, model: str | None = None, scheme: str | None = 
         ends = "impedance"
     if case.beyond_paper and ends != "impedance":
         field = case.beyond_paper[0]
-        raise CaseError([FieldError(
-            field=field,
-            message=f"{field} is solved only with the tool as a rod, by the explicit scheme at "
+        raise CaseError(
+            [
+                FieldError(
+                    field=field,
+                    message=f"{field} is solved only with the tool as a rod, by the explicit scheme at "
                     "Courant number 1 (its ends integrate their own equations): leave "
                     "numerics.model, cells, time_step and scheme out (the default accuracy), give "
-                    "numerics.tolerance, or numerics.scheme = 'explicit' with numerics.cells only")])
+                    "numerics.tolerance, or numerics.scheme = 'explicit' with numerics.cells only",
+                )
+            ]
+        )
     if ends == "impedance" and case.striker.elastic and striker_cells(case.striker, tau) < MIN_STRIKER_CELLS:
         need = math.ceil(MIN_STRIKER_CELLS * cells * (h / a) / striker_transit(case.striker))
-        raise CaseError([FieldError(
-            field="numerics.cells",
-            message=f"the elastic striker's wave transit, {striker_transit(case.striker):.3g} s, "
+        raise CaseError(
+            [
+                FieldError(
+                    field="numerics.cells",
+                    message=f"the elastic striker's wave transit, {striker_transit(case.striker):.3g} s, "
                     f"is under {MIN_STRIKER_CELLS} time steps of {tau:.3g} s: give at least {need} "
-                    "cells, or leave numerics.cells out (the default accuracy)")])
+                    "cells, or leave numerics.cells out (the default accuracy)",
+                )
+            ]
+        )
     if model == "rod" and ends != "impedance":
         ends = "mass" if weights.end_masses else "massless"
-        check_stiff_ends(case, weights, cells,
-                         tuple(tool_area(case.tool, np.array([0.0, case.tool.length]))))
+        check_stiff_ends(case, weights, cells, tuple(tool_area(case.tool, np.array([0.0, case.tool.length]))))
     return ResolvedNumerics(
-        model=model, scheme=weights.name, time_step=tau, cells=cells,
-        gamma=num.gamma, sigma=num.sigma, end_masses=weights.end_masses, steps=steps, courant=courant,
+        model=model,
+        scheme=weights.name,
+        time_step=tau,
+        cells=cells,
+        gamma=num.gamma,
+        sigma=num.sigma,
+        end_masses=weights.end_masses,
+        steps=steps,
+        courant=courant,
         ends=ends,
     )
 
@@ -317,18 +373,25 @@ def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     # just inside it, and a cell mean h/2 away would put it O(h) off on a taper (the cells' mass
     # changes by O(h²)).
     area_mid[[0, -1]] = tool_area(tool, x[[0, -1]])
-    node_area = np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]),
-                                [0.5 * area_mid[-1]]))
+    node_area = np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]), [0.5 * area_mid[-1]]))
     lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
     lower[1:-1] = area_mid[:-1] / node_area[1:-1]
     upper[1:-1] = area_mid[1:] / node_area[1:-1]
     if not end_masses:
         node_area[[0, -1]] = 0.0
     return Grid(
-        x=x, area=tool_area(tool, x), area_mid=area_mid, lower=lower, upper=upper,
-        node_area=node_area, end_area=(float(area_mid[0]), float(area_mid[-1])), h=h,
-        youngs_modulus=tool.youngs_modulus, density=tool.density,
+        x=x,
+        area=tool_area(tool, x),
+        area_mid=area_mid,
+        lower=lower,
+        upper=upper,
+        node_area=node_area,
+        end_area=(float(area_mid[0]), float(area_mid[-1])),
+        h=h,
+        youngs_modulus=tool.youngs_modulus,
+        density=tool.density,
     )
+
 
 # The coarsest grid of a ladder resolves the contact's time scale (`time_scale`) by this many
 # steps at a tolerance of 1e-2, and by √(1e-2/tol) times as many at another.
@@ -393,19 +456,22 @@ def first_cells(case: Case, tol: float) -> int:
     points = FIRST_POINTS * math.sqrt(1e-2 / tol)
     tau = time_scale(case) / points
     if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
-        raise CaseError([FieldError(
-            field="striker",
-            message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.striker.velocity:.3g} "
-                    "m/s lasts no time that a grid can resolve: give values of a real striker")])
-    return max(fewest_cells(case), profile_cells(case),
-               math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
+        raise CaseError(
+            [
+                FieldError(
+                    field="striker",
+                    message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.striker.velocity:.3g} "
+                    "m/s lasts no time that a grid can resolve: give values of a real striker",
+                )
+            ]
+        )
+    return max(fewest_cells(case), profile_cells(case), math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
 
 
 def explicit_numerics(case: Case, cells: int) -> ResolvedNumerics:
     """The explicit scheme at Courant number 1 on `cells` cells."""
     h = case.tool.length / cells
-    return resolve_numerics(case, model="rod", scheme="explicit", cells=cells,
-                            time_step=h / wave_speed(case.tool))
+    return resolve_numerics(case, model="rod", scheme="explicit", cells=cells, time_step=h / wave_speed(case.tool))
 
 
 def tolerance_of(numerics: Numerics) -> float | None:

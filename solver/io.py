@@ -15,7 +15,7 @@ import glob
 import json
 import os
 import secrets
-from functools import lru_cache
+from functools import cache
 from importlib.metadata import version
 from math import prod
 from pathlib import Path
@@ -40,8 +40,17 @@ DEFLATE_LEVEL = 4
 FIELD_CHUNK_BYTES = 1 << 18
 HELD_BYTES = 1 << 15  # an unchunked dataset's rows are written in blocks of about this size
 
-_UNITS = {"time": "s", "displacement": "m", "velocity": "m/s", "force": "N", "overlap": "m",
-          "penetration": "m", "energy": "J", "x": "m", "stress": "Pa"}
+_UNITS = {
+    "time": "s",
+    "displacement": "m",
+    "velocity": "m/s",
+    "force": "N",
+    "overlap": "m",
+    "penetration": "m",
+    "energy": "J",
+    "x": "m",
+    "stress": "Pa",
+}
 
 
 def units(path: str) -> str:
@@ -63,7 +72,7 @@ def _chunk_rows(shape: tuple[int, ...], dtype: np.dtype) -> int:
 _TEXT = h5py.string_dtype()  # variable-length UTF-8, as h5py stores a str
 
 
-@lru_cache(maxsize=None)
+@cache
 def _hdf5_type(dtype: np.dtype) -> h5t.TypeID:
     """The HDF5 type h5py gives `dtype`, made once a dtype rather than once an object."""
     return h5t.py_create(dtype, logical=True)
@@ -90,8 +99,9 @@ _NEVER_FILLED = _property_list(h5p.DATASET_CREATE, set_fill_time=(h5d.FILL_TIME_
 _NO_CHUNK_CACHE = _property_list(h5p.DATASET_ACCESS, set_chunk_cache=(0, 1, 1.0))
 
 
-def _dataset(file: h5py.File, name: str, shape: tuple[int, ...], dtype: np.dtype,
-             chunk_rows: int | None) -> h5d.DatasetID:
+def _dataset(
+    file: h5py.File, name: str, shape: tuple[int, ...], dtype: np.dtype, chunk_rows: int | None
+) -> h5d.DatasetID:
     """A new dataset at path `name` (its groups made as needed); chunked by `chunk_rows` rows and
     compressed when given."""
     layout, access = _NEVER_FILLED, None
@@ -101,8 +111,15 @@ def _dataset(file: h5py.File, name: str, shape: tuple[int, ...], dtype: np.dtype
         layout.set_shuffle()
         layout.set_deflate(DEFLATE_LEVEL)
         access = _NO_CHUNK_CACHE
-    return h5d.create(file.id, name.encode(), _hdf5_type(np.dtype(dtype)), h5s.create_simple(shape),
-                      dcpl=layout, lcpl=_LINKS, dapl=access)
+    return h5d.create(
+        file.id,
+        name.encode(),
+        _hdf5_type(np.dtype(dtype)),
+        h5s.create_simple(shape),
+        dcpl=layout,
+        lcpl=_LINKS,
+        dapl=access,
+    )
 
 
 class _Rows:
@@ -112,8 +129,9 @@ class _Rows:
     unused in the file); an unchunked one's is about HELD_BYTES, so that a long history is not
     written a few rows at a time."""
 
-    def __init__(self, name: str, dataset: h5d.DatasetID, shape: tuple[int, ...], dtype: np.dtype,
-                 chunk_rows: int | None):
+    def __init__(
+        self, name: str, dataset: h5d.DatasetID, shape: tuple[int, ...], dtype: np.dtype, chunk_rows: int | None
+    ):
         self.name, self.dataset, self.rows = name, dataset, shape[0]
         row_bytes = np.dtype(dtype).itemsize * prod(shape[1:])
         block = chunk_rows if chunk_rows is not None else HELD_BYTES // max(1, row_bytes)
@@ -132,7 +150,7 @@ class _Rows:
                 rows = rows[whole:]
         while len(rows):
             take = min(len(rows), len(self.buffer) - self.held)
-            self.buffer[self.held:self.held + take] = rows[:take]
+            self.buffer[self.held : self.held + take] = rows[:take]
             self.held += take
             rows = rows[take:]
             if self.held == len(self.buffer):
@@ -145,7 +163,7 @@ class _Rows:
 
     def _write_held(self) -> None:
         if self.held:
-            self._write(self.buffer[:self.held])
+            self._write(self.buffer[: self.held])
             self.held = 0
 
     def _write(self, block: np.ndarray) -> None:
@@ -219,14 +237,18 @@ class ResultWriter:
         numerics = result.numerics.as_dict()
         summary = result.summary
         estimate = summary.get("error_estimate")
-        attributes = {"format": FORMAT, "format_version": FORMAT_VERSION,
-                      "solver_version": version("percussim"), "case": result.case.model_dump_json(),
-                      "numerics": json.dumps(numerics),
-                      **{f"numerics.{key}": value for key, value in numerics.items()},
-                      # what the summary says of its accuracy, readable without parsing it
-                      "error_estimate": json.dumps(estimate),
-                      "not_estimated": json.dumps(summary.get("not_estimated", {})),
-                      "warnings": json.dumps(summary["warnings"])}
+        attributes = {
+            "format": FORMAT,
+            "format_version": FORMAT_VERSION,
+            "solver_version": version("percussim"),
+            "case": result.case.model_dump_json(),
+            "numerics": json.dumps(numerics),
+            **{f"numerics.{key}": value for key, value in numerics.items()},
+            # what the summary says of its accuracy, readable without parsing it
+            "error_estimate": json.dumps(estimate),
+            "not_estimated": json.dumps(summary.get("not_estimated", {})),
+            "warnings": json.dumps(summary["warnings"]),
+        }
         if estimate is not None:
             attributes["error_estimate.worst"] = float(estimate["worst"])
         if summary.get("tolerance") is not None:
@@ -237,8 +259,9 @@ class ResultWriter:
         # at a fraction of its cost on a summary's force history.
         result.summary_json = pydantic_core.to_json(result.summary).decode()
         summary = np.array(result.summary_json, dtype=_TEXT)
-        h5d.create(self._file.id, b"summary", _hdf5_type(summary.dtype),
-                   h5s.create(h5s.SCALAR)).write(h5s.ALL, h5s.ALL, summary)
+        h5d.create(self._file.id, b"summary", _hdf5_type(summary.dtype), h5s.create(h5s.SCALAR)).write(
+            h5s.ALL, h5s.ALL, summary
+        )
         for rows in self._rows.values():
             rows.close()
         self._close()
@@ -273,7 +296,6 @@ def read_result(source: str | Path | BinaryIO) -> Result:
         case = Case.model_validate_json(f.attrs["case"])
         numerics = ResolvedNumerics(**json.loads(f.attrs["numerics"]))
         arrays = {}
-        f.visititems(lambda name, obj: arrays.__setitem__(name, obj[()])
-                     if isinstance(obj, h5py.Dataset) else None)
+        f.visititems(lambda name, obj: arrays.__setitem__(name, obj[()]) if isinstance(obj, h5py.Dataset) else None)
     summary = json.loads(arrays.pop("summary"))
     return Result.from_arrays(case, numerics, arrays, summary)

@@ -74,19 +74,60 @@ from numba.core import cgutils
 from numba.extending import intrinsic
 
 from .compiled import compiled
-from .layout import (ENERGY_SLOTS, E_ANVIL_KINETIC, E_CONTACT_POTENTIAL, E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM,
-                     E_EXTERNAL_WORK, E_LAUNCHED, E_MEDIUM_PLASTIC, E_MEDIUM_POTENTIAL, E_STRIKER_KINETIC,
-                     E_STRIKER_STRAIN, E_TOOL_KINETIC, E_WITHDRAWN,
-                     E_TOOL_STRAIN, H_ANVIL_DISP, H_ANVIL_FORCE, H_ANVIL_KINETIC, H_ANVIL_VEL,
-                     H_CONTACT_FORCE, H_CONTACT_POTENTIAL,
-                     H_DISSIPATED_CONTACT, H_DISSIPATED_MEDIUM, H_LAUNCHED, H_WITHDRAWN, H_EXTERNAL_FORCE, H_EXTERNAL_WORK,
-                     H_MEDIUM_FORCE, H_MEDIUM_PLASTIC, H_MEDIUM_POTENTIAL, H_OVERLAP,
-                     H_PERMANENT_PENETRATION, H_STRIKER_DISP, H_STRIKER_STRAIN,
-                     H_STRIKER_KINETIC, H_STRIKER_VEL, H_STRUCK_END, H_TIME, H_TOOL_KINETIC,
-                     H_TOOL_STRAIN, H_WORKING_END, X_CONTACTS, X_CO_IMPACT, X_ENERGY_EXCESS,
-                     X_FAILED_TIME, X_MAX_COMPRESSION, X_MAX_PENETRATION, X_MAX_TENSION,
-                     X_MIN_CONTACT_STEPS,
-                     X_PEAK_FORCE, X_PEAK_FORCE_TIME, X_REBOUND_VELOCITY, new_extremes)
+from .layout import (
+    E_ANVIL_KINETIC,
+    E_CONTACT_POTENTIAL,
+    E_DISSIPATED_CONTACT,
+    E_DISSIPATED_MEDIUM,
+    E_EXTERNAL_WORK,
+    E_LAUNCHED,
+    E_MEDIUM_PLASTIC,
+    E_MEDIUM_POTENTIAL,
+    E_STRIKER_KINETIC,
+    E_STRIKER_STRAIN,
+    E_TOOL_KINETIC,
+    E_TOOL_STRAIN,
+    E_WITHDRAWN,
+    ENERGY_SLOTS,
+    H_ANVIL_DISP,
+    H_ANVIL_FORCE,
+    H_ANVIL_KINETIC,
+    H_ANVIL_VEL,
+    H_CONTACT_FORCE,
+    H_CONTACT_POTENTIAL,
+    H_DISSIPATED_CONTACT,
+    H_DISSIPATED_MEDIUM,
+    H_EXTERNAL_FORCE,
+    H_EXTERNAL_WORK,
+    H_LAUNCHED,
+    H_MEDIUM_FORCE,
+    H_MEDIUM_PLASTIC,
+    H_MEDIUM_POTENTIAL,
+    H_OVERLAP,
+    H_PERMANENT_PENETRATION,
+    H_STRIKER_DISP,
+    H_STRIKER_KINETIC,
+    H_STRIKER_STRAIN,
+    H_STRIKER_VEL,
+    H_STRUCK_END,
+    H_TIME,
+    H_TOOL_KINETIC,
+    H_TOOL_STRAIN,
+    H_WITHDRAWN,
+    H_WORKING_END,
+    X_CO_IMPACT,
+    X_CONTACTS,
+    X_ENERGY_EXCESS,
+    X_FAILED_TIME,
+    X_MAX_COMPRESSION,
+    X_MAX_PENETRATION,
+    X_MAX_TENSION,
+    X_MIN_CONTACT_STEPS,
+    X_PEAK_FORCE,
+    X_PEAK_FORCE_TIME,
+    X_REBOUND_VELOCITY,
+    new_extremes,
+)
 
 # Force kinds (`force_kind`)
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
@@ -133,21 +174,20 @@ cell at the ends, 0 at a massless end), the cells' areas S_{i+½} and the areas 
 working ends (their stresses are the end forces over them)."""
 ToolRows = namedtuple("ToolRows", "p inv_den coefficient coefficient_product p_product")
 """The tool's rows u_1 … u_N eliminated once (`factor_tool_rows`)."""
-Rod = namedtuple("Rod", "cell_length time_step courant_squared youngs_modulus density "
-                        "struck_end_stiffness working_end_stiffness")
+Rod = namedtuple(
+    "Rod", "cell_length time_step courant_squared youngs_modulus density struck_end_stiffness working_end_stiffness"
+)
 """The rod's constants: h, τ, r = (a·τ/h)², E, ρ and the end cells' stiffness k_0, k_N = S·E/h."""
 Weights = namedtuple("Weights", "new old centered end_masses impedance_ends")
 """The scheme (`solver.schemes.Scheme`): the weights of layers n+1 and n−1 in the tool's operator
 (γ and 0 for the paper's, σ and σ for the σ-scheme, 0 and 0 explicit; layer n has the rest),
 whether the boundary terms are centred on layer n, whether the ends carry their half-cell masses,
 and whether each end integrates its own equations (the explicit scheme at Courant number 1)."""
-Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponent "
-                                "tension_stiffness damping impedance")
+Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponent tension_stiffness damping impedance")
 """The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
 contact and `c0·δ` in separation (c1, α, c0), its damper (b1), and the impedance ρ·a·S of the
 tool's end cell (N·s/m)."""
-Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness "
-                               "ultimate_resistance damping_factor")
+Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness ultimate_resistance damping_factor")
 """The working end: the medium's `MEDIUM_…` kind, its loading stiffness (c2, rock's k, or soil's
 R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading
 stiffness k_u, soil's ultimate resistance R_u and Smith damping J (s/m)."""
@@ -169,8 +209,10 @@ the one before) and an elastic striker's layers (3 × (N_s+1); its node 0 is `y`
 Observed = namedtuple("Observed", "extremes contacts")
 """What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
 intervals (start, end; one row each, those beyond its rows counted only)."""
-Recorders = namedtuple("Recorders", "history history_stride probe_node probe_weight probes "
-                                    "field_u field_stress field_stride striker_u striker_stress")
+Recorders = namedtuple(
+    "Recorders",
+    "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress",
+)
 """Where a call records its layers: every `history_stride`-th to `history` (a column each) and
 `probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
 with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each)
@@ -183,14 +225,16 @@ Overlaps = namedtuple("Overlaps", "cur old ref")
 """The overlap δ = y − u_0 of layers n and n−1 and of the reference layer."""
 Boundary = namedtuple("Boundary", "end_weight spring_weight damper_factor back")
 """How the end rows and the boundary terms weight the layers (`boundary_weights`)."""
-StepConstants = namedtuple("StepConstants", "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
-                                            "lag strain_sigma e_over_h half_e_over_h "
-                                            "kinetic_factor initial_energy anvil_energy segments "
-                                            "explicit")
+StepConstants = namedtuple(
+    "StepConstants",
+    "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
+    "lag strain_sigma e_over_h half_e_over_h "
+    "kinetic_factor initial_energy anvil_energy segments "
+    "explicit",
+)
 """What every step derives from the bundles (`step_constants`): `initial_energy` the striker's at
 impact, `anvil_energy` the anvil's; `segments` is `segment_layout`'s."""
-Recorded = namedtuple("Recorded", "row time velocity contact_force medium_force struck_end_stress "
-                                  "working_end_stress")
+Recorded = namedtuple("Recorded", "row time velocity contact_force medium_force struck_end_stress working_end_stress")
 """A layer as it is recorded: its row of `u`, its time, the striker's velocity, the end forces the
 scheme applies there and the stresses they make at the ends (tension +)."""
 
@@ -204,8 +248,13 @@ MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swe
 def new_state(cells: int, striker_cells: int = 0) -> State:
     """The state before a run on `cells` cells, with an elastic striker on `striker_cells`
     (`advance` sets layer 0 and the one before)."""
-    return State(u=np.zeros((3, cells + 1)), y=np.zeros(3), ends=np.zeros(END_SLOTS),
-                 energy=np.zeros((2, ENERGY_SLOTS)), striker=np.zeros((3, striker_cells + 1)))
+    return State(
+        u=np.zeros((3, cells + 1)),
+        y=np.zeros(3),
+        ends=np.zeros(END_SLOTS),
+        energy=np.zeros((2, ENERGY_SLOTS)),
+        striker=np.zeros((3, striker_cells + 1)),
+    )
 
 
 def new_observed(max_contacts: int) -> Observed:
@@ -276,8 +325,9 @@ def factor_tool_rows(tool, rod, weights, medium):
         for i in range(start, end + 1):
             product *= p[i]
             p_product[i] = product
-    return ToolRows(p=p, inv_den=inv_den, coefficient=coefficient,
-                    coefficient_product=coefficient_product, p_product=p_product)
+    return ToolRows(
+        p=p, inv_den=inv_den, coefficient=coefficient, coefficient_product=coefficient_product, p_product=p_product
+    )
 
 
 @compiled(inline="always")
@@ -578,8 +628,10 @@ def struck_forces(x, v_in, v_face, contact, striker, anvil):
         near, give = 2.0 * v_face, 1.0 / striker.impedance
     if anvil.present:
         end = anvil.contact
-        return (link_force(y - y_a, near - w_a, give, contact),
-                link_force(y_a - u0, w_a - 2.0 * v_in, 1.0 / end.impedance, end))
+        return (
+            link_force(y - y_a, near - w_a, give, contact),
+            link_force(y_a - u0, w_a - 2.0 * v_in, 1.0 / end.impedance, end),
+        )
     force = link_force(y - u0, near - 2.0 * v_in, give + 1.0 / contact.impedance, contact)
     return force, force
 
@@ -610,8 +662,7 @@ def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil)
 def moved(x, span, rates, striker):
     """`x + span·rates`; an elastic striker's w is its face's velocity, the rate of y."""
     w = rates[0] if striker.elastic else x[1] + span * rates[1]
-    return (x[0] + span * rates[0], w, x[2] + span * rates[2], x[3] + span * rates[3],
-            x[4] + span * rates[4])
+    return (x[0] + span * rates[0], w, x[2] + span * rates[2], x[3] + span * rates[3], x[4] + span * rates[4])
 
 
 @compiled(inline="always")
@@ -628,8 +679,7 @@ def spring_stage(free, base, compliance, g, guess, contact):
     """`(F, δ)` of one contact within a stage: `δ = free − compliance·F`,
     `F = Φ'(δ) + b·(δ − base)/g` (its damper sees the stage's δ' = (δ − base)/g)."""
     give = compliance * contact.damping / g
-    delta = solve_spring_balance((free + give * base) / (1.0 + give), compliance / (1.0 + give),
-                                 guess, contact)
+    delta = solve_spring_balance((free + give * base) / (1.0 + give), compliance / (1.0 + give), guess, contact)
     return contact_spring(delta, contact)[0] + contact.damping * (delta - base) / g, delta
 
 
@@ -669,8 +719,12 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
         if done:
             delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)
             break
-    return (contact_spring(delta1, contact)[0] + d1 * (delta1 - base[0]),
-            contact_spring(delta2, end)[0] + d2 * (delta2 - base[1]), delta1, delta2)
+    return (
+        contact_spring(delta1, contact)[0] + d1 * (delta1 - base[0]),
+        contact_spring(delta2, end)[0] + d2 * (delta2 - base[1]),
+        delta1,
+        delta2,
+    )
 
 
 @compiled(inline="always")
@@ -687,13 +741,18 @@ def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
         y_free, give = x[0] + g * (x[1] + g * r / m1), g * g / m1
     u_free = x[4] + 2.0 * g * v_in
     if not anvil.present:
-        force, delta = spring_stage(y_free - u_free, x[0] - x[4], give + g / contact.impedance, g,
-                                    guess[0], contact)
+        force, delta = spring_stage(y_free - u_free, x[0] - x[4], give + g / contact.impedance, g, guess[0], contact)
         return force, force, delta, 0.0
     ya_free = x[2] + g * x[3]
-    return anvil_balance((y_free - ya_free, ya_free - u_free), (x[0] - x[2], x[2] - x[4]),
-                         (give, g * g / anvil.mass, g / anvil.contact.impedance), g, guess,
-                         contact, anvil.contact)
+    return anvil_balance(
+        (y_free - ya_free, ya_free - u_free),
+        (x[0] - x[2], x[2] - x[4]),
+        (give, g * g / anvil.mass, g / anvil.contact.impedance),
+        g,
+        guess,
+        contact,
+        anvil.contact,
+    )
 
 
 @compiled(inline="always")
@@ -734,8 +793,12 @@ def hermite(a, b, rate_a, rate_b, span, s):
     """The cubic with values a, b and rates rate_a, rate_b at the ends of a span, at fraction s."""
     s2 = s * s
     s3 = s2 * s
-    return ((2.0 * s3 - 3.0 * s2 + 1.0) * a + (s3 - 2.0 * s2 + s) * span * rate_a
-            + (3.0 * s2 - 2.0 * s3) * b + (s3 - s2) * span * rate_b)
+    return (
+        (2.0 * s3 - 3.0 * s2 + 1.0) * a
+        + (s3 - 2.0 * s2 + s) * span * rate_a
+        + (3.0 * s2 - 2.0 * s3) * b
+        + (s3 - s2) * span * rate_b
+    )
 
 
 @compiled()
@@ -783,13 +846,10 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
             return substeps(stiffness / (z_both + b1), span, SDIRK_MONOTONE)
         limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / contact.striker_mass * tau)
         return substeps(stiffness / (z + b1), span, limit)
-    k1 = max(contact_spring(abs(y - y_a) + span * abs(w - w_a), contact)[1],
-             contact.tension_stiffness)
-    k2 = max(contact_spring(abs(y_a - u0) + span * abs(w_a - end_rate), end)[1],
-             end.tension_stiffness)
+    k1 = max(contact_spring(abs(y - y_a) + span * abs(w - w_a), contact)[1], contact.tension_stiffness)
+    k2 = max(contact_spring(abs(y_a - u0) + span * abs(w_a - end_rate), end)[1], end.tension_stiffness)
     b2 = end.damping
-    count = substeps(k2 / (z + b2), span,
-                     min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b2) / anvil.mass * tau))
+    count = substeps(k2 / (z + b2), span, min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b2) / anvil.mass * tau))
     omega2 = (k1 + k2) / anvil.mass
     if striker.elastic:
         count = max(count, substeps(k1 / (striker.impedance + b1), span, SDIRK_MONOTONE))
@@ -840,8 +900,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         if t_a >= t_stop:
             # the next stretch without a break of R
             t_next = min(t_end, next_break(t_a, force))
-            sub = (t_next - t_a) / struck_substeps(x, f_end, t_next - t_a, v_mean, contact,
-                                                   striker, anvil, tau)
+            sub = (t_next - t_a) / struck_substeps(x, f_end, t_next - t_a, v_mean, contact, striker, anvil, tau)
             t_stop = t_next
         t_b = t_stop if t_a + 1.5 * sub >= t_stop else t_a + sub
         span = t_b - t_a
@@ -863,8 +922,10 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         rate1, end_rate1 = overlap_rates(k1, anvil)
         rate2, end_rate2 = overlap_rates(k2, anvil)
         work += span * ((1.0 - gamma) * r1 * (x[1] + g * k1[1]) + gamma * r2 * x2[1])
-        dissipated += span * ((1.0 - gamma) * (b1 * rate1 * rate1 + b2 * end_rate1 * end_rate1)
-                              + gamma * (b1 * rate2 * rate2 + b2 * end_rate2 * end_rate2))
+        dissipated += span * (
+            (1.0 - gamma) * (b1 * rate1 * rate1 + b2 * end_rate1 * end_rate1)
+            + gamma * (b1 * rate2 * rate2 + b2 * end_rate2 * end_rate2)
+        )
         impulse_b = impulse + span * ((1.0 - gamma) * f1 + gamma * f2)
         # a change of sign of δ1 beyond rounding: where, on the cubic through the ends' values
         # and rates. Faces that come to rest together (equal impedances) graze, δ ≈ 0 within
@@ -875,15 +936,23 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
             edge *= 2.0
         if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
-            k_a = body_rates(x, 0.0, f, f_end, r_a, v_start + v_slope * (t_a - t0),
-                             face_start + face_slope * (t_a - t0), contact, striker, anvil)
-            s = hermite_root(overlaps[0] - edge, d2 - edge, overlap_rates(k_a, anvil)[0], rate2,
-                             span)
+            k_a = body_rates(
+                x,
+                0.0,
+                f,
+                f_end,
+                r_a,
+                v_start + v_slope * (t_a - t0),
+                face_start + face_slope * (t_a - t0),
+                contact,
+                striker,
+                anvil,
+            )
+            s = hermite_root(overlaps[0] - edge, d2 - edge, overlap_rates(k_a, anvil)[0], rate2, span)
             in_contact = not in_contact
             events[count, 0] = t_a + s * span
             if striker.elastic:
-                events[count, 1] = mean_velocity(impulse + s * (impulse_b - impulse), contact,
-                                                 striker)
+                events[count, 1] = mean_velocity(impulse + s * (impulse_b - impulse), contact, striker)
             else:
                 events[count, 1] = hermite(x[1], x2[1], k_a[1], k2[1], span, s)
             events[count, 2] = 1.0 if in_contact else -1.0
@@ -1108,14 +1177,16 @@ def yielding_end_step(tau, state, v_mean, v_slope, medium):
 
 def _llvm_binary(name):
     """A Numba function `(float64, float64) → float64` that is the LLVM intrinsic `name`."""
+
     @intrinsic
     def call(typingctx, a, b):
         def codegen(context, builder, signature, args):
             double = ir.DoubleType()
-            fn = cgutils.get_or_insert_function(
-                builder.module, ir.FunctionType(double, [double, double]), name)
+            fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(double, [double, double]), name)
             return builder.call(fn, args)
+
         return types.float64(types.float64, types.float64), codegen
+
     return call
 
 
@@ -1135,8 +1206,7 @@ STRESS_BLOCK = 64
 #   kinetic energy non-finite, which `advance` checks before it uses the stresses, and a stress of
 #   −0 or +0 is the same record.
 @compiled(fastmath={"contract", "reassoc", "nnan", "nsz"})
-def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_sigma,
-                             half_e_over_h):
+def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_sigma, half_e_over_h):
     """The tool's energy terms between the layers in rows `new`, `cur` of `u` and the interior
     stress extremes of the layer in row `stressed`: `(Σ S_i·(u_i − uc_i)², Σ S_{i+½}·[σ(e_a² +
     e_b²) + (1 − 2σ)·e_a·e_b], least stress, its block, greatest stress, its block)`.
@@ -1188,7 +1258,6 @@ def first_node(u, row, half_e_over_h, start, value):
         found = half_e_over_h * (u[row, i + one] - u[row, i - one]) == value
         first = min(first, np.int64(i) if found else last)
     return first
-
 
 
 @compiled(inline="always")
@@ -1278,8 +1347,10 @@ def _uncounted_value(context, builder, typ, value):
 def uncounted(typingctx, bundle):
     """The bundle (or array) with the same arrays, whose references are not counted: for use
     while something else holds them."""
+
     def codegen(context, builder, signature, args):
         return _uncounted_value(context, builder, bundle, args[0])
+
     return bundle(bundle), codegen
 
 
@@ -1354,11 +1425,18 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     t = m * tau
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
     potential = contact_law(y[row] - struck, contact)[1]
-    energy[0, E_WITHDRAWN] += (energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
-                               + potential + energy[0, E_ANVIL_KINETIC])
+    energy[0, E_WITHDRAWN] += (
+        energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN] + potential + energy[0, E_ANVIL_KINETIC]
+    )
     if ends[S_IN_CONTACT] != 0.0:
-        track_contact(ends, observed, t, mean_velocity(ends[S_IMPULSE], contact, striker)
-                      if striker.elastic else ends[S_STRIKER_VELOCITY], False, tau)
+        track_contact(
+            ends,
+            observed,
+            t,
+            mean_velocity(ends[S_IMPULSE], contact, striker) if striker.elastic else ends[S_STRIKER_VELOCITY],
+            False,
+            tau,
+        )
     launch_striker(state, row, row_before, struck, contact, striker, tau)
     launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
     # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
@@ -1397,24 +1475,32 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, s
     energy[0, E_ANVIL_KINETIC] = step.anvil_energy
     if weights.impedance_ends:
         contact_force, end_force = struck_forces(
-            (0.0, striker_velocity, 0.0, anvil.velocity, 0.0), 0.0, 0.5 * striker_velocity,
-            contact, striker, anvil)
+            (0.0, striker_velocity, 0.0, anvil.velocity, 0.0), 0.0, 0.5 * striker_velocity, contact, striker, anvil
+        )
         energy[0, E_STRIKER_KINETIC] = step.initial_energy
     else:
         contact_force = end_force = contact.damping * striker_velocity
     ends[S_ANVIL_FORCE] = end_force
-    return Recorded(row=layer.new, time=t, velocity=striker_velocity, contact_force=contact_force,
-                    medium_force=0.0, struck_end_stress=-end_force / tool.struck_end_area,
-                    working_end_stress=0.0)
+    return Recorded(
+        row=layer.new,
+        time=t,
+        velocity=striker_velocity,
+        contact_force=contact_force,
+        medium_force=0.0,
+        struck_end_stress=-end_force / tool.struck_end_area,
+        working_end_stress=0.0,
+    )
 
 
 @compiled(inline="always")
 def known_layers(u, layer, i, weight_cur, weight_old):
     """The known layers' combination `v = w_n·u^n + w_{n−1}·u^{n−1}` at nodes i − 1, i, i + 1."""
     _, cur, old, _ = layer
-    return (weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1],
-            weight_cur * u[cur, i] + weight_old * u[old, i],
-            weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1])
+    return (
+        weight_cur * u[cur, i - 1] + weight_old * u[old, i - 1],
+        weight_cur * u[cur, i] + weight_old * u[old, i],
+        weight_cur * u[cur, i + 1] + weight_old * u[old, i + 1],
+    )
 
 
 @compiled(inline="always")
@@ -1447,13 +1533,14 @@ def explicit_interior(u, layer, tool, r, n):
     grid_lower, grid_upper = tool.lower, tool.upper
     if tool.uniform:
         for i in range(1, n):
-            u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                         + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1]))
+            u[new, i] = 2.0 * u[cur, i] - u[old, i] + r * (u[cur, i - 1] - 2.0 * u[cur, i] + u[cur, i + 1])
     else:
         for i in range(1, n):
-            u[new, i] = (2.0 * u[cur, i] - u[old, i]
-                         + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i])
-                                + grid_upper[i] * (u[cur, i + 1] - u[cur, i])))
+            u[new, i] = (
+                2.0 * u[cur, i]
+                - u[old, i]
+                + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i]) + grid_upper[i] * (u[cur, i + 1] - u[cur, i]))
+            )
 
 
 NO_CARRIES = (0.0, 0.0, 0.0, 0.0)
@@ -1495,8 +1582,12 @@ def working_end_diagonal(tool, rod, weights, medium):
     end_weight, spring_weight, damper_factor, _ = boundary_weights(weights, rod.time_step)
     tau, n = rod.time_step, len(tool.node_area) - 1
     mass_n = rod.density * rod.cell_length * tool.node_area[n] / (tau * tau)
-    return (mass_n + end_weight * rod.working_end_stiffness + spring_weight * medium.stiffness
-            + medium.damping * damper_factor)
+    return (
+        mass_n
+        + end_weight * rod.working_end_stiffness
+        + spring_weight * medium.stiffness
+        + medium.damping * damper_factor
+    )
 
 
 @compiled(inline="always")
@@ -1509,9 +1600,11 @@ def working_end_row(u, layer, rows, rod, weights, medium, step):
     spring_weight, damper_factor = step.boundary.spring_weight, step.boundary.damper_factor
     v_right = weight_cur * u[cur, n] + weight_old * u[old, n]
     v_mid = weight_cur * u[cur, n - 1] + weight_old * u[old, n - 1]
-    rhs = (step.mass_n * (2.0 * u[cur, n] - u[old, n])
-           - medium.stiffness * (1.0 - spring_weight) * u[ref, n]
-           + medium.damping * damper_factor * u[ref, n])
+    rhs = (
+        step.mass_n * (2.0 * u[cur, n] - u[old, n])
+        - medium.stiffness * (1.0 - spring_weight) * u[ref, n]
+        + medium.damping * damper_factor * u[ref, n]
+    )
     if weights.end_masses:
         rhs -= rod.working_end_stiffness * (v_right - v_mid)
     u[new, n] = rhs * rows.inv_den[n]
@@ -1523,8 +1616,9 @@ def working_end_force(u, layer, medium, step):
     new, _, _, ref = layer
     n = step.n
     _, spring_weight, damper_factor, _ = step.boundary
-    return (medium.stiffness * (spring_weight * u[new, n] + (1.0 - spring_weight) * u[ref, n])
-            + medium.damping * damper_factor * (u[new, n] - u[ref, n]))
+    return medium.stiffness * (
+        spring_weight * u[new, n] + (1.0 - spring_weight) * u[ref, n]
+    ) + medium.damping * damper_factor * (u[new, n] - u[ref, n])
 
 
 @compiled(inline="always")
@@ -1549,22 +1643,24 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
     a_0 = step.mass_0 + end_weight * k_0 * (1.0 - p_1)
     b_0 = step.mass_0 * (2.0 * u[cur, 0] - u[old, 0]) + end_weight * k_0 * q_1
     if weights.end_masses:
-        b_0 += k_0 * ((weight_cur * u[cur, 1] + weight_old * u[old, 1])
-                      - (weight_cur * u[cur, 0] + weight_old * u[old, 0]))
+        b_0 += k_0 * (
+            (weight_cur * u[cur, 1] + weight_old * u[old, 1]) - (weight_cur * u[cur, 0] + weight_old * u[old, 0])
+        )
     delta_free = b_y / a_y - b_0 / a_0
     compliance = 1.0 / a_y + 1.0 / a_0
     # Φ of the reference layer, as computed when it was new (0 for the state before impact)
     ref_potential = ends[S_POTENTIAL_BEFORE if back == 1 else S_POTENTIAL_BEFORE_THAT]
-    delta = solve_overlap(delta_free, compliance, delta_ref, ref_potential,
-                          2.0 * delta_cur - delta_old, contact, b1 * damper_factor)
-    contact_force = (quotient_force(delta, delta_ref, ref_potential, contact)[0]
-                     + b1 * damper_factor * (delta - delta_ref))
+    delta = solve_overlap(
+        delta_free, compliance, delta_ref, ref_potential, 2.0 * delta_cur - delta_old, contact, b1 * damper_factor
+    )
+    contact_force = quotient_force(delta, delta_ref, ref_potential, contact)[0] + b1 * damper_factor * (
+        delta - delta_ref
+    )
     return (b_y - contact_force) / a_y, (b_0 + contact_force) / a_0, contact_force
 
 
 @compiled(inline="always")
-def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force,
-                   scratch, step):
+def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step):
     """The ends that integrate their own equations, over the step to `t`: the waves arriving at
     them, then the striker, the anvil and the struck end (`struck_end_step`), an elastic striker's
     back end (`free_back_end`) and the working end (`working_end_step`), with the contacts and the
@@ -1592,18 +1688,21 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     end_state[7] = ends[S_ANVIL_VELOCITY]
     end_state[8] = ends[S_ANVIL_FORCE]
     work, dissipated, crossings, contact_range, end_range = struck_end_step(
-        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil,
-        force, events)
+        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
+    )
     far_state[0] = u[cur, n]
     far_state[1] = ends[S_MEDIUM_FORCE]
     for k in range(MEDIUM_STATE):
         far_state[2 + k] = ends[S_MEDIUM + k]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
-    track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool,
-                              rod, step)
+    track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
-    if not (abs(end_state[0]) < 1e300 and abs(end_state[2]) < 1e300
-            and abs(end_state[6]) < 1e300 and abs(far_state[0]) < 1e300):
+    if not (
+        abs(end_state[0]) < 1e300
+        and abs(end_state[2]) < 1e300
+        and abs(end_state[6]) < 1e300
+        and abs(far_state[0]) < 1e300
+    ):
         return False, 0.0, 0.0, 0.0, 0.0, flows
     y[new] = end_state[0]
     u[new, 0] = end_state[2]
@@ -1639,16 +1738,18 @@ def rate_integral(rates, tau, a, b, power):
             if power == 1:
                 total += mean * (q - p) + 0.5 * slope * (q * q - p * p)
             else:
-                total += (mean * mean * (q - p) + mean * slope * (q * q - p * p)
-                          + slope * slope * (q * q * q - p * p * p) / 3.0)
+                total += (
+                    mean * mean * (q - p)
+                    + mean * slope * (q * q - p * p)
+                    + slope * slope * (q * q * q - p * p * p) / 3.0
+                )
     return total
 
 
 @compiled(inline="always")
 def back_rates(ends, now):
     """The back end's incoming rate over this step (`now`) and the two before, for `rate_integral`."""
-    return (now, (ends[S_BACK_RATE], ends[S_BACK_RATE + 1]),
-            (ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3]))
+    return (now, (ends[S_BACK_RATE], ends[S_BACK_RATE + 1]), (ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3]))
 
 
 @compiled(inline="always")
@@ -1665,8 +1766,7 @@ def free_back_end(striker_u, layer, ends, striker, tau):
     striker_u[new, n_s] = striker_u[cur, n_s] + tau * now[0] + returned
     # each wave there carries Z·v² of power, the arriving one for the last d/2, the returned one
     # for the d/2 before: Z·∫v_b² over [t − d, t], at the step's middle as the grid's energy is
-    ends[S_BACK_ENERGY] = striker.back_impedance * rate_integral(rates, tau, 0.5 * tau - d,
-                                                                  0.5 * tau, 2)
+    ends[S_BACK_ENERGY] = striker.back_impedance * rate_integral(rates, tau, 0.5 * tau - d, 0.5 * tau, 2)
     ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3] = ends[S_BACK_RATE], ends[S_BACK_RATE + 1]
     ends[S_BACK_RATE], ends[S_BACK_RATE + 1] = now
 
@@ -1691,8 +1791,7 @@ def incoming_wave(u, layer, inner, edge, ends, slot, tau):
 
 
 @compiled(inline="always")
-def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod,
-                        step):
+def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step):
     """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
     dissipates), into `energy[0]`; returns the balance (stored + dissipated − input: > 0 is energy
     created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
@@ -1706,12 +1805,14 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     dy = y[new] - y[cur]
     striker_kinetic = 0.5 * contact.striker_mass * dy * dy * step.inv_tau2
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-        u, new, cur, rec, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
+        u, new, cur, rec, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    )
     tool_kinetic *= step.kinetic_factor
     tool_strain *= 0.5 * step.e_over_h
     contact_pot = spring_weight * potential + (1.0 - spring_weight) * ends[S_POTENTIAL_BEFORE]
-    medium_pot = 0.5 * medium.stiffness * (spring_weight * u[new, n] * u[new, n]
-                                           + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
+    medium_pot = (
+        0.5 * medium.stiffness * (spring_weight * u[new, n] * u[new, n] + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
+    )
     energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y[new] - y[old])
     rate = damper_factor * (delta - overlaps.ref)
     energy[0, E_DISSIPATED_CONTACT] += contact.damping * rate * rate * tau
@@ -1722,15 +1823,22 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     energy[0, E_TOOL_STRAIN] = tool_strain
     energy[0, E_CONTACT_POTENTIAL] = contact_pot
     energy[0, E_MEDIUM_POTENTIAL] = medium_pot
-    balance = (striker_kinetic + tool_kinetic + tool_strain + contact_pot + medium_pot
-               + energy[0, E_DISSIPATED_CONTACT] + energy[0, E_DISSIPATED_MEDIUM]
-               - step.initial_energy - energy[0, E_EXTERNAL_WORK])
+    balance = (
+        striker_kinetic
+        + tool_kinetic
+        + tool_strain
+        + contact_pot
+        + medium_pot
+        + energy[0, E_DISSIPATED_CONTACT]
+        + energy[0, E_DISSIPATED_MEDIUM]
+        - step.initial_energy
+        - energy[0, E_EXTERNAL_WORK]
+    )
     return balance, (low, low_block, high, high_block)
 
 
 @compiled(inline="always")
-def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool,
-                           step):
+def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool, step):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
     at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
     tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
@@ -1742,14 +1850,14 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     if anvil.present:
         anvil_at = ends[S_ANVIL_DISP]
         velocity_a = ends[S_ANVIL_VELOCITY]
-        potential = (contact_law(y[new] - anvil_at, contact)[1]
-                     + contact_law(anvil_at - u[new, 0], anvil.contact)[1])
+        potential = contact_law(y[new] - anvil_at, contact)[1] + contact_law(anvil_at - u[new, 0], anvil.contact)[1]
         energy[0, E_ANVIL_KINETIC] = 0.5 * anvil.mass * velocity_a * velocity_a
     else:
         potential = contact_law(y[new] - u[new, 0], contact)[1]
     stored, plastic = medium_energy(u[new, n], medium_state(ends), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-        u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h)
+        u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    )
     energy[0, E_EXTERNAL_WORK] += work
     energy[0, E_DISSIPATED_CONTACT] += dissipated
     energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
@@ -1758,22 +1866,34 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     energy[0, E_CONTACT_POTENTIAL] = potential
     energy[0, E_MEDIUM_POTENTIAL] = stored
     energy[0, E_MEDIUM_PLASTIC] = plastic
-    balance = (energy[0, E_TOOL_KINETIC] + energy[0, E_TOOL_STRAIN] - step.initial_energy
-               - step.anvil_energy + energy[0, E_WITHDRAWN] - energy[0, E_LAUNCHED])
+    balance = (
+        energy[0, E_TOOL_KINETIC]
+        + energy[0, E_TOOL_STRAIN]
+        - step.initial_energy
+        - step.anvil_energy
+        + energy[0, E_WITHDRAWN]
+        - energy[0, E_LAUNCHED]
+    )
     if striker.elastic:
         s_tool, s_rod = striker.tool, striker.rod
         e_over_h = s_rod.youngs_modulus / s_rod.cell_length
         kinetic, strain, _, _, _, _ = tool_energy_and_stresses(
-            striker_u, new, cur, new, s_tool.node_area, s_tool.area_mid, step.strain_sigma,
-            0.5 * e_over_h)
+            striker_u, new, cur, new, s_tool.node_area, s_tool.area_mid, step.strain_sigma, 0.5 * e_over_h
+        )
         energy[0, E_STRIKER_KINETIC] = kinetic * 0.5 * s_rod.density * s_rod.cell_length * step.inv_tau2
         energy[0, E_STRIKER_STRAIN] = strain * 0.5 * e_over_h + ends[S_BACK_ENERGY]
         balance += energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
     else:
         energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
         balance += 0.5 * (energy[0, E_STRIKER_KINETIC] + energy[1, E_STRIKER_KINETIC])
-    for slot in (E_CONTACT_POTENTIAL, E_MEDIUM_POTENTIAL, E_MEDIUM_PLASTIC, E_ANVIL_KINETIC,
-                 E_DISSIPATED_CONTACT, E_DISSIPATED_MEDIUM):
+    for slot in (
+        E_CONTACT_POTENTIAL,
+        E_MEDIUM_POTENTIAL,
+        E_MEDIUM_PLASTIC,
+        E_ANVIL_KINETIC,
+        E_DISSIPATED_CONTACT,
+        E_DISSIPATED_MEDIUM,
+    ):
         balance += 0.5 * (energy[0, slot] + energy[1, slot])
     balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
     return balance, (low, low_block, high, high_block)
@@ -1790,8 +1910,7 @@ def track_energy_excess(extremes, balance):
 
 
 @compiled(inline="always")
-def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod,
-                              step):
+def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod, step):
     """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
     (largest contact force, its time), `end_range` (the force on the tool's struck end: largest,
     its time, least, its time) and `working_range` (the medium force's, with their offsets from
@@ -1821,8 +1940,9 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
     s0, sn = recorded.struck_end_stress, recorded.working_end_stress
     s_low, s_high = min(s0, low, sn), max(s0, high, sn)
     for peak, value, inside, block, slot in (
-            (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
-            (s_high, s_high, high, high_block, X_MAX_TENSION)):
+        (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
+        (s_high, s_high, high, high_block, X_MAX_TENSION),
+    ):
         if peak > extremes[slot]:
             # Where, only for a new record (most layers set none): the first node of that
             # stress, from the struck end.
@@ -1861,15 +1981,12 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
             extremes[X_PEAK_FORCE_TIME] = when
         track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_0, 0.0, when)
         top, offset = vertex(-f3, -f2, -f1, -contact_force)
-        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0,
-                          t_rec - tau + offset * tau)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau)
     if m_rec >= 3:
         top, offset = vertex(g3, g2, g1, medium_force)
-        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h,
-                          t_rec - tau + offset * tau)
+        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
         top, offset = vertex(-g3, -g2, -g1, -medium_force)
-        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h,
-                          t_rec - tau + offset * tau)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
     ends[S_FORCE_EARLIER] = f2
     ends[S_FORCE_BEFORE_THAT] = f1
     ends[S_FORCE_BEFORE] = contact_force
@@ -1908,8 +2025,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
-        for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL,
-                  H_MEDIUM_PLASTIC):
+        for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL, H_MEDIUM_PLASTIC):
             history[c, column] = 0.0
     else:
         history[H_STRIKER_KINETIC, column] = energy[0, E_STRIKER_KINETIC]
@@ -1958,8 +2074,7 @@ def record_fields(recorders, row, state, recorded, striker, step):
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
 @compiled(fastmath={"contract"})
-def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state,
-            observed, recorders):
+def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
     The `Tool` with its rows factored (`ToolRows`), the `Rod`'s constants and the scheme's
@@ -1985,8 +2100,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
     Returns `(status, layers of history written, rows of fields written)`; on a non-finite value
     it stops with `STATUS_NON_FINITE` and the time in `extremes[X_FAILED_TIME]`.
     """
-    tool, rows, striker, state, observed, recorders = uncounted(
-        (tool, rows, striker, state, observed, recorders))
+    tool, rows, striker, state, observed, recorders = uncounted((tool, rows, striker, state, observed, recorders))
     step = step_constants(tool, rod, weights, contact, anvil)
     u, y, ends, energy, striker_u = state
     extremes = observed.extremes
@@ -1998,13 +2112,11 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
     n_field = 0
 
     for m in range(first, last + 1):
-        layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3,
-                       ref=(m - step.boundary.back) % 3)
+        layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3, ref=(m - step.boundary.back) % 3)
         new, cur, old, ref = layer
         t = m * tau
         if m == 0:
-            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil,
-                                    step)
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step)
             interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
         else:
             for slot in range(ENERGY_SLOTS):
@@ -2019,21 +2131,34 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
 
             if weights.impedance_ends:
                 finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
-                    state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force,
-                    uncounted(scratch), step)
+                    state,
+                    observed,
+                    layer,
+                    t,
+                    tool,
+                    rod,
+                    contact,
+                    striker,
+                    anvil,
+                    medium,
+                    force,
+                    uncounted(scratch),
+                    step,
+                )
                 if not finite:
                     extremes[X_FAILED_TIME] = t
                     return STATUS_NON_FINITE, n_hist, n_field
                 rec, t_rec = new, t
                 balance, interior = audit_impedance_energy(
-                    state, layer, flows, velocity, contact, striker, anvil, medium, tool, step)
+                    state, layer, flows, velocity, contact, striker, anvil, medium, tool, step
+                )
             else:
-                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0],
-                                    ref=y[ref] - u[ref, 0])
+                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0], ref=y[ref] - u[ref, 0])
                 r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
                 q_1, carries = sweep(u, layer, rows, step)
                 y_new, u0_new, contact_force = solve_struck_end(
-                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step)
+                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step
+                )
                 end_force = contact_force
                 if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
                     extremes[X_FAILED_TIME] = t
@@ -2050,10 +2175,12 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
                     velocity = (y_new - y[old]) / (2.0 * tau)
                 else:
                     rec, t_rec = new, t
-                    velocity = (contact.striker_velocity if m == 1 else
-                                (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau))
+                    velocity = (
+                        contact.striker_velocity if m == 1 else (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau)
+                    )
                 balance, interior = audit_scheme_energy(
-                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step)
+                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step
+                )
                 ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
                 ends[S_POTENTIAL_BEFORE] = potential
                 track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
@@ -2061,10 +2188,15 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
             if not track_energy_excess(extremes, balance):
                 extremes[X_FAILED_TIME] = t
                 return STATUS_NON_FINITE, n_hist, n_field
-            recorded = Recorded(row=rec, time=t_rec, velocity=velocity, contact_force=contact_force,
-                                medium_force=medium_force,
-                                struck_end_stress=-end_force / tool.struck_end_area,
-                                working_end_stress=-medium_force / tool.working_end_area)
+            recorded = Recorded(
+                row=rec,
+                time=t_rec,
+                velocity=velocity,
+                contact_force=contact_force,
+                medium_force=medium_force,
+                struck_end_stress=-end_force / tool.struck_end_area,
+                working_end_stress=-medium_force / tool.working_end_area,
+            )
 
         if m < step.lag:
             continue  # the centred schemes record layer 0 once its forces are known

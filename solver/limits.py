@@ -6,8 +6,7 @@ from dataclasses import dataclass
 
 from . import layout as L
 from .case import Case, CaseError, FieldError
-from .grid import (ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, striker_cells,
-                   tolerance_of)
+from .grid import ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, striker_cells, tolerance_of
 
 
 @dataclass(frozen=True)
@@ -50,31 +49,44 @@ def excesses(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits()) 
     """Each limit the run of `case` on `numerics` would exceed."""
     found = []
     if numerics.cells > limits.max_cells:
-        found.append(Excess("numerics.cells", f"{numerics.cells} cells exceed the limit of "
-                                              f"{limits.max_cells} (PERCUSSIM_MAX_CELLS raises it)"))
+        found.append(
+            Excess(
+                "numerics.cells",
+                f"{numerics.cells} cells exceed the limit of {limits.max_cells} (PERCUSSIM_MAX_CELLS raises it)",
+            )
+        )
     blows = case.blows.count if case.blows else 1
     per_blow = f" × {blows} blows" if blows > 1 else ""
     fewer_blows = ", or give fewer blows.count" if blows > 1 else ""
     if numerics.steps > limits.max_steps:
-        found.append(Excess(
-            "numerics.time_step",
-            f"{numerics.steps} time steps (duration / time_step{per_blow}) exceed the limit of "
-            f"{limits.max_steps} (PERCUSSIM_MAX_STEPS raises it)",
-            f"raise numerics.time_step or shorten numerics.duration{fewer_blows}"))
+        found.append(
+            Excess(
+                "numerics.time_step",
+                f"{numerics.steps} time steps (duration / time_step{per_blow}) exceed the limit of "
+                f"{limits.max_steps} (PERCUSSIM_MAX_STEPS raises it)",
+                f"raise numerics.time_step or shorten numerics.duration{fewer_blows}",
+            )
+        )
     work = float(numerics.cells) * numerics.steps
     if numerics.model == "rod" and work > limits.max_node_steps:
-        found.append(Excess(
-            "numerics",
-            f"{work:.3g} node-steps (cells × steps) exceed the limit of {limits.max_node_steps:.3g} "
-            "(PERCUSSIM_MAX_NODE_STEPS raises it)",
-            f"use fewer cells or a larger time_step{fewer_blows}"))
+        found.append(
+            Excess(
+                "numerics",
+                f"{work:.3g} node-steps (cells × steps) exceed the limit of {limits.max_node_steps:.3g} "
+                "(PERCUSSIM_MAX_NODE_STEPS raises it)",
+                f"use fewer cells or a larger time_step{fewer_blows}",
+            )
+        )
     values = output_values(case, numerics)
     if values > limits.max_output_values:
-        found.append(Excess(
-            "outputs",
-            f"the outputs would keep {values:.3g} numbers, over the limit of "
-            f"{limits.max_output_values:.3g} (PERCUSSIM_MAX_OUTPUT_VALUES raises it)",
-            "raise outputs.history_stride or outputs.field_stride"))
+        found.append(
+            Excess(
+                "outputs",
+                f"the outputs would keep {values:.3g} numbers, over the limit of "
+                f"{limits.max_output_values:.3g} (PERCUSSIM_MAX_OUTPUT_VALUES raises it)",
+                "raise outputs.history_stride or outputs.field_stride",
+            )
+        )
     return found
 
 
@@ -82,8 +94,9 @@ def check_limits(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits
     """Raise `CaseError` naming each limit the case exceeds and the field that sets it."""
     found = excesses(case, numerics, limits)
     if found:
-        raise CaseError([FieldError(field=e.field, message=e.what + (f": {e.remedy}" if e.remedy else ""))
-                         for e in found])
+        raise CaseError(
+            [FieldError(field=e.field, message=e.what + (f": {e.remedy}" if e.remedy else "")) for e in found]
+        )
 
 
 def check_case(case: Case, limits: Limits) -> None:

@@ -31,8 +31,7 @@ from . import layout as L
 from .case import Case, Force
 from .controller import HISTORY_PATHS
 from .errors import Cancelled, NumericalFailure
-from .grid import (ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass,
-                   tool_mass_ahead)
+from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass, tool_mass_ahead
 from .result import CancelCheck, ProgressCallback, Result
 from .summary import MAX_CONTACTS, build_summary
 
@@ -50,8 +49,10 @@ CONTACT_SIDE = 1e-300
 X1, V1, X2, V2, WORK, DISSIPATED_CONTACT, DISSIPATED_MEDIUM = range(7)
 STATES = 7
 
-NO_FIELDS_WARNING = ("the lumped model has no wave in the tool: outputs.fields are not computed "
-                     "(probes and stress maxima are its quasi-static stress)")
+NO_FIELDS_WARNING = (
+    "the lumped model has no wave in the tool: outputs.fields are not computed "
+    "(probes and stress maxima are its quasi-static stress)"
+)
 STRESS_STATIONS = 129  # stations along the tool scanned for the quasi-static stress maxima
 STRESS_CHUNK = 4096  # samples of the histories scanned at a time
 
@@ -61,8 +62,7 @@ class IntegrationFailure(NumericalFailure):
 
     def __init__(self, time: float, reason: str):
         self.time = time
-        RuntimeError.__init__(
-            self, f"the lumped model's integrator failed at t = {time:.6g} s: {reason}")
+        RuntimeError.__init__(self, f"the lumped model's integrator failed at t = {time:.6g} s: {reason}")
 
 
 @dataclass(frozen=True)
@@ -79,13 +79,17 @@ class Parameters:
     b2: float
 
     @classmethod
-    def of(cls, case: Case) -> "Parameters":
+    def of(cls, case: Case) -> Parameters:
         medium = case.medium
         return cls(
-            m1=case.striker.mass, m2=tool_mass(case.tool),
-            c1=case.contact.stiffness, alpha=case.contact.exponent,
-            c0=case.contact.tension_stiffness, b1=case.contact.damping,
-            c2=medium.stiffness if medium else 0.0, b2=medium.damping if medium else 0.0,
+            m1=case.striker.mass,
+            m2=tool_mass(case.tool),
+            c1=case.contact.stiffness,
+            alpha=case.contact.exponent,
+            c0=case.contact.tension_stiffness,
+            b1=case.contact.damping,
+            c2=medium.stiffness if medium else 0.0,
+            b2=medium.damping if medium else 0.0,
         )
 
 
@@ -103,6 +107,7 @@ class Segment:
 
 
 # --- the model ---------------------------------------------------------------------------------
+
 
 def spring_force(delta, p: Parameters, contact: bool):
     """`G(δ)·δ` on one branch: `c1·|δ|^α·δ` (contact, odd so it stays smooth past 0) or `c0·δ`."""
@@ -162,16 +167,19 @@ def rhs(t, s, p: Parameters, contact: bool, force: Callable[[float], float]) -> 
     f = spring_force(s[X1] - s[X2], p, contact) + p.b1 * rate
     r = force(t)
     medium = p.c2 * s[X2] + p.b2 * s[V2]
-    return np.array([s[V1], (r - f) / p.m1, s[V2], (f - medium) / p.m2,
-                     r * s[V1], p.b1 * rate * rate, p.b2 * s[V2] * s[V2]])
+    return np.array(
+        [s[V1], (r - f) / p.m1, s[V2], (f - medium) / p.m2, r * s[V1], p.b1 * rate * rate, p.b2 * s[V2] * s[V2]]
+    )
 
 
 def overlap_event(contact: bool):
     """Terminal event δ = 0, crossed out of the current branch: downward in contact, upward in
     separation, so a segment that starts at δ = 0 moving into its branch does not stop at once."""
+
     def event(t, s, *rhs_args):  # solve_ivp passes the rhs's args on to events
         delta = s[X1] - s[X2]
         return delta if delta < 0.0 else delta + CONTACT_SIDE
+
     event.terminal = True
     event.direction = -1.0 if contact else 1.0
     return event
@@ -200,8 +208,15 @@ def segments(case: Case, p: Parameters, t_end: float) -> Iterator[Segment]:
     for stop in force_breaks(case.force, t_end):
         while t < stop:
             ode = solve_ivp(
-                rhs, (t, stop), state, method="DOP853", rtol=RTOL, atol=atol, dense_output=True,
-                events=overlap_event(contact), args=(p, contact, segment_force(case.force, t, stop)),
+                rhs,
+                (t, stop),
+                state,
+                method="DOP853",
+                rtol=RTOL,
+                atol=atol,
+                dense_output=True,
+                events=overlap_event(contact),
+                args=(p, contact, segment_force(case.force, t, stop)),
             )
             if ode.status < 0:
                 raise IntegrationFailure(float(ode.t[-1]), ode.message)
@@ -213,6 +228,7 @@ def segments(case: Case, p: Parameters, t_end: float) -> Iterator[Segment]:
 
 
 # --- what a run observes -----------------------------------------------------------------------
+
 
 @dataclass
 class ContactLog:
@@ -242,8 +258,9 @@ def segment_peak(seg: Segment, p: Parameters) -> tuple[float, float]:
     from scipy.optimize import minimize_scalar
 
     steps = seg.sol.ts
-    scan = np.concatenate([np.linspace(a, b, PEAK_SEARCH_POINTS, endpoint=False)
-                           for a, b in zip(steps[:-1], steps[1:])] + [steps[-1:]])
+    scan = np.concatenate(
+        [np.linspace(a, b, PEAK_SEARCH_POINTS, endpoint=False) for a, b in zip(steps[:-1], steps[1:])] + [steps[-1:]]
+    )
 
     def force(t):
         s = seg.sol(t)
@@ -252,8 +269,9 @@ def segment_peak(seg: Segment, p: Parameters) -> tuple[float, float]:
     values = force(scan)
     best = int(np.argmax(values))
     lo, hi = scan[max(best - 1, 0)], scan[min(best + 1, len(scan) - 1)]
-    refined = minimize_scalar(lambda t: -float(force(t)), bounds=(lo, hi), method="bounded",
-                              options={"xatol": 1e-9 * (hi - lo)})
+    refined = minimize_scalar(
+        lambda t: -float(force(t)), bounds=(lo, hi), method="bounded", options={"xatol": 1e-9 * (hi - lo)}
+    )
     if -refined.fun > values[best]:
         return -float(refined.fun), float(refined.x)
     return float(values[best]), float(scan[best])
@@ -299,8 +317,15 @@ def final_energy(p: Parameters, s: np.ndarray) -> np.ndarray:
 
 def energy_excess(history: dict[str, np.ndarray], initial: float) -> float:
     """Largest energy created at a sample, stored + dissipated − input (the kernel's tracker)."""
-    names = ("striker_kinetic", "tool_kinetic", "tool_strain", "contact_potential",
-             "medium_potential", "dissipated_contact", "dissipated_medium")
+    names = (
+        "striker_kinetic",
+        "tool_kinetic",
+        "tool_strain",
+        "contact_potential",
+        "medium_potential",
+        "dissipated_contact",
+        "dissipated_medium",
+    )
     balance = sum(history[f"energy/{n}"] for n in names) - initial - history["energy/external_work"]
     return max(0.0, float(np.max(balance)))
 
@@ -309,49 +334,53 @@ def contact_table(log: ContactLog) -> np.ndarray:
     """The finished contact intervals (start, end) in the controller's fixed-size table."""
     table = np.zeros((MAX_CONTACTS, 2))
     kept = np.reshape(log.intervals[:MAX_CONTACTS], (-1, 2))
-    table[:len(kept)] = kept
+    table[: len(kept)] = kept
     return table
 
 
-def quasi_static_stress(case: Case, p: Parameters, contact: np.ndarray, medium: np.ndarray,
-                        x: np.ndarray) -> np.ndarray:
+def quasi_static_stress(
+    case: Case, p: Parameters, contact: np.ndarray, medium: np.ndarray, x: np.ndarray
+) -> np.ndarray:
     """Stress (tension +) at stations `x` of the rigid tool, each sample: the part of the tool
     ahead of x, mass `μ(x)·m2`, moves with the whole, so `σ = −((1 − μ)·F_c + μ·F_m)/S(x)`."""
     mu = np.clip(tool_mass_ahead(case.tool, x) / p.m2, 0.0, 1.0)
     return -(np.outer(contact, 1.0 - mu) + np.outer(medium, mu)) / tool_area(case.tool, x)
 
 
-def stress_extremes(case: Case, p: Parameters, history: dict[str, np.ndarray],
-                    peak: tuple[float, float]) -> np.ndarray:
+def stress_extremes(case: Case, p: Parameters, history: dict[str, np.ndarray], peak: tuple[float, float]) -> np.ndarray:
     """`(max compression, x, t, max tension, x, t)` of the quasi-static stress, scanned in chunks
     so the memory stays independent of the run's length; the struck end's compression at the
     peak contact force (found between samples) is a candidate too."""
-    x = np.union1d(np.linspace(0.0, case.tool.length, STRESS_STATIONS),
-                   case.tool.profile.x if case.tool.profile else [])
+    x = np.union1d(
+        np.linspace(0.0, case.tool.length, STRESS_STATIONS), case.tool.profile.x if case.tool.profile else []
+    )
     time = history["time"]
     at_peak = peak[0] / float(tool_area(case.tool, np.zeros(1))[0])
     best = np.array([at_peak, 0.0, peak[1], 0.0, 0.0, 0.0])
     for start in range(0, len(time), STRESS_CHUNK):
         part = slice(start, start + STRESS_CHUNK)
-        stress = quasi_static_stress(case, p, history["contact/force"][part],
-                                     history["medium/force"][part], x)
+        stress = quasi_static_stress(case, p, history["contact/force"][part], history["medium/force"][part], x)
         for sign, slot in ((-1.0, 0), (1.0, 3)):
             k = np.argmax(sign * stress)
             value = sign * stress.flat[k]
             if value > best[slot]:
                 row, col = np.unravel_index(k, stress.shape)
-                best[slot:slot + 3] = value, x[col], time[part][row]
+                best[slot : slot + 3] = value, x[col], time[part][row]
     return best
 
 
-def fill_extremes(log: ContactLog, peak: tuple[float, float], stress: np.ndarray,
-                  excess: float) -> np.ndarray:
+def fill_extremes(log: ContactLog, peak: tuple[float, float], stress: np.ndarray, excess: float) -> np.ndarray:
     """The kernel's extremes from the contact log, the refined peak force and the stress maxima."""
     extremes = L.new_extremes()
     extremes[L.X_PEAK_FORCE], extremes[L.X_PEAK_FORCE_TIME] = peak
-    (extremes[L.X_MAX_COMPRESSION], extremes[L.X_MAX_COMPRESSION_X],
-     extremes[L.X_MAX_COMPRESSION_TIME], extremes[L.X_MAX_TENSION], extremes[L.X_MAX_TENSION_X],
-     extremes[L.X_MAX_TENSION_TIME]) = stress
+    (
+        extremes[L.X_MAX_COMPRESSION],
+        extremes[L.X_MAX_COMPRESSION_X],
+        extremes[L.X_MAX_COMPRESSION_TIME],
+        extremes[L.X_MAX_TENSION],
+        extremes[L.X_MAX_TENSION_X],
+        extremes[L.X_MAX_TENSION_TIME],
+    ) = stress
     extremes[L.X_CONTACTS] = len(log.intervals)
     extremes[L.X_CO_IMPACT] = log.first_end
     extremes[L.X_REBOUND_VELOCITY] = log.rebound_velocity
@@ -371,8 +400,9 @@ def simulate_lumped(
     `outputs.history_stride`-th); the integrator chooses its own steps. Progress is reported and
     cancellation checked between integration segments.
     """
-    num = numerics or dataclasses.replace(resolve_numerics(case, model="lumped"), scheme="dop853",
-                                         end_masses=False, cells=0, courant=0.0)
+    num = numerics or dataclasses.replace(
+        resolve_numerics(case, model="lumped"), scheme="dop853", end_masses=False, cells=0, courant=0.0
+    )
     p = Parameters.of(case)
     t_end = num.steps * num.time_step
     time = np.arange(0, num.steps + 1, case.outputs.history_stride) * num.time_step
@@ -394,18 +424,27 @@ def simulate_lumped(
             raise Cancelled(f"cancelled at t = {seg.t1:.6g} s")
 
     history = history_table(case, p, time, samples)
-    initial = 0.5 * p.m1 * case.striker.velocity ** 2
-    extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak),
-                             energy_excess(history, initial))
+    initial = 0.5 * p.m1 * case.striker.velocity**2
+    extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak), energy_excess(history, initial))
     extremes[L.X_MAX_PENETRATION] = np.max(history["tool/working_end_displacement"])
     summary = build_summary(
-        case=case, numerics=num, extremes=extremes, contacts=contact_table(log),
+        case=case,
+        numerics=num,
+        extremes=extremes,
+        contacts=contact_table(log),
         open_contact=log.start if log.in_contact else None,
-        energy=final_energy(p, final), history=history,
+        energy=final_energy(p, final),
+        history=history,
         extra_warnings=[NO_FIELDS_WARNING] if case.outputs.fields else [],
     )
     probe_x = np.asarray(case.outputs.probes, dtype=float)
-    probe_stress = quasi_static_stress(case, p, history["contact/force"], history["medium/force"],
-                                       probe_x)
-    return Result(case=case, numerics=num, history=history, probe_x=probe_x,
-                  probe_stress=probe_stress, fields=None, summary=summary)
+    probe_stress = quasi_static_stress(case, p, history["contact/force"], history["medium/force"], probe_x)
+    return Result(
+        case=case,
+        numerics=num,
+        history=history,
+        probe_x=probe_x,
+        probe_stress=probe_stress,
+        fields=None,
+        summary=summary,
+    )

@@ -49,11 +49,10 @@ def _profile(rng: np.random.Generator, shape: str, length: float, area: float) -
     if shape == "stepped":
         at = rng.uniform(0.2, 0.7) * length
         end = area * _log_uniform(rng, 0.25, 4.0)
-        return {"profile": {"x": [0.0, at, at + 0.05 * length, length],
-                            "area": [area, area, end, end]}}
+        return {"profile": {"x": [0.0, at, at + 0.05 * length, length], "area": [area, area, end, end]}}
     start = rng.uniform(0.0, 0.7) * length  # the cone's first station
     ratio = _log_uniform(rng, 0.1, 10.0)
-    x = [0.0] + list(np.linspace(start, length, 9)[0 if start > 0 else 1:])
+    x = [0.0] + list(np.linspace(start, length, 9)[0 if start > 0 else 1 :])
     diameter = np.sqrt(ratio) ** ((np.maximum(np.array(x) - start, 0.0)) / (length - start))
     return {"profile": {"x": [float(v) for v in x], "area": [float(area * d * d) for d in diameter]}}
 
@@ -86,8 +85,7 @@ def draw_case(rng: np.random.Generator, index: int) -> dict:
         contact["tension_stiffness"] = tangent * _log_uniform(rng, 1e-5, 1e-2)
     if rng.uniform() < 0.6:
         contact["damping"] = 2.0 * rng.uniform(0.0, 3.0) * math.sqrt(tangent * m1)
-    case = {"name": f"matrix-{index}", "striker": {"mass": m1, "velocity": w1}, "tool": tool,
-            "contact": contact}
+    case = {"name": f"matrix-{index}", "striker": {"mass": m1, "velocity": w1}, "tool": tool, "contact": contact}
     end_stiffness = STEEL["youngs_modulus"] * area / length
     medium = ("none", "soft", "stiff")[int(rng.integers(3))]
     if medium != "none":
@@ -105,11 +103,18 @@ def draw_case(rng: np.random.Generator, index: int) -> dict:
         amplitude = m1 * w1 / duration * _log_uniform(rng, 0.1, 5.0) * float(rng.choice([-1.0, 1.0]))
         if force == "pulse":
             start = rng.uniform(0.0, 0.6) * duration
-            case["force"] = {"kind": "pulse", "amplitude": amplitude, "start": start,
-                             "duration": rng.uniform(0.05, 0.5) * duration}
+            case["force"] = {
+                "kind": "pulse",
+                "amplitude": amplitude,
+                "start": start,
+                "duration": rng.uniform(0.05, 0.5) * duration,
+            }
         else:
-            case["force"] = {"kind": force, "amplitude": amplitude,
-                             "omega": 2.0 * math.pi / duration * _log_uniform(rng, 0.3, 5.0)}
+            case["force"] = {
+                "kind": force,
+                "amplitude": amplitude,
+                "omega": 2.0 * math.pi / duration * _log_uniform(rng, 0.3, 5.0),
+            }
     case["numerics"] = {"duration": duration}
     return case
 
@@ -120,8 +125,7 @@ def draw_cases(seed: int, count: int) -> list[dict]:
     return [draw_case(rng, k) for k in range(count)]
 
 
-def reference_cells(case: Case, points_per_contact: int = 20, fewest: int = 200,
-                    most: int = 2000) -> int:
+def reference_cells(case: Case, points_per_contact: int = 20, fewest: int = 200, most: int = 2000) -> int:
     """The first grid of a reference: the rigid-wall contact time resolved by `points_per_contact`
     steps, within `fewest`–`most` cells (the ends' substeps resolve a contact that is shorter)."""
     a = wave_speed(case.tool)
@@ -131,8 +135,12 @@ def reference_cells(case: Case, points_per_contact: int = 20, fewest: int = 200,
 
 def reference_left_out(case: Case, reference: Reference) -> dict[str, str]:
     """The headline quantities the reference has no meaningful relative error for."""
-    return left_out(reference.headline(), case.striker.velocity,
-                    reference.initial + max(reference.external_work, 0.0), case.medium is not None)
+    return left_out(
+        reference.headline(),
+        case.striker.velocity,
+        reference.initial + max(reference.external_work, 0.0),
+        case.medium is not None,
+    )
 
 
 def extrapolate(coarse: float, middle: float, fine: float) -> float:
@@ -157,8 +165,7 @@ class ConvergedReference:
     cells: list[int]
 
 
-def converged_reference(case: Case, target: float = 1e-5, max_cells: int = 200_000
-                        ) -> ConvergedReference:
+def converged_reference(case: Case, target: float = 1e-5, max_cells: int = 200_000) -> ConvergedReference:
     """The characteristics solution on grids doubled until, for every headline quantity with a
     meaningful relative error, the extrapolations (`extrapolate`) of the last two triplets of grids
     agree within `target` of the value; or until `max_cells`. The value is the last extrapolation,

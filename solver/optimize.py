@@ -32,7 +32,15 @@ from .grid import DEFAULT_TOLERANCE
 from .limits import Limits
 from .paths import quantity
 from .result import CancelCheck, ProgressCallback
-from .study import DURATION_REMEDY, Optimization, check_optimization, parse_optimization, quantity_fields, set_aside, study_case
+from .study import (
+    DURATION_REMEDY,
+    Optimization,
+    check_optimization,
+    parse_optimization,
+    quantity_fields,
+    set_aside,
+    study_case,
+)
 
 POPULATION = 10  # per variable: differential evolution's population
 MIN_POPULATION = 8
@@ -44,8 +52,15 @@ CHECKED = 3  # designs checked under the tolerance before giving up on the limit
 class _Study:
     """The design space on one grid: every run counted, cached and kept in the history."""
 
-    def __init__(self, request: Optimization, space: Space, cells: int, tolerance: float,
-                 evaluator: Evaluator, cancelled: CancelCheck | None):
+    def __init__(
+        self,
+        request: Optimization,
+        space: Space,
+        cells: int,
+        tolerance: float,
+        evaluator: Evaluator,
+        cancelled: CancelCheck | None,
+    ):
         self.request, self.space, self.cells, self.tolerance = request, space, cells, tolerance
         self.evaluator, self.cancelled = evaluator, cancelled
         self.base = study_case(request.case).model_dump(mode="json", exclude_none=True)
@@ -61,14 +76,23 @@ class _Study:
         wanted = list({u.tobytes(): u for u in units if u.tobytes() not in self._cache}.values())
         if wanted:
             trees = [self.space.tree(self.base, self.space.values(u)) for u in wanted]
-            answers = self.evaluator(Batch(cases=trees, cells=self.cells,
-                                           duration=self.request.case.numerics.duration,
-                                           series=None, quantities=self.names))
+            answers = self.evaluator(
+                Batch(
+                    cases=trees,
+                    cells=self.cells,
+                    duration=self.request.case.numerics.duration,
+                    series=None,
+                    quantities=self.names,
+                )
+            )
             for u, answer in zip(wanted, answers):
                 found = answer.get("quantities", {name: None for name in self.names})
-                entry = {"values": dict(zip(self.space.paths, self.space.values(u).tolist())),
-                         "quantities": found, "feasible": self.feasible(found),
-                         **({"error": answer["error"]} if "error" in answer else {})}
+                entry = {
+                    "values": dict(zip(self.space.paths, self.space.values(u).tolist())),
+                    "quantities": found,
+                    "feasible": self.feasible(found),
+                    **({"error": answer["error"]} if "error" in answer else {}),
+                }
                 self.history.append(entry)
                 self._cache[u.tobytes()] = found
         return [self._cache[u.tobytes()] for u in units]
@@ -117,9 +141,14 @@ class _Study:
         return f[0], (f[1:] - f[0]) / steps, g[0], ((g[1:] - g[0]) / steps[:, None]).T
 
 
-def optimize(optimization: Optimization | dict, evaluator: Evaluator | None = None,
-             processes: int | None = None, progress: ProgressCallback | None = None,
-             cancelled: CancelCheck | None = None, limits: Limits = Limits()) -> dict:
+def optimize(
+    optimization: Optimization | dict,
+    evaluator: Evaluator | None = None,
+    processes: int | None = None,
+    progress: ProgressCallback | None = None,
+    cancelled: CancelCheck | None = None,
+    limits: Limits = Limits(),
+) -> dict:
     """Find the best design (see the module's docstring). `evaluator` runs the batches (default:
     a pool over `processes`, one a core). Returns as JSON: the best case and its summary (checked
     under the tolerance), its variables and quantities, every evaluation, and why it stopped."""
@@ -129,19 +158,22 @@ def optimize(optimization: Optimization | dict, evaluator: Evaluator | None = No
         return _optimize(optimization, run, progress, cancelled, limits)
 
 
-def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCallback | None,
-              cancelled: CancelCheck | None, limits: Limits) -> dict:
+def _optimize(
+    request: Optimization,
+    evaluator: Evaluator,
+    progress: ProgressCallback | None,
+    cancelled: CancelCheck | None,
+    limits: Limits,
+) -> dict:
     started = time.monotonic()
     case = study_case(request.case)
     space = check_optimization(request, limits)
     report = progress or (lambda fraction: None)
     tol = case.numerics.tolerance or DEFAULT_TOLERANCE
     own = space.own(case)
-    own_case = Case.model_validate(space.tree(case.model_dump(mode="json", exclude_none=True),
-                                              space.values(own)))
+    own_case = Case.model_validate(space.tree(case.model_dump(mode="json", exclude_none=True), space.values(own)))
     cells = study_grid(own_case, space, tol, limits)
-    check_grid(own_case, cells, case.numerics.duration, limits, field="case.numerics.duration",
-               remedy=DURATION_REMEDY)
+    check_grid(own_case, cells, case.numerics.duration, limits, field="case.numerics.duration", remedy=DURATION_REMEDY)
     study = _Study(request, space, cells, tol, evaluator, cancelled)
     _check_quantities(study, own)
 
@@ -153,26 +185,40 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
         report(0.8 * min(1.0, len(study.history) / request.max_evaluations))
         return len(study.history) >= GLOBAL_SHARE * request.max_evaluations
 
-    constraints = ([NonlinearConstraint(study.margins_many, 0.0, np.inf)] if request.limits else [])
+    constraints = [NonlinearConstraint(study.margins_many, 0.0, np.inf)] if request.limits else []
     found = differential_evolution(
-        study.objective_many, [(0.0, 1.0)] * n, popsize=max(1, population // n), maxiter=request.max_evaluations,
-        init="sobol", seed=request.seed, tol=1e-6, atol=0.0, polish=False, vectorized=True,
-        updating="deferred", constraints=constraints, callback=generation)
+        study.objective_many,
+        [(0.0, 1.0)] * n,
+        popsize=max(1, population // n),
+        maxiter=request.max_evaluations,
+        init="sobol",
+        seed=request.seed,
+        tol=1e-6,
+        atol=0.0,
+        polish=False,
+        vectorized=True,
+        updating="deferred",
+        constraints=constraints,
+        callback=generation,
+    )
     global_runs = len(study.history)
     local = _local_stage(study, found.x, request.max_evaluations)
     report(0.9)
     best, checked = _check(study, case, tol, limits)
     report(1.0)
     spent = "its share of the budget of runs was spent"
-    stopped = (f"global stage: {spent if global_runs >= GLOBAL_SHARE * request.max_evaluations else found.message} "
-               f"({global_runs} runs, {found.nit} generations)")
+    stopped = (
+        f"global stage: {spent if global_runs >= GLOBAL_SHARE * request.max_evaluations else found.message} "
+        f"({global_runs} runs, {found.nit} generations)"
+    )
     if local is not None:
         local_spent = len(study.history) >= request.max_evaluations
         stopped += f"; local stage: {'the budget of runs was spent' if local_spent else local.message}"
     answer = {
         "objective": {request.objective.goal: request.objective.quantity},
-        "variables": {path: [low, high] for path, low, high in zip(space.paths, space.low.tolist(),
-                                                                    space.high.tolist())},
+        "variables": {
+            path: [low, high] for path, low, high in zip(space.paths, space.low.tolist(), space.high.tolist())
+        },
         "limits": {name: bound.model_dump(exclude_none=True) for name, bound in request.limits.items()},
         "stopped": stopped,
         "evaluations": len(study.history),
@@ -182,15 +228,25 @@ def _optimize(request: Optimization, evaluator: Evaluator, progress: ProgressCal
         "seconds": time.monotonic() - started,
     }
     if best is None:
-        answer |= {"case": None, "summary": None, "values": None, "quantities": None,
-                   "warnings": ["no design within the bounds was found that keeps every limit under "
-                                "the tolerance: loosen a limit or widen the bounds"]}
+        answer |= {
+            "case": None,
+            "summary": None,
+            "values": None,
+            "quantities": None,
+            "warnings": [
+                "no design within the bounds was found that keeps every limit under "
+                "the tolerance: loosen a limit or widen the bounds"
+            ],
+        }
         return answer
     values, result = best
-    answer |= {"values": values, "case": result.case.model_dump(mode="json", exclude_none=True),
-               "summary": result.summary,
-               "quantities": {name: quantity(result.summary, name) for name in study.names},
-               "warnings": set_aside(request.case) + _warnings(study, values)}
+    answer |= {
+        "values": values,
+        "case": result.case.model_dump(mode="json", exclude_none=True),
+        "summary": result.summary,
+        "quantities": {name: quantity(result.summary, name) for name in study.names},
+        "warnings": set_aside(request.case) + _warnings(study, values),
+    }
     return answer
 
 
@@ -203,9 +259,15 @@ def _check_quantities(study: _Study, own: np.ndarray) -> None:
         raise CaseError([FieldError(field="case", message=f"the case itself fails: {entry['error']}")])
     for name, field in quantity_fields(request).items():
         if found.get(name) is None:
-            errors.append(FieldError(field=field, message=(
-                f"{name!r} has no value for this case (a medium's penetration with no medium, the "
-                "blows of a single blow)")))
+            errors.append(
+                FieldError(
+                    field=field,
+                    message=(
+                        f"{name!r} has no value for this case (a medium's penetration with no medium, the "
+                        "blows of a single blow)"
+                    ),
+                )
+            )
     if errors:
         raise CaseError(errors)
 
@@ -223,11 +285,19 @@ def _local_stage(study: _Study, start: np.ndarray, budget: int):
 
     if not math.isfinite(at(start)[0]):
         return None
-    constraints = ([{"type": "ineq", "fun": lambda u: at(u)[2], "jac": lambda u: at(u)[3]}]
-                   if study.request.limits else [])
-    return minimize(lambda u: at(u)[0], start, jac=lambda u: at(u)[1], method="SLSQP",
-                    bounds=[(0.0, 1.0)] * len(start), constraints=constraints,
-                    options={"maxiter": 30, "ftol": 1e-10}, callback=lambda u: _spent(study, budget))
+    constraints = (
+        [{"type": "ineq", "fun": lambda u: at(u)[2], "jac": lambda u: at(u)[3]}] if study.request.limits else []
+    )
+    return minimize(
+        lambda u: at(u)[0],
+        start,
+        jac=lambda u: at(u)[1],
+        method="SLSQP",
+        bounds=[(0.0, 1.0)] * len(start),
+        constraints=constraints,
+        options={"maxiter": 30, "ftol": 1e-10},
+        callback=lambda u: _spent(study, budget),
+    )
 
 
 def _spent(study: _Study, budget: int) -> None:
@@ -239,12 +309,12 @@ def _spent(study: _Study, budget: int) -> None:
 def _check(study: _Study, case: Case, tol: float, limits: Limits) -> tuple[tuple | None, list[dict]]:
     """The best feasible designs of the history, best first, solved under the tolerance until one
     keeps every limit there: (its values, its result), and what each check found."""
-    ranked = sorted((e for e in study.history if e["feasible"] and "error" not in e),
-                    key=lambda e: study.objective(e["quantities"]))
+    ranked = sorted(
+        (e for e in study.history if e["feasible"] and "error" not in e), key=lambda e: study.objective(e["quantities"])
+    )
     checked = []
     for entry in ranked[:CHECKED]:
-        tree = study.space.tree(case.model_dump(mode="json", exclude_none=True),
-                                list(entry["values"].values()))
+        tree = study.space.tree(case.model_dump(mode="json", exclude_none=True), list(entry["values"].values()))
         accurate = study_case(case.model_validate(tree), tol)
         result = solve_to_tolerance(accurate, tol, limits=limits)
         found = {name: quantity(result.summary, name) for name in study.names}
@@ -258,8 +328,7 @@ def _check(study: _Study, case: Case, tol: float, limits: Limits) -> tuple[tuple
 def _warnings(study: _Study, values: dict) -> list[str]:
     """What the answer cannot promise: a variable at a bound."""
     warnings = []
-    for path, value, low, high in zip(study.space.paths, values.values(), study.space.low,
-                                      study.space.high):
+    for path, value, low, high in zip(study.space.paths, values.values(), study.space.low, study.space.high):
         span = high - low
         if value - low <= 1e-3 * span or high - value <= 1e-3 * span:
             side = "lower" if value - low <= 1e-3 * span else "upper"

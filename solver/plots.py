@@ -16,10 +16,11 @@ import io
 import json
 import math
 import threading
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable, Iterator, Sequence
+from typing import TYPE_CHECKING
 
 import h5py
 import numpy as np
@@ -35,7 +36,7 @@ FIGSIZE = (9.0, 5.0)  # inches
 DPI = 120  # a PNG is FIGSIZE × DPI pixels
 MAX_CURVE_POINTS = 20_000  # samples read of a history; the peak force is marked from the summary
 MAX_FILL_POINTS = 2_000  # samples of the stacked energy terms: a fill is never simplified, and an
-                         # SVG of eight fills of 20 000 points each is 5 MB
+# SVG of eight fills of 20 000 points each is 5 MB
 MAX_MAP_SIDE = 1000  # times and stations read for the space–time map
 DEFAULT_TIMES = 5  # curves of stress along the tool when no times are given
 MAX_TIMES = 12  # curves of stress along the tool at the most: more is a tangle, not a plot
@@ -121,8 +122,7 @@ def open_result(path: str | Path) -> Iterator[Source]:
         raise NotAResult(f"{path} is not a percussim result: not an HDF5 file ({error})") from None
     with h5:
         if h5.attrs.get("format") != FORMAT:
-            raise NotAResult(f"{path} is not a percussim result: an HDF5 file without "
-                             f"format = {FORMAT!r}")
+            raise NotAResult(f"{path} is not a percussim result: an HDF5 file without format = {FORMAT!r}")
         yield Source(h5, json.loads(h5.attrs["case"]), json.loads(h5["summary"][()]))
 
 
@@ -144,8 +144,11 @@ def forces(case: dict) -> list[tuple[str, str, str]]:
     return shown
 
 
-_FORCE_STYLES = {"contact_force": {"color": "C0", "lw": 1.4}, "medium_force": {"color": "C1", "lw": 1.1},
-                 "external_force": {"color": "C2", "lw": 1.1, "ls": "--"}}
+_FORCE_STYLES = {
+    "contact_force": {"color": "C0", "lw": 1.4},
+    "medium_force": {"color": "C1", "lw": 1.1},
+    "external_force": {"color": "C2", "lw": 1.1, "ls": "--"},
+}
 
 
 def _force(fig: Figure, src: Source, times) -> None:
@@ -154,18 +157,24 @@ def _force(fig: Figure, src: Source, times) -> None:
     t = src.time()
     for key, path, label in forces(src.case):
         ax.plot(t, src.history(path) / 1e3, label=label, **_FORCE_STYLES[key])
-    spans = [(c["start"] * src.t_scale, ((c["end"] if c["end"] is not None else src.end) - c["start"])
-              * src.t_scale) for c in src.summary["contacts"]]
+    spans = [
+        (c["start"] * src.t_scale, ((c["end"] if c["end"] is not None else src.end) - c["start"]) * src.t_scale)
+        for c in src.summary["contacts"]
+    ]
     if spans:
         # One collection for every interval: a run may have thousands.
-        ax.broken_barh(spans, (0, 1), transform=ax.get_xaxis_transform(), color="C0", alpha=0.08,
-                       label="in contact")
+        ax.broken_barh(spans, (0, 1), transform=ax.get_xaxis_transform(), color="C0", alpha=0.08, label="in contact")
     peak = src.summary["peak_contact_force"]
     if peak["value"] > 0:
         ax.plot(peak["time"] * src.t_scale, peak["value"] / 1e3, "o", color="C0", ms=5)
-        ax.annotate(f"peak {peak['value'] / 1e3:.4g} kN at {src.in_unit(peak['time'])}",
-                    (peak["time"] * src.t_scale, peak["value"] / 1e3), xytext=(8, -4),
-                    textcoords="offset points", va="top", fontsize=9)
+        ax.annotate(
+            f"peak {peak['value'] / 1e3:.4g} kN at {src.in_unit(peak['time'])}",
+            (peak["time"] * src.t_scale, peak["value"] / 1e3),
+            xytext=(8, -4),
+            textcoords="offset points",
+            va="top",
+            fontsize=9,
+        )
     ax.axhline(0, color="0.5", lw=0.6)
     decorate(ax, src.t_label(), "force (kN), compression > 0")
     ax.legend(loc="upper right", fontsize=9)
@@ -176,9 +185,11 @@ def displacements(case: dict) -> list[tuple[str, str, str]]:
     the working end's u_N(t)."""
     # an elastic striker's recorded displacement is its impact face's
     striker = "striker's impact face" if case["striker"].get("length") else "striker"
-    return [("striker", "striker/displacement", striker),
-            ("struck_end", "tool/struck_end_displacement", "struck end of the tool"),
-            ("working_end", "tool/working_end_displacement", "working end of the tool")]
+    return [
+        ("striker", "striker/displacement", striker),
+        ("struck_end", "tool/struck_end_displacement", "struck end of the tool"),
+        ("working_end", "tool/working_end_displacement", "working end of the tool"),
+    ]
 
 
 def _displacements(fig: Figure, src: Source, times) -> None:
@@ -228,8 +239,7 @@ def _default_frames(src: Source, frame_times: np.ndarray) -> list[int]:
     after = np.flatnonzero(frame_times > start)
     if len(after) == 0:
         return [len(frame_times) - 1]
-    frames = _nearest(frame_times[after], [start + span * k / DEFAULT_TIMES
-                                           for k in range(1, DEFAULT_TIMES + 1)])
+    frames = _nearest(frame_times[after], [start + span * k / DEFAULT_TIMES for k in range(1, DEFAULT_TIMES + 1)])
     if len(frames) < min(DEFAULT_TIMES, len(after)):
         frames = range(min(DEFAULT_TIMES, len(after)))
     return [int(after[k]) for k in frames]
@@ -255,8 +265,7 @@ def _frames(src: Source, times: Sequence[float] | None) -> list[int]:
         return _default_frames(src, frame_times)
     for t in times:
         if not frame_times[0] <= t <= frame_times[-1]:
-            raise ValueError(f"time {t:g} s is outside the run's fields "
-                             f"({frame_times[0]:g} … {frame_times[-1]:g} s)")
+            raise ValueError(f"time {t:g} s is outside the run's fields ({frame_times[0]:g} … {frame_times[-1]:g} s)")
     return _nearest(frame_times, times)
 
 
@@ -286,8 +295,16 @@ def _spacetime(fig: Figure, src: Source, times) -> None:
     x = src.h5["fields/x"][::cols]
     t = src.h5["fields/time"][::rows] * src.t_scale
     bound = float(np.abs(values).max()) or 1.0
-    image = ax.imshow(values, origin="lower", aspect="auto", cmap="RdBu_r", vmin=-bound,
-                      vmax=bound, extent=(t[0], t[-1], x[0], x[-1]), interpolation="nearest")
+    image = ax.imshow(
+        values,
+        origin="lower",
+        aspect="auto",
+        cmap="RdBu_r",
+        vmin=-bound,
+        vmax=bound,
+        extent=(t[0], t[-1], x[0], x[-1]),
+        interpolation="nearest",
+    )
     fig.colorbar(image, ax=ax, label="stress σ (MPa), compression < 0")
     ax.set_xlabel(src.t_label())
     ax.set_ylabel(ALONG_THE_TOOL)
@@ -346,16 +363,28 @@ def _energy(fig: Figure, src: Source, times) -> None:
     budget = energy_budget(src, lambda path: src.history(path, MAX_FILL_POINTS))
     terms, supplied, numerical = budget.terms, budget.supplied, budget.numerical
     lost = numerical[-1] / supplied[-1] if supplied[-1] > 0 else 0.0
-    bands = ax.stackplot(t, *terms, numerical,
-                         labels=[*energy_terms(src.h5).values(), NUMERICAL],
-                         colors=[f"C{k}" for k in range(len(terms))] + ["0.75"], alpha=0.85, lw=0)
+    bands = ax.stackplot(
+        t,
+        *terms,
+        numerical,
+        labels=[*energy_terms(src.h5).values(), NUMERICAL],
+        colors=[f"C{k}" for k in range(len(terms))] + ["0.75"],
+        alpha=0.85,
+        lw=0,
+    )
     bands[-1].set_hatch("////")  # what the scheme lost stands apart from the physics
     bands[-1].set_edgecolor("firebrick")
     ax.plot(t, supplied, color="black", lw=1.4, ls="--", label=INPUT)
-    ax.annotate(f"the scheme {'lost' if lost >= 0 else 'created'} {abs(100 * lost):.2g}% of the input",
-                xy=(t[-1], supplied[-1] - 0.5 * numerical[-1]), xytext=(-8, 0),
-                textcoords="offset points", ha="right", va="center", fontsize=9,
-                color="firebrick" if abs(lost) > 0.01 else "0.3")
+    ax.annotate(
+        f"the scheme {'lost' if lost >= 0 else 'created'} {abs(100 * lost):.2g}% of the input",
+        xy=(t[-1], supplied[-1] - 0.5 * numerical[-1]),
+        xytext=(-8, 0),
+        textcoords="offset points",
+        ha="right",
+        va="center",
+        fontsize=9,
+        color="firebrick" if abs(lost) > 0.01 else "0.3",
+    )
     decorate(ax, src.t_label(), "energy (J)")
     ax.set_ylim(0, 1.06 * max(supplied.max(), np.sum(terms, axis=0).max()))
     fig.legend(loc="outside right upper", fontsize=9, frameon=False)
@@ -371,19 +400,28 @@ def _force_penetration(fig: Figure, src: Source, times) -> None:
     """The medium's force against the working end's penetration u_N: a loop whose area, once the
     medium is unloaded, is the net work on it; the permanent penetration marked."""
     ax = fig.subplots()
-    ax.plot(src.history(penetration_path(src.h5)) * 1e3, src.history("medium/force") / 1e3, color="C1",
-            lw=1.3, label="medium force")
+    ax.plot(
+        src.history(penetration_path(src.h5)) * 1e3,
+        src.history("medium/force") / 1e3,
+        color="C1",
+        lw=1.3,
+        label="medium force",
+    )
     penetration = src.summary["medium_penetration"]
     permanent = penetration["permanent"] * 1e3
     ax.axvline(permanent, color="C3", lw=0.9, ls="--")
-    ax.plot(permanent, 0.0, "v", color="C3", ms=8, clip_on=False,
-            label=f"permanent penetration {permanent:.4g} mm")
+    ax.plot(permanent, 0.0, "v", color="C3", ms=8, clip_on=False, label=f"permanent penetration {permanent:.4g} mm")
     ax.axhline(0, color="0.5", lw=0.6)
     # kN·mm = J: the loop's area reads in joules on these axes.
-    ax.annotate(f"net work on the medium {src.summary['energy']['to_medium']:.4g} J\n"
-                f"(the loop's area once the medium is unloaded)\n"
-                f"deepest penetration {penetration['max'] * 1e3:.4g} mm",
-                xy=(0.02, 0.97), xycoords="axes fraction", va="top", fontsize=9)
+    ax.annotate(
+        f"net work on the medium {src.summary['energy']['to_medium']:.4g} J\n"
+        f"(the loop's area once the medium is unloaded)\n"
+        f"deepest penetration {penetration['max'] * 1e3:.4g} mm",
+        xy=(0.02, 0.97),
+        xycoords="axes fraction",
+        va="top",
+        fontsize=9,
+    )
     decorate(ax, "penetration of the working end u_N (mm)", "medium force (kN), compression > 0")
     ax.margins(x=0.02)
     ax.legend(loc="best", fontsize=9)
@@ -405,10 +443,8 @@ def _blows(fig: Figure, src: Source, times) -> None:
 
     table = src.summary["blows"]
     number = np.arange(1, len(table) + 1)
-    for ax, (column, (title, unit, scale)) in zip(fig.subplots(2, 3, sharex=True).flat,
-                                                  BLOW_COLUMNS.items()):
-        ax.plot(number, [row[column] * scale for row in table], "o-", color="C0", lw=1.2, ms=4,
-                label=title)
+    for ax, (column, (title, unit, scale)) in zip(fig.subplots(2, 3, sharex=True).flat, BLOW_COLUMNS.items()):
+        ax.plot(number, [row[column] * scale for row in table], "o-", color="C0", lw=1.2, ms=4, label=title)
         ax.set_title(title, fontsize=10)
         decorate(ax, "blow", unit)
         ax.margins(x=0.05)
@@ -445,35 +481,43 @@ def _no_fields(h5: h5py.File, case: dict) -> str | None:
     if "fields/stress" in h5:
         return None
     if h5.attrs.get("numerics.model") == "lumped":
-        return ("this result is of the lumped model, which has no stress wave in the tool: "
-                "run the case with numerics.model = \"rod\" and outputs.fields = true")
+        return (
+            "this result is of the lumped model, which has no stress wave in the tool: "
+            'run the case with numerics.model = "rod" and outputs.fields = true'
+        )
     return "this result has no stress fields: run the case with outputs.fields = true"
 
 
 def _no_probes(h5: h5py.File, case: dict) -> str | None:
     if len(h5["probes/x"]):
         return None
-    return ("this result has no probes: run the case with outputs.probes, the stations x (m) "
-            "along the tool, e.g. [0.0, 0.25]")
+    return (
+        "this result has no probes: run the case with outputs.probes, the stations x (m) "
+        "along the tool, e.g. [0.0, 0.25]"
+    )
 
 
 def _no_medium(h5: h5py.File, case: dict) -> str | None:
     if case.get("medium"):
         return None
-    return ("this case has no medium at the working end: give it a medium (medium.stiffness, or "
-            "medium.kind \"bilinear\" or \"smith\" with its fields)")
+    return (
+        "this case has no medium at the working end: give it a medium (medium.stiffness, or "
+        'medium.kind "bilinear" or "smith" with its fields)'
+    )
 
 
 def _no_blows(h5: h5py.File, case: dict) -> str | None:
     if case.get("blows"):
         return None
-    return ("this case has no blows table: run it blow after blow with blows.count, "
-            "e.g. \"blows\": {\"count\": 5}")
+    return 'this case has no blows table: run it blow after blow with blows.count, e.g. "blows": {"count": 5}'
 
 
 # What a plot may need beyond the histories: each check says why a result lacks it, or None.
 _NEEDS: dict[str, Callable[[h5py.File, dict], str | None]] = {
-    "fields": _no_fields, "probes": _no_probes, "medium": _no_medium, "blows": _no_blows,
+    "fields": _no_fields,
+    "probes": _no_probes,
+    "medium": _no_medium,
+    "blows": _no_blows,
 }
 
 
@@ -532,9 +576,13 @@ def render(path: str | Path, name: str, fmt: str, times: Sequence[float] | None 
     return buffer.getvalue()
 
 
-def write_plots(path: str | Path, out_dir: str | Path, formats: Sequence[str] = ("png", "svg"),
-                names: Sequence[str] | None = None,
-                times: Sequence[float] | None = None) -> tuple[list[Path], dict[str, str]]:
+def write_plots(
+    path: str | Path,
+    out_dir: str | Path,
+    formats: Sequence[str] = ("png", "svg"),
+    names: Sequence[str] | None = None,
+    times: Sequence[float] | None = None,
+) -> tuple[list[Path], dict[str, str]]:
     """Write the plots of the result at `path` as `<out_dir>/<name>.<format>`.
 
     Returns the files written and, for each plot this result cannot make, the reason.

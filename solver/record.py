@@ -92,55 +92,84 @@ class Record(BaseModel):
 
     model_config = INPUT
 
-    quantity: Literal["contact_force", "medium_force", "stress", "struck_end_velocity",
-                      "working_end_velocity"]
+    quantity: Literal["contact_force", "medium_force", "stress", "struck_end_velocity", "working_end_velocity"]
     x: float | None = Field(default=None, description="the gauge's station for a stress, m")
-    time: list[float] | None = Field(default=None, min_length=MIN_SAMPLES, max_length=MAX_SAMPLES,
-                                     description="s, the record's clock")
-    time_start: float | None = Field(default=None, description="s: the first sample's time, with sample_rate "
-                                                               "instead of time (default 0)")
-    sample_rate: float | None = Field(default=None, gt=0.0, le=1e12,
-                                      description="Hz: samples a second of an evenly sampled record, "
-                                                  "instead of time")
-    time_offset: float | None = Field(default=None, ge=-1e4, le=1e4, description=(
-        "s: the model's time at the record's time 0 (a record triggered where the pulse reaches "
-        "its gauge: about x/c); left out, 0 for a record that starts at rest, else fitted"))
-    values: list[float] = Field(min_length=MIN_SAMPLES, max_length=MAX_SAMPLES,
-                                description="SI: N, Pa (tension positive) or m/s")
+    time: list[float] | None = Field(
+        default=None, min_length=MIN_SAMPLES, max_length=MAX_SAMPLES, description="s, the record's clock"
+    )
+    time_start: float | None = Field(
+        default=None, description="s: the first sample's time, with sample_rate instead of time (default 0)"
+    )
+    sample_rate: float | None = Field(
+        default=None, gt=0.0, le=1e12, description="Hz: samples a second of an evenly sampled record, instead of time"
+    )
+    time_offset: float | None = Field(
+        default=None,
+        ge=-1e4,
+        le=1e4,
+        description=(
+            "s: the model's time at the record's time 0 (a record triggered where the pulse reaches "
+            "its gauge: about x/c); left out, 0 for a record that starts at rest, else fitted"
+        ),
+    )
+    values: list[float] = Field(
+        min_length=MIN_SAMPLES, max_length=MAX_SAMPLES, description="SI: N, Pa (tension positive) or m/s"
+    )
 
     @model_validator(mode="after")
-    def _consistent(self) -> "Record":
+    def _consistent(self) -> Record:
         if self.time is None and self.sample_rate is None:
             if self.time_start is not None:
                 raise field_error("Record", ("sample_rate",), "is required with time_start", None)
-            raise field_error("Record", ("time",), "is required: give the samples' times, or "
-                              "time_start and sample_rate for an evenly sampled record", None)
+            raise field_error(
+                "Record",
+                ("time",),
+                "is required: give the samples' times, or time_start and sample_rate for an evenly sampled record",
+                None,
+            )
         if self.time is not None and (self.sample_rate is not None or self.time_start is not None):
             name = "sample_rate" if self.sample_rate is not None else "time_start"
-            raise field_error("Record", (name,), "cannot be given with time: give the times, or "
-                              "time_start and sample_rate, not both", getattr(self, name))
+            raise field_error(
+                "Record",
+                (name,),
+                "cannot be given with time: give the times, or time_start and sample_rate, not both",
+                getattr(self, name),
+            )
         if self.time is not None:
             if len(self.values) != len(self.time):
-                raise field_error("Record", ("values",), f"must have one value per time: "
-                                  f"{len(self.values)} values for {len(self.time)} times", None)
+                raise field_error(
+                    "Record",
+                    ("values",),
+                    f"must have one value per time: {len(self.values)} values for {len(self.time)} times",
+                    None,
+                )
             steps = np.diff(self.time)
             if (steps <= 0.0).any() and ((steps < 0.0).any() or even_sampling(self.time) is None):
                 i = int(np.argmax(steps <= 0.0)) + 1
-                raise field_error("Record", ("time", i), f"must increase: time[{i}] = {self.time[i]:.9g} s "
-                                  f"is not after time[{i - 1}] = {self.time[i - 1]:.9g} s", None)
+                raise field_error(
+                    "Record",
+                    ("time", i),
+                    f"must increase: time[{i}] = {self.time[i]:.9g} s "
+                    f"is not after time[{i - 1}] = {self.time[i - 1]:.9g} s",
+                    None,
+                )
         if self.instants[-1] + (self.time_offset or 0.0) <= 0.0:
-            raise field_error("Record", ("time",), "must reach past the impact: the last sample is at "
-                              f"{self.instants[-1] + (self.time_offset or 0.0):.6g} s of the model's time "
-                              "(the record's time + time_offset)", None)
+            raise field_error(
+                "Record",
+                ("time",),
+                "must reach past the impact: the last sample is at "
+                f"{self.instants[-1] + (self.time_offset or 0.0):.6g} s of the model's time "
+                "(the record's time + time_offset)",
+                None,
+            )
         if self.quantity == "stress" and self.x is None:
-            raise field_error("Record", ("x",), "is required for a stress record: the gauge's "
-                              "station, m from the struck end", None)
+            raise field_error(
+                "Record", ("x",), "is required for a stress record: the gauge's station, m from the struck end", None
+            )
         if self.quantity != "stress" and self.x is not None:
-            raise field_error("Record", ("x",), "belongs to a stress record only (quantity 'stress')",
-                              self.x)
+            raise field_error("Record", ("x",), "belongs to a stress record only (quantity 'stress')", self.x)
         if np.ptp(self.values) == 0.0:
-            raise field_error("Record", ("values",),
-                              "are all equal: a record with no pulse determines nothing", None)
+            raise field_error("Record", ("values",), "are all equal: a record with no pulse determines nothing", None)
         return self
 
     @cached_property
@@ -165,10 +194,12 @@ class Record(BaseModel):
             return []
         repeats = int(np.sum(np.diff(self.time) <= 0.0))
         t = self.instants
-        return [f"record.time repeats {repeats} of its {len(t)} instants, as rounding an even sampling "
-                f"does: read as {len(t)} samples evenly from {t[0]:.9g} to {t[-1]:.9g} s "
-                f"({(len(t) - 1) / (t[-1] - t[0]):.4g} Hz, fitted through its instants); give "
-                "time_start and sample_rate to say so"]
+        return [
+            f"record.time repeats {repeats} of its {len(t)} instants, as rounding an even sampling "
+            f"does: read as {len(t)} samples evenly from {t[0]:.9g} to {t[-1]:.9g} s "
+            f"({(len(t) - 1) / (t[-1] - t[0]):.4g} Hz, fitted through its instants); give "
+            "time_start and sample_rate to say so"
+        ]
 
     @property
     def unit(self) -> str:
@@ -209,20 +240,33 @@ class Record(BaseModel):
         largest time_offset a fit will try, when it is fitted."""
         errors = []
         if self.quantity == "stress" and not 0.0 <= self.x <= case.tool.length:
-            errors.append(FieldError(field=f"{field}.x", message=(
-                f"the gauge at x = {self.x:g} m is off the tool: it must lie within 0 ≤ x ≤ "
-                f"tool.length = {case.tool.length:g} m")))
+            errors.append(
+                FieldError(
+                    field=f"{field}.x",
+                    message=(
+                        f"the gauge at x = {self.x:g} m is off the tool: it must lie within 0 ≤ x ≤ "
+                        f"tool.length = {case.tool.length:g} m"
+                    ),
+                )
+            )
         if self.quantity == "medium_force" and case.medium is None:
-            errors.append(FieldError(field=f"{field}.quantity",
-                                     message="a medium force needs a medium: the case has none"))
+            errors.append(
+                FieldError(field=f"{field}.quantity", message="a medium force needs a medium: the case has none")
+            )
         offset = self.time_offset if self.time_offset is not None else (offset_high or 0.0)
         end = float(self.instants[-1]) + offset
         if end > case.numerics.duration:
             shifted = f" (its last sample + time_offset {offset:.6g} s)" if offset else ""
-            errors.append(FieldError(field=f"{field}.time", message=(
-                f"ends at {end:.6g} s of the model's time{shifted}, after the case's "
-                f"numerics.duration of {case.numerics.duration:.6g} s: times are in seconds (SI); "
-                "lengthen numerics.duration if the record is that long")))
+            errors.append(
+                FieldError(
+                    field=f"{field}.time",
+                    message=(
+                        f"ends at {end:.6g} s of the model's time{shifted}, after the case's "
+                        f"numerics.duration of {case.numerics.duration:.6g} s: times are in seconds (SI); "
+                        "lengthen numerics.duration if the record is that long"
+                    ),
+                )
+            )
         if errors:
             raise CaseError(errors)
 
@@ -284,8 +328,7 @@ def record_from_csv(text: str, **given: float) -> Record:
         rows.append((line, [cell.strip() for cell in row]))
     for name, value in given.items():
         if name in clock and clock[name] != value:
-            raise _csv_error(f"is {value:g}, but the file says {name} = {clock[name]:g}: give one",
-                             f"record.{name}")
+            raise _csv_error(f"is {value:g}, but the file says {name} = {clock[name]:g}: give one", f"record.{name}")
         clock[name] = value
     if not rows:
         raise _csv_error("is empty: give a header time,<quantity> and samples")
@@ -293,16 +336,19 @@ def record_from_csv(text: str, **given: float) -> Record:
     known = ", ".join(q if q != "stress" else "stress@X" for q in QUANTITIES)
     timed = len(header) == 2 and header[0] == "time"
     if not (timed or len(header) == 1 and header[0] != "time"):
-        raise _csv_error(f"line {header_line} must be the header time,<quantity> (or <quantity> alone, "
-                         f"with sample_rate given) with the quantity one of {known}; found {','.join(header)!r}")
+        raise _csv_error(
+            f"line {header_line} must be the header time,<quantity> (or <quantity> alone, "
+            f"with sample_rate given) with the quantity one of {known}; found {','.join(header)!r}"
+        )
     label = header[-1]
     quantity, x = label, None
     if quantity.startswith("stress@"):
         try:
             quantity, x = "stress", float(quantity.removeprefix("stress@"))
         except ValueError:
-            raise _csv_error(f"{label!r}: the gauge's station must be a number of metres, as in stress@0.35",
-                             "record.x") from None
+            raise _csv_error(
+                f"{label!r}: the gauge's station must be a number of metres, as in stress@0.35", "record.x"
+            ) from None
     elif quantity not in QUANTITIES or quantity == "stress":
         raise _csv_error(f"{quantity!r} is not a recorded quantity: give one of {known}", "record.quantity")
     columns = "time and " + label if timed else label
@@ -313,7 +359,9 @@ def record_from_csv(text: str, **given: float) -> Record:
         try:
             numbers.append([float(cell) for cell in row])
         except ValueError:
-            raise _csv_error(f"line {line}: {','.join(row)!r} is not {'two numbers' if timed else 'a number'}") from None
+            raise _csv_error(
+                f"line {line}: {','.join(row)!r} is not {'two numbers' if timed else 'a number'}"
+            ) from None
     data: dict = {"quantity": quantity, "values": [row[-1] for row in numbers], **clock}
     if timed:
         data["time"] = [row[0] for row in numbers]
@@ -324,8 +372,7 @@ def record_from_csv(text: str, **given: float) -> Record:
 
 def record_to_csv(record: Record) -> str:
     """The record as CSV text, as `record_from_csv` reads it."""
-    lines = [f"# {name} = {getattr(record, name)!r}" for name in CLOCK_FIELDS
-             if getattr(record, name) is not None]
+    lines = [f"# {name} = {getattr(record, name)!r}" for name in CLOCK_FIELDS if getattr(record, name) is not None]
     if record.time is None:
         lines += [record.label] + [f"{v!r}" for v in record.values]
     else:
@@ -333,8 +380,7 @@ def record_to_csv(record: Record) -> str:
     return "\n".join(lines) + "\n"
 
 
-def series(quantity: str, history: dict[str, np.ndarray], probe_stress: np.ndarray,
-           times: np.ndarray) -> np.ndarray:
+def series(quantity: str, history: dict[str, np.ndarray], probe_stress: np.ndarray, times: np.ndarray) -> np.ndarray:
     """A run's `quantity` at `times` (linear between its samples): its history, its first probe's
     stress, or an end's velocity from its displacement."""
     t = history["time"]

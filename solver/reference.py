@@ -27,8 +27,16 @@ from .grid import wave_speed
 class LinearImpact:
     """A striker `m1` at `W1` on a steel rod through a linear contact of damping ratio `ζ`."""
 
-    def __init__(self, zeta: float = 0.3, m1: float = 20.0, w1: float = 5.0, area: float = 0.01,
-                 length: float = 2.0, youngs_modulus: float = 2.1e11, density: float = 7800.0):
+    def __init__(
+        self,
+        zeta: float = 0.3,
+        m1: float = 20.0,
+        w1: float = 5.0,
+        area: float = 0.01,
+        length: float = 2.0,
+        youngs_modulus: float = 2.1e11,
+        density: float = 7800.0,
+    ):
         self.m1, self.w1, self.area, self.length = m1, w1, area, length
         self.youngs_modulus, self.density = youngs_modulus, density
         self.a = math.sqrt(youngs_modulus / density)
@@ -56,14 +64,19 @@ class LinearImpact:
 
     def truth(self) -> dict[str, float]:
         """The exact values of the headline quantities the closed form gives."""
-        return {"co_impact_time": self.contact_time, "peak_contact_force": self.peak_force,
-                "max_compressive_stress": self.peak_force / self.area,
-                "striker_rebound_velocity": self.rebound_velocity}
+        return {
+            "co_impact_time": self.contact_time,
+            "peak_contact_force": self.peak_force,
+            "max_compressive_stress": self.peak_force / self.area,
+            "striker_rebound_velocity": self.rebound_velocity,
+        }
 
     def errors(self, summary: dict) -> tuple[float, float]:
         """Relative errors of a run's co-impact time and peak contact force."""
-        return (summary["co_impact_time"] / self.contact_time - 1,
-                summary["peak_contact_force"]["value"] / self.peak_force - 1)
+        return (
+            summary["co_impact_time"] / self.contact_time - 1,
+            summary["peak_contact_force"]["value"] / self.peak_force - 1,
+        )
 
     def case(self, cells: int, courant: float = 0.5, **outputs) -> dict:
         """The case as JSON-ready dict, on `cells` cells at Courant number `aτ/h`."""
@@ -71,11 +84,14 @@ class LinearImpact:
         return {
             "name": "linear-impact-reference",
             "striker": {"mass": self.m1, "velocity": self.w1},
-            "tool": {"length": self.length, "area": self.area,
-                     "youngs_modulus": self.youngs_modulus, "density": self.density},
+            "tool": {
+                "length": self.length,
+                "area": self.area,
+                "youngs_modulus": self.youngs_modulus,
+                "density": self.density,
+            },
             "contact": {"stiffness": self.k, "exponent": 0.0},
-            "numerics": {"duration": 1.2 * self.contact_time, "cells": cells,
-                         "time_step": courant * h / self.a},
+            "numerics": {"duration": 1.2 * self.contact_time, "cells": cells, "time_step": courant * h / self.a},
             "outputs": outputs,
         }
 
@@ -96,8 +112,15 @@ class RigidImpact:
     end by about 2ΔF/c2, which must stay below the contact's overlap F/k (`case`: c2 = 100·k).
     """
 
-    def __init__(self, m1: float = 80.0, w1: float = 5.0, area: float = 0.01, length: float = 1.0,
-                 youngs_modulus: float = 2.1e11, density: float = 7800.0):
+    def __init__(
+        self,
+        m1: float = 80.0,
+        w1: float = 5.0,
+        area: float = 0.01,
+        length: float = 1.0,
+        youngs_modulus: float = 2.1e11,
+        density: float = 7800.0,
+    ):
         self.m1, self.w1, self.area, self.length = m1, w1, area, length
         self.youngs_modulus, self.density = youngs_modulus, density
         self.a = math.sqrt(youngs_modulus / density)
@@ -115,17 +138,20 @@ class RigidImpact:
         t = np.asarray(t, dtype=float)
         s = t - self.return_time
         first = self.sigma0 * np.exp(-self.beta * t)
-        second = self.sigma0 * np.exp(-self.beta * s) * (math.exp(-self.beta * self.return_time)
-                                                         + 2.0 - 2.0 * self.beta * s)
+        second = (
+            self.sigma0 * np.exp(-self.beta * s) * (math.exp(-self.beta * self.return_time) + 2.0 - 2.0 * self.beta * s)
+        )
         return np.where(t < self.return_time, first, second)
 
     def truth(self) -> dict[str, float]:
         """The exact co-impact time, peak contact force (at t = 2L/a) and largest compression (at
         the fixed end at t = 3L/a)."""
         echo = math.exp(-self.mu)
-        return {"co_impact_time": self.contact_time,
-                "peak_contact_force": self.sigma0 * self.area * (2.0 + echo),
-                "max_compressive_stress": 2.0 * self.sigma0 * (1.0 + echo)}
+        return {
+            "co_impact_time": self.contact_time,
+            "peak_contact_force": self.sigma0 * self.area * (2.0 + echo),
+            "max_compressive_stress": 2.0 * self.sigma0 * (1.0 + echo),
+        }
 
     def case(self, contact_zeta: float = 100.0) -> dict:
         """The case, its numerics left to the solver: a linear contact of damping ratio
@@ -135,8 +161,12 @@ class RigidImpact:
         return {
             "name": "saint-venant",
             "striker": {"mass": self.m1, "velocity": self.w1},
-            "tool": {"length": self.length, "area": self.area,
-                     "youngs_modulus": self.youngs_modulus, "density": self.density},
+            "tool": {
+                "length": self.length,
+                "area": self.area,
+                "youngs_modulus": self.youngs_modulus,
+                "density": self.density,
+            },
             "contact": {"stiffness": k, "exponent": 0.0},
             "medium": {"stiffness": 100.0 * k},
             "numerics": {"duration": 1.1 * self.contact_time},
@@ -174,7 +204,7 @@ class CushionedImpact:
         self.peak_force = stiffness * overlap
 
     @classmethod
-    def of_case(cls, case) -> "CushionedImpact":
+    def of_case(cls, case) -> CushionedImpact:
         """A case's lumped striker on its uniform tool through its linear contact (exponent 0,
         no damper: what the closed form assumes, the caller checks)."""
         return cls(case.striker.mass, case.striker.velocity, case.contact.stiffness, impedance(case.tool))
@@ -189,8 +219,9 @@ class LundbergRock:
     and the rock keeps `2(1 − e^(−x))²/x·(1 − k/k_u)` of the wave's energy F_i²·T/Z (the piston's
     own when its impedance is the rod's), largest (0.8145 for k_u → ∞) at x = 1.2564."""
 
-    def __init__(self, incident: float, duration: float, impedance: float, stiffness: float,
-                 unloading_stiffness: float):
+    def __init__(
+        self, incident: float, duration: float, impedance: float, stiffness: float, unloading_stiffness: float
+    ):
         self.incident = incident
         self.x = stiffness * duration / impedance
         kept = 1.0 - stiffness / unloading_stiffness
@@ -200,15 +231,14 @@ class LundbergRock:
         self.efficiency = 2.0 * (1.0 - math.exp(-self.x)) ** 2 / self.x * kept
 
     @classmethod
-    def of_case(cls, case) -> "LundbergRock":
+    def of_case(cls, case) -> LundbergRock:
         """A case's uniform elastic piston on its uniform tool on bilinear rock: the wave of
         `Z_p·Z·v/(Z_p + Z)` lasting 2L_p/a_p its impact sends (through a contact too stiff to
         shape it). The efficiency is of the piston's energy only when Z_p = Z."""
         piston, tool, rock = case.striker.rod(), case.tool, case.medium
         z_piston, z_tool = impedance(piston), impedance(tool)
         incident = z_piston * z_tool * case.striker.velocity / (z_piston + z_tool)
-        return cls(incident, 2.0 * piston.length / wave_speed(piston), z_tool, rock.stiffness,
-                   rock.unloading_stiffness)
+        return cls(incident, 2.0 * piston.length / wave_speed(piston), z_tool, rock.stiffness, rock.unloading_stiffness)
 
 
 def observed_order(cells, errors) -> float:
@@ -231,8 +261,7 @@ class RecordedForce(NamedTuple):
     alternating: float  # the share of second differences that alternate: a period-2τ ripple
 
 
-def recorded_force(history: dict[str, np.ndarray], peak: float,
-                   reference: dict[str, np.ndarray]) -> RecordedForce:
+def recorded_force(history: dict[str, np.ndarray], peak: float, reference: dict[str, np.ndarray]) -> RecordedForce:
     """Compare `history['contact/force']` (at `history['time']`) with the reference's `contact`
     force (at its `time`), interpolated onto the run's instants; `peak` scales each figure."""
     t, force = history["time"], history["contact/force"]
@@ -240,5 +269,8 @@ def recorded_force(history: dict[str, np.ndarray], peak: float,
     late = t > 2 * reference["time"][0]
     second = force[2:] - 2.0 * force[1:-1] + force[:-2]
     alternating = np.abs(second[1:] + second[:-1]) < 0.5 * np.abs(second[1:] - second[:-1])
-    return RecordedForce(float(np.abs(force - expected)[late].max() / peak),
-                         float(np.abs(second).max() / peak), float(alternating.mean()))
+    return RecordedForce(
+        float(np.abs(force - expected)[late].max() / peak),
+        float(np.abs(second).max() / peak),
+        float(alternating.mean()),
+    )

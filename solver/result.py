@@ -4,8 +4,9 @@ runs (a `Recorder`: held in memory by `MemoryRecorder`, or streamed to HDF5 by
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import Callable, Protocol
+from typing import Protocol
 
 import numpy as np
 
@@ -52,24 +53,41 @@ class Result:
     summary_json: str | None = field(default=None, repr=False)  # as written to a result file
 
     @classmethod
-    def from_arrays(cls, case: Case, numerics: ResolvedNumerics, arrays: dict[str, np.ndarray],
-                    summary: dict) -> Result:
+    def from_arrays(
+        cls, case: Case, numerics: ResolvedNumerics, arrays: dict[str, np.ndarray], summary: dict
+    ) -> Result:
         """The result from its arrays under their HDF5 names; all but probes and fields are history."""
         history = dict(arrays)
-        fields = (Fields(*(history.pop(f"fields/{k}") for k in FIELD_NAMES),
-                         *(history.pop(f"fields/{k}", None) for k in STRIKER_FIELD_NAMES))
-                  if "fields/x" in history else None)
+        fields = (
+            Fields(
+                *(history.pop(f"fields/{k}") for k in FIELD_NAMES),
+                *(history.pop(f"fields/{k}", None) for k in STRIKER_FIELD_NAMES),
+            )
+            if "fields/x" in history
+            else None
+        )
         probe_x, probe_stress = history.pop("probes/x"), history.pop("probes/stress")
-        return cls(case=case, numerics=numerics, history=history, probe_x=probe_x,
-                   probe_stress=probe_stress, fields=fields, summary=summary)
+        return cls(
+            case=case,
+            numerics=numerics,
+            history=history,
+            probe_x=probe_x,
+            probe_stress=probe_stress,
+            fields=fields,
+            summary=summary,
+        )
 
     def arrays(self) -> dict[str, np.ndarray]:
         """The arrays under their HDF5 names (the inverse of `from_arrays`)."""
         arrays = {**self.history, "probes/x": self.probe_x, "probes/stress": self.probe_stress}
         if self.fields is not None:
-            arrays.update({f"fields/{k}": getattr(self.fields, k)
-                           for k in FIELD_NAMES + STRIKER_FIELD_NAMES
-                           if getattr(self.fields, k) is not None})
+            arrays.update(
+                {
+                    f"fields/{k}": getattr(self.fields, k)
+                    for k in FIELD_NAMES + STRIKER_FIELD_NAMES
+                    if getattr(self.fields, k) is not None
+                }
+            )
         return arrays
 
 
@@ -106,7 +124,7 @@ class MemoryRecorder:
 
     def append(self, name: str, rows: np.ndarray) -> None:
         first = self.filled[name]
-        self.arrays[name][first:first + len(rows)] = rows
+        self.arrays[name][first : first + len(rows)] = rows
         self.filled[name] = first + len(rows)
 
     def held(self) -> dict[str, np.ndarray]:

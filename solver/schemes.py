@@ -49,8 +49,7 @@ class Scheme:
         return 1.0 if self.name == "explicit" else float("inf")
 
 
-def make_scheme(name: str, gamma: float = 0.5, sigma: float = 0.25,
-                end_masses: bool | None = None) -> Scheme:
+def make_scheme(name: str, gamma: float = 0.5, sigma: float = 0.25, end_masses: bool | None = None) -> Scheme:
     """The scheme `name` with its weight (γ for 'paper', σ for 'sigma') and end option
     (default: half-cell end masses for the second-order schemes)."""
     if end_masses is None:
@@ -65,5 +64,4 @@ def make_scheme(name: str, gamma: float = 0.5, sigma: float = 0.25,
 
 def scheme_of(numerics: Numerics, name: str | None = None) -> Scheme:
     """The case's scheme (or `name`), default 'paper', with its γ, σ and end option."""
-    return make_scheme(name or numerics.scheme or "paper", numerics.gamma, numerics.sigma,
-                       numerics.end_masses)
+    return make_scheme(name or numerics.scheme or "paper", numerics.gamma, numerics.sigma, numerics.end_masses)

@@ -22,15 +22,29 @@ import itertools
 import json
 import math
 import re
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable, Iterator
 
 import numpy as np
 
-from .plots import (INPUT, NUMERICAL, PLOTS, NotAvailable, Source, displacements, energy_budget,
-                    energy_terms, forces, open_result, penetration_path, probe_label, problem,
-                    strides, take)
+from .plots import (
+    INPUT,
+    NUMERICAL,
+    PLOTS,
+    NotAvailable,
+    Source,
+    displacements,
+    energy_budget,
+    energy_terms,
+    forces,
+    open_result,
+    penetration_path,
+    probe_label,
+    problem,
+    strides,
+    take,
+)
 
 DEFAULT_POINTS = 2000  # samples a curve, about: a screen's width, twice over
 MAX_POINTS = 2_000_000  # samples a curve at the most, every sample (`points=0`) included
@@ -83,8 +97,9 @@ def _datasets(src: Source, columns: list[tuple[Column, str, int | None]], x: int
 
 def _histories(src: Source, shown: list[tuple[str, str, str]], unit: str) -> _Table:
     """Time, then the histories `shown` as (key, dataset, label), all in `unit`."""
-    return _datasets(src, [(TIME, "time", None)] + [(Column(key, label, unit), path, None)
-                                                     for key, path, label in shown])
+    return _datasets(
+        src, [(TIME, "time", None)] + [(Column(key, label, unit), path, None) for key, path, label in shown]
+    )
 
 
 def _force(src: Source) -> _Table:
@@ -96,21 +111,35 @@ def _displacements(src: Source) -> _Table:
 
 
 def _probes(src: Source) -> _Table:
-    return _datasets(src, [(TIME, "time", None)] + [
-        (Column(f"probe_{k}", probe_label(x), "Pa"), "probes/stress", k)
-        for k, x in enumerate(src.h5["probes/x"][()])])
+    return _datasets(
+        src,
+        [(TIME, "time", None)]
+        + [
+            (Column(f"probe_{k}", probe_label(x), "Pa"), "probes/stress", k)
+            for k, x in enumerate(src.h5["probes/x"][()])
+        ],
+    )
 
 
 def _force_penetration(src: Source) -> _Table:
-    return _datasets(src, [(TIME, "time", None),
-                           (Column("penetration", "penetration of the working end u_N", "m"),
-                            penetration_path(src.h5), None),
-                           (Column("medium_force", "medium force", "N"), "medium/force", None)], x=1)
+    return _datasets(
+        src,
+        [
+            (TIME, "time", None),
+            (Column("penetration", "penetration of the working end u_N", "m"), penetration_path(src.h5), None),
+            (Column("medium_force", "medium force", "N"), "medium/force", None),
+        ],
+        x=1,
+    )
 
 
 def _energy(src: Source) -> _Table:
-    columns = [TIME, *(Column(name, label, "J") for name, label in energy_terms(src.h5).items()),
-               Column("input", INPUT, "J"), Column("numerical", NUMERICAL, "J")]
+    columns = [
+        TIME,
+        *(Column(name, label, "J") for name, label in energy_terms(src.h5).items()),
+        Column("input", INPUT, "J"),
+        Column("numerical", NUMERICAL, "J"),
+    ]
 
     def read(rows: slice) -> list[np.ndarray]:
         budget = energy_budget(src, lambda path: src.h5[path][rows])
@@ -196,8 +225,11 @@ def _min_max(table: _Table, rows: int, most: int) -> dict[int, tuple[np.ndarray,
             kept = slice(None)
             if decimate:
                 ends = np.array([0] * (start == 0) + [length - 1] * (start + length == rows), int)
-                kept = np.unique(np.concatenate([_extremes(values[k], size), ends] + (
-                    [_extremes(values[table.x], size)] if table.x else [])))
+                kept = np.unique(
+                    np.concatenate(
+                        [_extremes(values[k], size), ends] + ([_extremes(values[table.x], size)] if table.x else [])
+                    )
+                )
             parts[k].append((values[table.x][kept], values[k][kept]))
     return {k: tuple(np.concatenate(axis) for axis in zip(*curve)) for k, curve in parts.items()}
 
@@ -218,10 +250,16 @@ def _curves(src: Source, name: str, points: int) -> dict:
     most = _at_most(points, MAX_POINTS)
     curves = (_strided if chart.stacked else _min_max)(table, src.rows, most)
     label, unit = chart.y
-    return {"x": _axis(table.columns[table.x]), "y": {"label": label, "unit": unit},
-            "samples": src.rows, "decimated": any(len(y) < src.rows for _, y in curves.values()),
-            "series": [{"key": table.columns[k].key, "label": table.columns[k].label, "x": x, "y": y}
-                       for k, (x, y) in curves.items()]}
+    return {
+        "x": _axis(table.columns[table.x]),
+        "y": {"label": label, "unit": unit},
+        "samples": src.rows,
+        "decimated": any(len(y) < src.rows for _, y in curves.values()),
+        "series": [
+            {"key": table.columns[k].key, "label": table.columns[k].label, "x": x, "y": y}
+            for k, (x, y) in curves.items()
+        ],
+    }
 
 
 def _fields(src: Source, times: int, stations: int) -> dict:
@@ -229,15 +267,25 @@ def _fields(src: Source, times: int, stations: int) -> dict:
     frames = _spread(stress.shape[0], _at_most(times, MAX_FIELD_SIDE))
     nodes = _spread(stress.shape[1], _at_most(stations, MAX_FIELD_SIDE))
     shown = np.block([[stress[rows, columns] for columns in nodes] for rows in frames])
-    return {"x": {"label": "x along the tool", "unit": "m"}, "time": {"unit": "s"},
-            "stress_unit": "Pa", "stations": take(src.h5["fields/x"], nodes),
-            "times": take(src.h5["fields/time"], frames), "stress": shown,
-            "samples": {"times": stress.shape[0], "stations": stress.shape[1]},
-            "decimated": shown.shape != stress.shape}
+    return {
+        "x": {"label": "x along the tool", "unit": "m"},
+        "time": {"unit": "s"},
+        "stress_unit": "Pa",
+        "stations": take(src.h5["fields/x"], nodes),
+        "times": take(src.h5["fields/time"], frames),
+        "stress": shown,
+        "samples": {"times": stress.shape[0], "stations": stress.shape[1]},
+        "decimated": shown.shape != stress.shape,
+    }
 
 
-def series(path: str | Path, name: str, points: int = DEFAULT_POINTS, times: int = DEFAULT_TIMES,
-           stations: int = DEFAULT_STATIONS) -> dict:
+def series(
+    path: str | Path,
+    name: str,
+    points: int = DEFAULT_POINTS,
+    times: int = DEFAULT_TIMES,
+    stations: int = DEFAULT_STATIONS,
+) -> dict:
     """Series `name` of the result at `path`, its values as NumPy arrays (`dumps` writes it).
 
     A curve has about `points` samples (0: every one; MAX_POINTS at the most); the stress field
@@ -288,15 +336,21 @@ def _field_rows(src: Source) -> tuple[list[str], int, Callable[[slice], np.ndarr
     """The stress field's header, frames, and its rows read: a frame's time, then its stations'."""
     stress, frame_times = src.h5["fields/stress"], src.h5["fields/time"]
     stations = [f"x={x!r} m" for x in src.h5["fields/x"][()].tolist()]
-    return ([f"{TIME.label} ({TIME.unit})", *stations], stress.shape[0],
-            lambda rows: np.column_stack([frame_times[rows], stress[rows]]))
+    return (
+        [f"{TIME.label} ({TIME.unit})", *stations],
+        stress.shape[0],
+        lambda rows: np.column_stack([frame_times[rows], stress[rows]]),
+    )
 
 
 def _curve_rows(src: Source, name: str) -> tuple[list[str], int, Callable[[slice], np.ndarray]]:
     """A chart's header, samples, and its rows read: time, then each column."""
     table = _CHARTS[name].table(src)
-    return ([f"{column.label} ({column.unit})" for column in table.columns], src.rows,
-            lambda rows: np.column_stack(table.read(rows)))
+    return (
+        [f"{column.label} ({column.unit})" for column in table.columns],
+        src.rows,
+        lambda rows: np.column_stack(table.read(rows)),
+    )
 
 
 def _csv(path: str | Path, name: str) -> Iterator[str]:

@@ -7,8 +7,9 @@ import contextlib
 import functools
 import math
 import os
+from collections.abc import Callable
 from concurrent.futures import ProcessPoolExecutor
-from typing import Any, Callable
+from typing import Any
 
 from pydantic import ValidationError
 
@@ -26,9 +27,14 @@ from .sweep import TABLE_OUTPUTS, Sweep, table_row, variants
 FIXED_SHARE = 0.75  # of a fixed grid's progress: the run asked for; its companions the rest
 
 
-def simulate(case: Case | dict | str | os.PathLike, model: str | None = None,
-             progress: ProgressCallback | None = None, cancelled: CancelCheck | None = None,
-             limits: Limits = Limits(), result_path: str | os.PathLike | None = None) -> Result:
+def simulate(
+    case: Case | dict | str | os.PathLike,
+    model: str | None = None,
+    progress: ProgressCallback | None = None,
+    cancelled: CancelCheck | None = None,
+    limits: Limits = Limits(),
+    result_path: str | os.PathLike | None = None,
+) -> Result:
     """Solve `case` (a `Case`, case JSON as a dict, or a case file's path; `CaseError` names each
     bad field) with `model` ('rod' or 'lumped'; default `case.numerics.model`) to the accuracy
     it asks: `numerics.tolerance`; the default accuracy (a tolerance of 0.01) when it gives neither
@@ -51,8 +57,13 @@ def simulate(case: Case | dict | str | os.PathLike, model: str | None = None,
     return result
 
 
-def _solve(case: Case, progress: ProgressCallback | None, cancelled: CancelCheck | None,
-           limits: Limits, recorder: Recorder | None) -> Result:
+def _solve(
+    case: Case,
+    progress: ProgressCallback | None,
+    cancelled: CancelCheck | None,
+    limits: Limits,
+    recorder: Recorder | None,
+) -> Result:
     tol = tolerance_of(case.numerics)
     if case.numerics.model == "lumped":
         numerics = resolve_numerics(case)
@@ -60,13 +71,11 @@ def _solve(case: Case, progress: ProgressCallback | None, cancelled: CancelCheck
         result = simulate_lumped(case, progress=progress, cancelled=cancelled)
         return lumped_estimate(case, result)
     if tol is not None:
-        return solve_to_tolerance(case, tol, progress=progress, cancelled=cancelled, limits=limits,
-                                  recorder=recorder)
+        return solve_to_tolerance(case, tol, progress=progress, cancelled=cancelled, limits=limits, recorder=recorder)
     numerics = resolve_numerics(case)
     check_limits(case, numerics, limits)
     share = None if progress is None else (lambda fraction: progress(FIXED_SHARE * fraction))
-    result = simulate_rod(case, numerics=numerics, progress=share, cancelled=cancelled,
-                          recorder=recorder)
+    result = simulate_rod(case, numerics=numerics, progress=share, cancelled=cancelled, recorder=recorder)
     refuse_chatter(result.summary, numerics)
 
     def companion(coarse_case: Case, coarse: ResolvedNumerics) -> Result:
@@ -93,24 +102,33 @@ def refuse_chatter(summary: dict, numerics: ResolvedNumerics) -> None:
     finished = [c for c in summary["contacts"] if c["end"] is not None]
     shortest = min(((c["end"] - c["start"]) / numerics.time_step for c in finished), default=math.inf)
     if shortest < CHATTER_STEPS:
-        raise CaseError([FieldError(
-            field="contact",
-            message=f"the contact chattered on this grid ({summary['contacts_total']} contacts, the "
+        raise CaseError(
+            [
+                FieldError(
+                    field="contact",
+                    message=f"the contact chattered on this grid ({summary['contacts_total']} contacts, the "
                     f"shortest over {shortest:.2g} time steps of {numerics.time_step:.3g} s): its "
                     f"stiffness or its damper is more than the scheme '{numerics.scheme}' with these "
                     "ends can take on this grid. Leave numerics.cells, time_step and scheme out (the "
                     "default accuracy takes any contact), or give numerics.scheme = 'explicit' with "
-                    "numerics.cells only")])
+                    "numerics.cells only",
+                )
+            ]
+        )
 
 
 def fixed_choice(case: Case, numerics: ResolvedNumerics) -> str:
     """Why a run on a fixed grid used its scheme: the case said so."""
     num = case.numerics
     if num.scheme is not None:
-        return (f"numerics.scheme = '{num.scheme}' as asked, on the grid given or its defaults; its "
-                "error estimated from two companion runs on grids 2× and 4× coarser")
-    return (f"a grid was given, so the paper's weighted scheme (8) with γ = {num.gamma:g} on it; "
-            "its error estimated from two companion runs on grids 2× and 4× coarser")
+        return (
+            f"numerics.scheme = '{num.scheme}' as asked, on the grid given or its defaults; its "
+            "error estimated from two companion runs on grids 2× and 4× coarser"
+        )
+    return (
+        f"a grid was given, so the paper's weighted scheme (8) with γ = {num.gamma:g} on it; "
+        "its error estimated from two companion runs on grids 2× and 4× coarser"
+    )
 
 
 def _sweep_row(case: Case, limits: Limits) -> dict[str, Any]:
@@ -120,9 +138,12 @@ def _sweep_row(case: Case, limits: Limits) -> dict[str, Any]:
         return {"error": str(error)}
 
 
-def run_sweep(sweep: Sweep | dict, processes: int | None = None,
-              progress: Callable[[int, int], None] | None = None,
-              limits: Limits = Limits()) -> list[dict[str, Any]]:
+def run_sweep(
+    sweep: Sweep | dict,
+    processes: int | None = None,
+    progress: Callable[[int, int], None] | None = None,
+    limits: Limits = Limits(),
+) -> list[dict[str, Any]]:
     """Solve every variant, `processes` at once (default: one a core); one row each, in the order
     of `variants`: the parameter values, then the summary's columns (or `error`). `sweep` is a
     `Sweep` or its JSON as a dict (`{"case": …, "parameters": {"striker.velocity": [3, 5]}}`)."""
@@ -139,8 +160,7 @@ def run_sweep(sweep: Sweep | dict, processes: int | None = None,
     rows = []
     with ProcessPoolExecutor(processes) if processes > 1 else contextlib.nullcontext() as pool:
         # Batches large enough to hide the pipe, small enough to keep every process busy.
-        solved = (pool.map(solve, cases, chunksize=max(1, len(cases) // (64 * processes)))
-                  if pool else map(solve, cases))
+        solved = pool.map(solve, cases, chunksize=max(1, len(cases) // (64 * processes))) if pool else map(solve, cases)
         for (values, _), row in zip(found, solved):
             rows.append(values | row)
             if progress is not None:

@@ -23,8 +23,13 @@ from .summary import Summary
 OFFSET = "record.time_offset"  # a parameter of the fit that is the record's, not the case's
 UNITS_FACTOR = 30.0  # a record this far above or below every model's peak has the wrong units
 COARSE_TOLERANCE = 0.1  # of the grid of the units check: a peak within tens of percent is enough
-EXAMPLE_QUANTITIES = ("energy.transfer_efficiency", "max_compressive_stress", "peak_contact_force",
-                      "energy.to_medium", "medium_penetration.permanent")
+EXAMPLE_QUANTITIES = (
+    "energy.transfer_efficiency",
+    "max_compressive_stress",
+    "peak_contact_force",
+    "energy.to_medium",
+    "medium_penetration.permanent",
+)
 
 
 class Calibration(BaseModel):
@@ -35,7 +40,8 @@ class Calibration(BaseModel):
     case: Case
     record: Record
     parameters: dict[str, list[float]] = Field(
-        min_length=1, description="dotted field path → [low, high], the bounds of the fit")
+        min_length=1, description="dotted field path → [low, high], the bounds of the fit"
+    )
 
 
 STUDY_NUMERICS = ("duration", "tolerance")  # what a study reads of a case's numerics
@@ -51,13 +57,16 @@ def study_case(case: Case, tolerance: float | None = None) -> Case:
 
 def set_aside(case: Case) -> list[str]:
     """A warning naming the numerics a study does not use, if the case gives any."""
-    given = [f"numerics.{name}" for name in case.numerics.model_dump(exclude_defaults=True)
-             if name not in STUDY_NUMERICS]
+    given = [
+        f"numerics.{name}" for name in case.numerics.model_dump(exclude_defaults=True) if name not in STUDY_NUMERICS
+    ]
     if not given:
         return []
-    return [f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} set aside: a study runs every "
-            "case on its own grid, the explicit scheme at Courant number 1, chosen for "
-            "numerics.tolerance (0.01 when not given)"]
+    return [
+        f"{', '.join(given)} {'is' if len(given) == 1 else 'are'} set aside: a study runs every "
+        "case on its own grid, the explicit scheme at Courant number 1, chosen for "
+        "numerics.tolerance (0.01 when not given)"
+    ]
 
 
 def parse_calibration(data: dict) -> Calibration:
@@ -72,9 +81,17 @@ def fitted_bounds(calibration: Calibration) -> dict[str, list[float]]:
     bounds = dict(calibration.parameters)
     record = calibration.record
     if OFFSET in bounds and record.time_offset is not None:
-        raise CaseError([FieldError(field=f"parameters[{OFFSET!r}]", message=(
-            f"the record gives time_offset = {record.time_offset:g} s: leave it out of the record "
-            "to fit it here, or out of the parameters to keep it"))])
+        raise CaseError(
+            [
+                FieldError(
+                    field=f"parameters[{OFFSET!r}]",
+                    message=(
+                        f"the record gives time_offset = {record.time_offset:g} s: leave it out of the record "
+                        "to fit it here, or out of the parameters to keep it"
+                    ),
+                )
+            ]
+        )
     if OFFSET not in bounds and record.time_offset is None and not record.starts_at_rest():
         bounds[OFFSET] = list(record.offset_bounds(calibration.case))
     return bounds
@@ -83,17 +100,20 @@ def fitted_bounds(calibration: Calibration) -> dict[str, list[float]]:
 def run_span(record: Record, space: Space) -> float:
     """How long the study's runs last (s of the model's time): to the record's last sample at the
     latest time_offset the fit may try."""
-    offset = (space.high[space.paths.index(OFFSET)] if OFFSET in space.paths
-              else record.time_offset or 0.0)
+    offset = space.high[space.paths.index(OFFSET)] if OFFSET in space.paths else record.time_offset or 0.0
     return float(record.instants[-1] + offset)
 
 
 # What a user can change when a study's grid is over the limits: not the case's grid, which a study
 # sets aside (`study_case`).
-GRID_REMEDY = ("the study chooses its grid for numerics.tolerance and the record's length sets the "
-               "runs': shorten the record, loosen numerics.tolerance, or raise the limit")
-DURATION_REMEDY = ("the study chooses its grid for numerics.tolerance: shorten numerics.duration, "
-                   "loosen numerics.tolerance, or raise the limit")
+GRID_REMEDY = (
+    "the study chooses its grid for numerics.tolerance and the record's length sets the "
+    "runs': shorten the record, loosen numerics.tolerance, or raise the limit"
+)
+DURATION_REMEDY = (
+    "the study chooses its grid for numerics.tolerance: shorten numerics.duration, "
+    "loosen numerics.tolerance, or raise the limit"
+)
 
 
 def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Space:
@@ -114,9 +134,15 @@ def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Sp
     coarse = max(first_cells(case, COARSE_TOLERANCE), case_space.fewest_cells(case))
     duration = run_span(record, space)
     check_grid(case, coarse, duration, limits, field="record.time", remedy=GRID_REMEDY)
-    answers = evaluate_batch(Batch(cases=corners, cells=coarse, duration=duration,
-                                   series={"quantity": record.quantity, "times": None},
-                                   quantities=None))
+    answers = evaluate_batch(
+        Batch(
+            cases=corners,
+            cells=coarse,
+            duration=duration,
+            series={"quantity": record.quantity, "times": None},
+            quantities=None,
+        )
+    )
     peaks = [float(np.max(np.abs(a["series"]))) for a in answers if "series" in a]
     if peaks:
         _check_units(record, peaks)
@@ -128,10 +154,18 @@ def _check_units(record: Record, peaks: list[float]) -> None:
     low, high = min(peaks), max(peaks)
     if peak > UNITS_FACTOR * high or peak < low / UNITS_FACTOR:
         ratio = peak / high if peak > high else peak / low
-        raise CaseError([FieldError(field="record.values", message=(
-            f"the record's peak |{record.quantity}| is {peak:.4g} {record.unit}, {ratio:.3g}× the "
-            f"model's ({low:.4g} to {high:.4g} {record.unit} at the bounds' corners): give the record in "
-            f"SI units ({record.unit}); a factor near 1000 is a unit off by a prefix (kN, MPa, mm/s)"))])
+        raise CaseError(
+            [
+                FieldError(
+                    field="record.values",
+                    message=(
+                        f"the record's peak |{record.quantity}| is {peak:.4g} {record.unit}, {ratio:.3g}× the "
+                        f"model's ({low:.4g} to {high:.4g} {record.unit} at the bounds' corners): give the record in "
+                        f"SI units ({record.unit}); a factor near 1000 is a unit off by a prefix (kN, MPa, mm/s)"
+                    ),
+                )
+            ]
+        )
 
 
 class Objective(BaseModel):
@@ -143,11 +177,14 @@ class Objective(BaseModel):
     minimize: str | None = None
 
     @model_validator(mode="after")
-    def _one(self) -> "Objective":
+    def _one(self) -> Objective:
         if (self.maximize is None) == (self.minimize is None):
-            raise field_error("Objective", ("maximize",),
-                              "give one of maximize or minimize, with a summary quantity such as "
-                              "energy.transfer_efficiency", None)
+            raise field_error(
+                "Objective",
+                ("maximize",),
+                "give one of maximize or minimize, with a summary quantity such as energy.transfer_efficiency",
+                None,
+            )
         return self
 
     @property
@@ -174,7 +211,7 @@ class Bound(BaseModel):
     min: float | None = None
 
     @model_validator(mode="after")
-    def _some(self) -> "Bound":
+    def _some(self) -> Bound:
         if self.max is None and self.min is None:
             raise field_error("Bound", ("max",), "give max, min or both", None)
         if self.max is not None and self.min is not None and self.min > self.max:
@@ -188,15 +225,17 @@ class Optimization(BaseModel):
     model_config = INPUT
 
     case: Case
-    variables: dict[str, list[float]] = Field(
-        min_length=1, description="dotted field path → [low, high]")
+    variables: dict[str, list[float]] = Field(min_length=1, description="dotted field path → [low, high]")
     objective: Objective
-    limits: dict[str, Bound] = Field(default_factory=dict,
-                                     description="summary quantity → its {max} and/or {min}")
-    max_evaluations: Whole = Field(default=1000, ge=10, le=100_000,
-                                 description="the budget of model runs: 80% for the global stage, the rest "
-                                             "for the local stage (a stage stops at the end of the "
-                                             "generation or iteration that reaches it)")
+    limits: dict[str, Bound] = Field(default_factory=dict, description="summary quantity → its {max} and/or {min}")
+    max_evaluations: Whole = Field(
+        default=1000,
+        ge=10,
+        le=100_000,
+        description="the budget of model runs: 80% for the global stage, the rest "
+        "for the local stage (a stage stops at the end of the "
+        "generation or iteration that reaches it)",
+    )
     seed: Whole = Field(default=0, ge=0, description="of the global stage's random choices")
 
 
@@ -232,10 +271,11 @@ def _summary_has(path: str) -> bool:
     return target in (float, int)
 
 
-def quantity_fields(request: "Optimization") -> dict[str, str]:
+def quantity_fields(request: Optimization) -> dict[str, str]:
     """Each summary quantity a request names → the request's field that names it."""
-    return ({request.objective.quantity: f"objective.{request.objective.goal}"}
-            | {name: f"limits[{name!r}]" for name in request.limits})
+    return {request.objective.quantity: f"objective.{request.objective.goal}"} | {
+        name: f"limits[{name!r}]" for name in request.limits
+    }
 
 
 def check_optimization(request: Optimization, limits: Limits = Limits()) -> Space:
@@ -246,14 +286,25 @@ def check_optimization(request: Optimization, limits: Limits = Limits()) -> Spac
     space = Space.of(request.variables, "variables")
     case = study_case(request.case)
     space.check(case, "variables")
-    check_grid(case, space.fewest_cells(case), case.numerics.duration, limits,
-               field="case.numerics.duration", remedy=DURATION_REMEDY)
-    errors = [FieldError(field=field, message=(
-                  f"{name!r} is not a number of the pulse summary: give a summary quantity such as "
-                  + ", ".join(EXAMPLE_QUANTITIES)))
-              for name, field in quantity_fields(request).items() if not _summary_has(name)]
+    check_grid(
+        case,
+        space.fewest_cells(case),
+        case.numerics.duration,
+        limits,
+        field="case.numerics.duration",
+        remedy=DURATION_REMEDY,
+    )
+    errors = [
+        FieldError(
+            field=field,
+            message=(
+                f"{name!r} is not a number of the pulse summary: give a summary quantity such as "
+                + ", ".join(EXAMPLE_QUANTITIES)
+            ),
+        )
+        for name, field in quantity_fields(request).items()
+        if not _summary_has(name)
+    ]
     if errors:
         raise CaseError(errors)
     return space
-
-

@@ -9,18 +9,23 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from .plots import DRAWING, DPI, FIGSIZE, decorate, save, time_unit
+from .plots import DPI, DRAWING, FIGSIZE, decorate, save, time_unit
 
 if TYPE_CHECKING:
     from matplotlib.figure import Figure
 
-STUDY_PLOTS = {"fit": "Record against the fitted model, and the residual",
-               "convergence": "Every evaluation of the objective, and the best so far"}
+STUDY_PLOTS = {
+    "fit": "Record against the fitted model, and the residual",
+    "convergence": "Every evaluation of the objective, and the best so far",
+}
 # quantity → how its axis reads, and the scale to that unit
-_AXES = {"contact_force": ("contact force (kN)", 1e-3), "medium_force": ("medium force (kN)", 1e-3),
-         "stress": ("stress (MPa), tension +", 1e-6),
-         "struck_end_velocity": ("struck end velocity (m/s)", 1.0),
-         "working_end_velocity": ("working end velocity (m/s)", 1.0)}
+_AXES = {
+    "contact_force": ("contact force (kN)", 1e-3),
+    "medium_force": ("medium force (kN)", 1e-3),
+    "stress": ("stress (MPa), tension +", 1e-6),
+    "struck_end_velocity": ("struck end velocity (m/s)", 1.0),
+    "working_end_velocity": ("working end velocity (m/s)", 1.0),
+}
 
 
 def _new_figure() -> Figure:
@@ -50,11 +55,16 @@ def fit_figure(fit: dict, name: str = "case") -> Figure:
     bottom.plot(t * scale_t, (record - model) * scale, lw=0.8, color="C3")
     bottom.axhline(0.0, color="0.3", lw=0.6)
     offset = fit["record"].get("time_offset") or 0.0
-    clock = f"time ({unit_t})" if offset == 0.0 else (
-        f"time on the record's clock ({unit_t}): the impact at {-offset * scale_t:.4g} {unit_t}")
+    clock = (
+        f"time ({unit_t})"
+        if offset == 0.0
+        else (f"time on the record's clock ({unit_t}): the impact at {-offset * scale_t:.4g} {unit_t}")
+    )
     decorate(bottom, clock, "record − model")
-    fitted = [f"{path} = {p['value']:.4g}" + (f" ± {p['standard_error']:.2g}" if p["standard_error"] is not None else "")
-              for path, p in fit["parameters"].items()]
+    fitted = [
+        f"{path} = {p['value']:.4g}" + (f" ± {p['standard_error']:.2g}" if p["standard_error"] is not None else "")
+        for path, p in fit["parameters"].items()
+    ]
     fig.suptitle(f"Fit of {name}: nrmse {fit['nrmse']:.3g}\n" + _lines(fitted, TITLE_WIDTH), fontsize="medium")
     return fig
 
@@ -79,9 +89,11 @@ def convergence_figure(answer: dict, name: str = "case") -> Figure:
     the best feasible so far."""
     fig = _new_figure()
     ax = fig.subplots()
-    (goal, quantity), = answer["objective"].items()
-    values = np.array([np.nan if e["quantities"].get(quantity) is None else e["quantities"][quantity]
-                       for e in answer["history"]], dtype=float)
+    ((goal, quantity),) = answer["objective"].items()
+    values = np.array(
+        [np.nan if e["quantities"].get(quantity) is None else e["quantities"][quantity] for e in answer["history"]],
+        dtype=float,
+    )
     feasible = np.array([e["feasible"] for e in answer["history"]], dtype=bool)
     runs = np.arange(1, len(values) + 1)
     ax.plot(runs[feasible], values[feasible], ".", ms=3, color="C0", label="within the limits")
@@ -89,8 +101,13 @@ def convergence_figure(answer: dict, name: str = "case") -> Figure:
         ax.plot(runs[~feasible], values[~feasible], "x", ms=3, color="C3", label="breaks a limit")
     kept = np.where(feasible, values, np.nan)
     pick = np.fmax.accumulate if goal == "maximize" else np.fmin.accumulate
-    ax.plot(runs, pick(np.where(np.isnan(kept), -np.inf if goal == "maximize" else np.inf, kept)),
-            lw=1.4, color="k", label="best so far")
+    ax.plot(
+        runs,
+        pick(np.where(np.isnan(kept), -np.inf if goal == "maximize" else np.inf, kept)),
+        lw=1.4,
+        color="k",
+        label="best so far",
+    )
     ax.legend(loc="best")
     decorate(ax, "evaluation", quantity)
     best = answer.get("quantities") or {}

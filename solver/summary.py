@@ -49,7 +49,9 @@ class Energy(_Part):
     dissipated_contact: float = Field(description="by the contact's damper b1 (and the anvil's contact's), J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
     numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
-    striker_withdrawn: float = Field(description="what the striker still had when each blow ended and the next began, J")
+    striker_withdrawn: float = Field(
+        description="what the striker still had when each blow ended and the next began, J"
+    )
     striker_kinetic: float = Field(description="J, at the end of the run")
     striker_strain: float = Field(description="an elastic striker's, J, at the end of the run")
     anvil_kinetic: float = Field(description="J, at the end of the run")
@@ -58,7 +60,9 @@ class Energy(_Part):
     contact_potential: float = Field(description="Φ(δ) (and the anvil's contact's), J, at the end of the run")
     medium_potential: float = Field(description="what the medium would give back unloading, J, at the end of the run")
     medium_plastic: float = Field(description="the medium's work into permanent penetration, J")
-    max_excess_fraction: float = Field(description="largest energy created over the energy supplied, 1 (0 for a stable scheme)")
+    max_excess_fraction: float = Field(
+        description="largest energy created over the energy supplied, 1 (0 for a stable scheme)"
+    )
 
 
 class Penetration(_Part):
@@ -103,7 +107,8 @@ class Summary(_Part):
     max_compressive_stress: PeakStress
     max_tensile_stress: PeakStress
     striker_rebound_velocity: float | None = Field(
-        description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)")
+        description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)"
+    )
     medium_penetration: Penetration | None = Field(description="null without a medium")
     energy: Energy
     force_history: ForceHistory
@@ -112,7 +117,8 @@ class Summary(_Part):
     why: str = Field(description="why this model, scheme and grid")
     tolerance: float | None = Field(description="the relative accuracy asked, 1; null for a fixed grid")
     error_estimate: dict[str, float | None] | None = Field(
-        description="each estimated quantity's relative error, 1, and 'worst'; null when none could be made")
+        description="each estimated quantity's relative error, 1, and 'worst'; null when none could be made"
+    )
     not_estimated: dict[str, str] = Field(description="quantity → why its error is not estimated")
     runs: list[RunGrid] = Field(description="the grids solved for this answer, coarse to fine")
 
@@ -139,21 +145,29 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
 def to_medium(energy: np.ndarray) -> float:
     """The net work on the medium so far (`energy` in the kernel's slots): stored, plastic and
     dissipated."""
-    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC]
-                 + energy[L.E_DISSIPATED_MEDIUM])
+    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC] + energy[L.E_DISSIPATED_MEDIUM])
 
 
 def launch_energy(case: Case) -> float:
     """What one launch brings (J): the striker's kinetic energy at impact, and an anvil's."""
     anvil = case.anvil
-    return (0.5 * striker_mass(case.striker) * case.striker.velocity**2
-            + (0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0))
+    return 0.5 * striker_mass(case.striker) * case.striker.velocity**2 + (
+        0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0
+    )
 
 
-def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
-                  contacts: np.ndarray, open_contact: float | None, energy: np.ndarray,
-                  history: dict[str, np.ndarray], extra_warnings: list[str] | None = None,
-                  permanent_penetration: float = 0.0, blows: list[dict] | None = None) -> dict:
+def build_summary(
+    case: Case,
+    numerics: ResolvedNumerics,
+    extremes: np.ndarray,
+    contacts: np.ndarray,
+    open_contact: float | None,
+    energy: np.ndarray,
+    history: dict[str, np.ndarray],
+    extra_warnings: list[str] | None = None,
+    permanent_penetration: float = 0.0,
+    blows: list[dict] | None = None,
+) -> dict:
     """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
     `open_contact` is the start of a contact still open at the end (None if there is none),
     `history` needs the paths of FORCE_HISTORY only, `permanent_penetration` is the medium's
@@ -163,7 +177,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     follow (`add_accuracy`).
     """
     count = int(extremes[L.X_CONTACTS])
-    intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[:min(count, len(contacts))]]
+    intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[: min(count, len(contacts))]]
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
@@ -182,8 +196,7 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
     withdrawn = energy[L.E_WITHDRAWN]
-    numerical = (initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium
-                 - withdrawn)
+    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium - withdrawn
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     medium = to_medium(energy)
@@ -197,17 +210,21 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
         "co_impact_time": _number(extremes[L.X_CO_IMPACT]),
         "contacts": intervals,
         "contacts_total": count + (0 if open_contact is None else 1),
-        "peak_contact_force": {"value": float(extremes[L.X_PEAK_FORCE]),
-                               "time": float(extremes[L.X_PEAK_FORCE_TIME])},
-        "max_compressive_stress": {"value": float(extremes[L.X_MAX_COMPRESSION]),
-                                   "x": float(extremes[L.X_MAX_COMPRESSION_X]),
-                                   "time": float(extremes[L.X_MAX_COMPRESSION_TIME])},
-        "max_tensile_stress": {"value": float(extremes[L.X_MAX_TENSION]),
-                               "x": float(extremes[L.X_MAX_TENSION_X]),
-                               "time": float(extremes[L.X_MAX_TENSION_TIME])},
+        "peak_contact_force": {"value": float(extremes[L.X_PEAK_FORCE]), "time": float(extremes[L.X_PEAK_FORCE_TIME])},
+        "max_compressive_stress": {
+            "value": float(extremes[L.X_MAX_COMPRESSION]),
+            "x": float(extremes[L.X_MAX_COMPRESSION_X]),
+            "time": float(extremes[L.X_MAX_COMPRESSION_TIME]),
+        },
+        "max_tensile_stress": {
+            "value": float(extremes[L.X_MAX_TENSION]),
+            "x": float(extremes[L.X_MAX_TENSION_X]),
+            "time": float(extremes[L.X_MAX_TENSION_TIME]),
+        },
         "striker_rebound_velocity": _number(extremes[L.X_REBOUND_VELOCITY]),
-        "medium_penetration": None if case.medium is None else {
-            "max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},
+        "medium_penetration": None
+        if case.medium is None
+        else {"max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},
         "energy": {
             "initial": float(initial),
             "external_work": float(external),
@@ -226,16 +243,27 @@ def build_summary(case: Case, numerics: ResolvedNumerics, extremes: np.ndarray,
     }
 
 
-def add_accuracy(summary: dict, *, tolerance: float | None, error_estimate: dict[str, float] | None,
-                 not_estimated: dict[str, str], why: str, runs: list[ResolvedNumerics],
-                 warnings: list[str]) -> None:
+def add_accuracy(
+    summary: dict,
+    *,
+    tolerance: float | None,
+    error_estimate: dict[str, float] | None,
+    not_estimated: dict[str, str],
+    why: str,
+    runs: list[ResolvedNumerics],
+    warnings: list[str],
+) -> None:
     """Complete `summary` with what its error estimate says (`adaptive.annotate`)."""
-    summary.update({
-        "tolerance": tolerance,
-        "error_estimate": error_estimate,
-        "not_estimated": not_estimated,
-        "why": why,
-        "runs": [{"model": n.model, "scheme": n.scheme, "cells": n.cells,
-                  "time_step": n.time_step, "steps": n.steps} for n in runs],
-    })
+    summary.update(
+        {
+            "tolerance": tolerance,
+            "error_estimate": error_estimate,
+            "not_estimated": not_estimated,
+            "why": why,
+            "runs": [
+                {"model": n.model, "scheme": n.scheme, "cells": n.cells, "time_step": n.time_step, "steps": n.steps}
+                for n in runs
+            ],
+        }
+    )
     summary["warnings"].extend(warnings)

@@ -48,11 +48,13 @@ class Sweep(BaseModel):
 
     case: Case
     parameters: dict[str, list[Any]] = Field(
-        min_length=1, description="dotted field path → the values it takes; every combination runs")
+        min_length=1, description="dotted field path → the values it takes; every combination runs"
+    )
 
 
-def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits | None = Limits(),
-             field: str = "parameters") -> list[tuple[dict[str, Any], Case]]:
+def variants(
+    sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits | None = Limits(), field: str = "parameters"
+) -> list[tuple[dict[str, Any], Case]]:
     """Every (parameter values, validated case) of the sweep, or `CaseError` naming, for each bad
     variant (invalid, or over a size limit unless `limits` is None), the parameter value it came
     from (as `field[path][index]`) and what it breaks."""
@@ -62,9 +64,17 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits | No
             raise CaseError([FieldError(field=f"{field}[{name!r}]", message="give at least one value")])
     count = math.prod(len(v) for v in sweep.parameters.values())
     if count > max_variants:
-        raise CaseError([FieldError(field=field, message=(
-            f"{count} variants ({' × '.join(str(len(sweep.parameters[n])) for n in names)}) exceed "
-            f"the limit of {max_variants}: sweep fewer values"))])
+        raise CaseError(
+            [
+                FieldError(
+                    field=field,
+                    message=(
+                        f"{count} variants ({' × '.join(str(len(sweep.parameters[n])) for n in names)}) exceed "
+                        f"the limit of {max_variants}: sweep fewer values"
+                    ),
+                )
+            ]
+        )
     base = sweep.case.model_dump(mode="json", exclude_none=True)
     found, errors = [], {}
     for picks in itertools.product(*(enumerate(sweep.parameters[n]) for n in names)):
@@ -83,9 +93,14 @@ def variants(sweep: Sweep, max_variants: int = MAX_VARIANTS, limits: Limits | No
                 # The parameter whose path the broken field starts with; else the only parameter
                 # (the base case is valid, so it broke another field: striker.length makes
                 # striker.mass wrong); else the whole variant.
-                culprit = next((f"{field}[{n!r}][{k}]" for n, (k, _) in zip(names, picks)
-                                if e.field == n or e.field.startswith(n + ".") or len(names) == 1),
-                               f"{field} (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")")
+                culprit = next(
+                    (
+                        f"{field}[{n!r}][{k}]"
+                        for n, (k, _) in zip(names, picks)
+                        if e.field == n or e.field.startswith(n + ".") or len(names) == 1
+                    ),
+                    f"{field} (" + ", ".join(f"{n} = {v!r}" for n, v in values.items()) + ")",
+                )
                 errors.setdefault(culprit, FieldError(field=culprit, message=f"{e.field}: {e.message}"))
         except (IndexError, ValueError, TypeError) as error:
             errors[where] = FieldError(field=where, message=f"cannot be set: {error}")

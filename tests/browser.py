@@ -10,18 +10,27 @@ from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
 
 import pytest
-from playwright.sync_api import Page, expect, sync_playwright
-
 from live_stack import Stack
+from playwright.sync_api import Page, expect, sync_playwright
 
 KEY = "page-test-key"
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
-CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-                 # Without these Chromium reaches for the internet at start-up.
-                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    # Without these Chromium reaches for the internet at start-up.
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
 # A job of a few seconds: long enough to watch it run and cancel it.
-LONG = {"numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
-        "outputs": {"history_stride": 100, "probes": []}}
+LONG = {
+    "numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
+    "outputs": {"history_stride": 100, "probes": []},
+}
 
 
 def chromium() -> str:
@@ -74,8 +83,12 @@ def open_page(browser, stack):
             context.add_init_script(f"localStorage.setItem('percussim.apiKey', {json.dumps(key)})")
         page = context.new_page()
         page.on("pageerror", lambda error: errors.append(error))
-        page.on("request", lambda request: request.url.startswith((stack.url + "/", "data:", "blob:"))
-                or elsewhere.append(request.url))
+        page.on(
+            "request",
+            lambda request: (
+                request.url.startswith((stack.url + "/", "data:", "blob:")) or elsewhere.append(request.url)
+            ),
+        )
         page.goto(stack.url + "/")
         return page
 
@@ -94,8 +107,11 @@ def page(open_page):
 def case_in_page(page: Page, preset: str) -> dict:
     """The preset chosen, once its case is in the JSON (the last one's may still be there)."""
     page.select_option("#preset", preset)
-    page.wait_for_function("(name) => { try { return JSON.parse(document.getElementById('case-json').value).name === name; }"
-                           " catch { return false; } }", arg=preset)
+    page.wait_for_function(
+        "(name) => { try { return JSON.parse(document.getElementById('case-json').value).name === name; }"
+        " catch { return false; } }",
+        arg=preset,
+    )
     return json.loads(page.input_value("#case-json"))
 
 

@@ -72,31 +72,49 @@ def matched_tool_case(ratio: float) -> dict:
     """A piston of `ratio` on the tool whose far end is a dashpot of its impedance Z (nothing
     reflects), run until the piston's first pulse has passed it (L/a + T): the medium receives
     `passed_share(ratio)` of the piston's energy, largest at r = 1. A linear contact of 1e11 N/m."""
-    return piston_case(ratio, {"duration": TOOL / SPEED + T}, contact={"stiffness": 1e11, "exponent": 0.0},
-                       medium={"stiffness": 1.0, "damping": Z})
+    return piston_case(
+        ratio,
+        {"duration": TOOL / SPEED + T},
+        contact={"stiffness": 1e11, "exponent": 0.0},
+        medium={"stiffness": 1.0, "damping": Z},
+    )
 
 
 def stepped_piston_case(cells: int) -> dict:
     """An equal piston whose back half has twice the area, on `cells` of the explicit scheme: with
     2000 its length is a whole number of its cells, with 2003 not (a delay at its free end)."""
     profile = {"x": [0.0, PISTON / 2, PISTON / 2 + 1e-9, PISTON], "area": [AREA, AREA, 2 * AREA, 2 * AREA]}
-    return piston_case(1.0, {"scheme": "explicit", "cells": cells}, striker={
-        "velocity": V, "length": PISTON, "profile": profile, **STEEL})
+    return piston_case(
+        1.0,
+        {"scheme": "explicit", "cells": cells},
+        striker={"velocity": V, "length": PISTON, "profile": profile, **STEEL},
+    )
 
 
 def rock_case(x: float, numerics: dict, **medium) -> dict:
     """The equal piston's wave on bilinear rock of `x` = k·T/Z, unloading at `UNLOADING`·k."""
     k = rock_stiffness(x)
-    return piston_case(1.0, {"duration": MEDIUM_DURATION, **numerics}, medium={
-        "kind": "bilinear", "stiffness": k, "unloading_stiffness": UNLOADING * k, **medium})
+    return piston_case(
+        1.0,
+        {"duration": MEDIUM_DURATION, **numerics},
+        medium={"kind": "bilinear", "stiffness": k, "unloading_stiffness": UNLOADING * k, **medium},
+    )
 
 
-def soil_case(numerics: dict, resistance: float = SOIL_RESISTANCE,
-              quake: float = SOIL_RESISTANCE / SOIL_STIFFNESS, damping_factor: float = 0.0) -> dict:
+def soil_case(
+    numerics: dict,
+    resistance: float = SOIL_RESISTANCE,
+    quake: float = SOIL_RESISTANCE / SOIL_STIFFNESS,
+    damping_factor: float = 0.0,
+) -> dict:
     """The equal piston's wave on Smith soil (R_u, q, J)."""
     case = rock_case(1.0, numerics)
-    case["medium"] = {"kind": "smith", "ultimate_resistance": resistance, "quake": quake,
-                      "damping_factor": damping_factor}
+    case["medium"] = {
+        "kind": "smith",
+        "ultimate_resistance": resistance,
+        "quake": quake,
+        "damping_factor": damping_factor,
+    }
     return case
 
 
@@ -109,6 +127,7 @@ def drilling(blows: int, numerics: dict | None = None) -> dict:
 
 
 # --- the piston: one-dimensional impact ----------------------------------------------------------
+
 
 def first_force(ratio: float) -> float:
     """F_1 = Z_s·Z·v/(Z_s + Z): the two impedances in series while the piston's wave runs."""
@@ -136,6 +155,7 @@ def piston_force(ratio: float, t: float) -> float:
 
 # --- media that yield at the working end ---------------------------------------------------------
 
+
 def rock_stiffness(x: float) -> float:
     """k with k·T/Z = x."""
     return x * Z / T
@@ -160,8 +180,7 @@ def rock_penetration(x: float, unloading: float = UNLOADING) -> tuple[float, flo
     return deepest, deepest * (1.0 - 1.0 / unloading)
 
 
-def smith_set(resistance: float = SOIL_RESISTANCE,
-              stiffness: float = SOIL_STIFFNESS) -> tuple[float, float]:
+def smith_set(resistance: float = SOIL_RESISTANCE, stiffness: float = SOIL_STIFFNESS) -> tuple[float, float]:
     """(t_q, set) of undamped Smith soil under the rectangular wave F_i lasting T: elastic until
     `t_q = −(Z/k)·ln(1 − R_u/(2F_i))`, then flowing at `(2F_i − R_u)/Z` until T."""
     t_q = -(Z / stiffness) * math.log(1.0 - resistance / (2.0 * INCIDENT))
@@ -173,8 +192,15 @@ def smith_set(resistance: float = SOIL_RESISTANCE,
 ANVIL_DURATION = 1e-3
 
 
-def anvil_case(mass: float, numerics: dict, *, anvil_contact: dict, striker_mass: float = 2.0,
-               contact: dict | None = None, **changes) -> dict:
+def anvil_case(
+    mass: float,
+    numerics: dict,
+    *,
+    anvil_contact: dict,
+    striker_mass: float = 2.0,
+    contact: dict | None = None,
+    **changes,
+) -> dict:
     """A lumped striker at V on an anvil of `mass` resting on the tool (a linear medium behind
     it), each history row recorded."""
     return {
@@ -189,18 +215,19 @@ def anvil_case(mass: float, numerics: dict, *, anvil_contact: dict, striker_mass
     }
 
 
-def two_body_impact(striker_mass: float, anvil_mass: float, stiffness: float
-                    ) -> tuple[float, float, float]:
+def two_body_impact(striker_mass: float, anvil_mass: float, stiffness: float) -> tuple[float, float, float]:
     """(v1', v_a', contact time) of a striker at V on a free anvil at rest through a linear
     contact: `(m1 − m_a)/(m1 + m_a)·V`, `2·m1/(m1 + m_a)·V`, `π·sqrt(μ/k)`."""
     total = striker_mass + anvil_mass
     reduced = striker_mass * anvil_mass / total
-    return ((striker_mass - anvil_mass) / total * V, 2.0 * striker_mass / total * V,
-            math.pi * math.sqrt(reduced / stiffness))
+    return (
+        (striker_mass - anvil_mass) / total * V,
+        2.0 * striker_mass / total * V,
+        math.pi * math.sqrt(reduced / stiffness),
+    )
 
 
-def linear_three_bodies(m1: float, ma: float, k1: float, k2: float, times: np.ndarray
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def linear_three_bodies(m1: float, ma: float, k1: float, k2: float, times: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """(F1, F2) from rest at impact of `m1·y'' = −k1·(y − y_a)`, `m_a·y_a'' = k1·(y − y_a) −
     k2·(y_a − u_0)`, `Z·u_0' = k2·(y_a − u_0)` (the tool's end as a dashpot of its impedance),
     valid while both contacts are closed and nothing returns from the tool's far end."""
@@ -215,8 +242,14 @@ def linear_three_bodies(m1: float, ma: float, k1: float, k2: float, times: np.nd
     return k1 * (states[:, 0] - states[:, 2]), k2 * (states[:, 2] - states[:, 4])
 
 
-def rods_through_a_spring(velocity: float, striker_transit: float, striker_impedance: float,
-                          impedance: float, stiffness: float, times: np.ndarray) -> np.ndarray:
+def rods_through_a_spring(
+    velocity: float,
+    striker_transit: float,
+    striker_impedance: float,
+    impedance: float,
+    stiffness: float,
+    times: np.ndarray,
+) -> np.ndarray:
     """The force (compression +) at the struck end of a uniform tool hit by a uniform elastic
     striker through a linear contact spring `k` with no tension, by d'Alembert: the striker's
     face sends back the wave `f = F − g` and gets, from its free back end 2·L_s/a_s later,
@@ -235,8 +268,7 @@ def rods_through_a_spring(velocity: float, striker_transit: float, striker_imped
 
     def rate(t: float, delta: float) -> float:
         f_contact = stiffness * max(delta, 0.0)
-        return (velocity - f_contact / striker_impedance + 2.0 * returning(t) / striker_impedance
-                - f_contact / impedance)
+        return velocity - f_contact / striker_impedance + 2.0 * returning(t) / striker_impedance - f_contact / impedance
 
     delta = 0.0
     for k in range(steps):
@@ -274,17 +306,22 @@ class Hopkinson:
     @classmethod
     def case(cls, velocity: float = VELOCITY, length: float = STRIKER, stiffness: float = STIFFNESS) -> dict:
         rod = {"youngs_modulus": cls.E, "density": cls.RHO, "area": cls.AREA}
-        return {"name": "shpb", "striker": {"velocity": velocity, "length": length, **rod},
-                "tool": {"length": cls.BAR, **rod}, "contact": {"stiffness": stiffness, "exponent": 0.0},
-                "numerics": {"duration": 6.5e-4}}
+        return {
+            "name": "shpb",
+            "striker": {"velocity": velocity, "length": length, **rod},
+            "tool": {"length": cls.BAR, **rod},
+            "contact": {"stiffness": stiffness, "exponent": 0.0},
+            "numerics": {"duration": 6.5e-4},
+        }
 
     @classmethod
     def gauge_stress(cls, times: np.ndarray) -> np.ndarray:
         """The stress at the gauge (compression negative) at the model's `times`: the struck end's
         force x/c earlier, until the bar's far end sends its reflection back, at (2L − x)/c."""
         assert times[-1] < (2.0 * cls.BAR - cls.GAUGE) / cls.C
-        force = rods_through_a_spring(cls.VELOCITY, cls.STRIKER / cls.C, cls.Z, cls.Z, cls.STIFFNESS,
-                                      np.maximum(times - cls.GAUGE / cls.C, 0.0))
+        force = rods_through_a_spring(
+            cls.VELOCITY, cls.STRIKER / cls.C, cls.Z, cls.Z, cls.STIFFNESS, np.maximum(times - cls.GAUGE / cls.C, 0.0)
+        )
         return -force / cls.AREA
 
     @classmethod
@@ -320,9 +357,12 @@ class Hopkinson:
         rough = np.median(s[s > 0.5 * s.max()])
         above = np.flatnonzero(s >= 0.5 * rough)
         first, last = above[0], above[-1]
-        plateau = float(np.median(s[first + (last - first) // 4: last - (last - first) // 4]))
-        rise = np.interp(0.5 * plateau, s[first - 1:first + 1], t[first - 1:first + 1])
-        fall = np.interp(0.5 * plateau, s[last:last + 2][::-1], t[last:last + 2][::-1])
+        plateau = float(np.median(s[first + (last - first) // 4 : last - (last - first) // 4]))
+        rise = np.interp(0.5 * plateau, s[first - 1 : first + 1], t[first - 1 : first + 1])
+        fall = np.interp(0.5 * plateau, s[last : last + 2][::-1], t[last : last + 2][::-1])
         impulse = float(np.sum(s) * (t[1] - t[0]))
-        return {"velocity": 2.0 * plateau / (cls.RHO * cls.C), "half_width_length": cls.C * (fall - rise) / 2.0,
-                "impulse_length": cls.C * impulse / plateau / 2.0}
+        return {
+            "velocity": 2.0 * plateau / (cls.RHO * cls.C),
+            "half_width_length": cls.C * (fall - rise) / 2.0,
+            "impulse_length": cls.C * impulse / plateau / 2.0,
+        }

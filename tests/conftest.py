@@ -7,7 +7,6 @@ import os
 import shutil
 
 import pytest
-
 from percussim.solver.presets import preset_json
 from percussim.solver.reference import LinearImpact
 
@@ -40,8 +39,9 @@ BASE_CASE = {
 
 # A contact stiff in tension that the σ-scheme's end masses ring against on 60 cells: it passes
 # every check made up front and is refused as it runs, once it has chattered.
-CHATTERS = merge(BASE_CASE, {"numerics": {"scheme": "sigma", "cells": 60, "time_step": None},
-                             "contact": {"tension_stiffness": 1e12}})
+CHATTERS = merge(
+    BASE_CASE, {"numerics": {"scheme": "sigma", "cells": 60, "time_step": None}, "contact": {"tension_stiffness": 1e12}}
+)
 
 
 @pytest.fixture
@@ -56,7 +56,6 @@ def clean_environment(monkeypatch):
 def api_store(tmp_path, clean_environment):
     """The API in-process on a fresh results folder, and that folder's job store."""
     from fastapi.testclient import TestClient
-
     from percussim.service.app import create_app
     from percussim.worker.settings import Settings
     from percussim.worker.store import JobStore
@@ -69,7 +68,6 @@ def succeeded_job(client, jobs, result: str, case: dict | None = None) -> str:
     """A job submitted through the API, then given the result file `result` as a worker would
     have written it."""
     import h5py
-
     from percussim.worker.store import SUCCEEDED
 
     answer = client.post("/v1/jobs", json=case or BASE_CASE)

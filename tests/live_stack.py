@@ -60,8 +60,9 @@ def command_line(pid: int) -> str:
 class Process:
     def __init__(self, args: list[str], env: dict, log: Path):
         self.log = log
-        self.popen = subprocess.Popen(args, env=env, cwd=ROOT, stdout=log.open("wb"),
-                                      stderr=subprocess.STDOUT, start_new_session=True)
+        self.popen = subprocess.Popen(
+            args, env=env, cwd=ROOT, stdout=log.open("wb"), stderr=subprocess.STDOUT, start_new_session=True
+        )
 
     def stop(self, sig=signal.SIGTERM, timeout: float = 15.0) -> None:
         if self.popen.poll() is None:
@@ -90,9 +91,23 @@ class RedisServer:
         self.process: Process | None = None
 
     def start(self) -> None:
-        self.process = Process([self.binary, "--port", str(self.port), "--bind", "127.0.0.1",
-                                "--dir", str(self.folder), "--appendonly", "yes", "--save", ""],
-                               dict(os.environ), self.folder / "redis.log")
+        self.process = Process(
+            [
+                self.binary,
+                "--port",
+                str(self.port),
+                "--bind",
+                "127.0.0.1",
+                "--dir",
+                str(self.folder),
+                "--appendonly",
+                "yes",
+                "--save",
+                "",
+            ],
+            dict(os.environ),
+            self.folder / "redis.log",
+        )
         wait_for(lambda: redis.Redis.from_url(self.url, socket_timeout=0.5).ping(), 15, "redis-server")
 
     def stop(self) -> None:
@@ -118,8 +133,7 @@ class PostgresServer:
     empty database and returns its URL."""
 
     def __init__(self):
-        found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"),
-                       key=lambda path: int(Path(path).parts[-3]))
+        found = sorted(glob.glob("/usr/lib/postgresql/*/bin/initdb"), key=lambda path: int(Path(path).parts[-3]))
         if not found:
             raise RuntimeError("PostgreSQL is not installed: run the tests with scripts/test")
         self.bin = Path(found[-1]).parent
@@ -141,8 +155,7 @@ class PostgresServer:
 
     def start(self) -> None:
         options = f"-p {self.port} -k {self.folder} -c listen_addresses=127.0.0.1 -c fsync=off"
-        self._run("pg_ctl", "-D", str(self.data), "-o", options, "-l", str(self.folder / "postgres.log"),
-                  "-w", "start")
+        self._run("pg_ctl", "-D", str(self.data), "-o", options, "-l", str(self.folder / "postgres.log"), "-w", "start")
 
     def stop(self, mode: str = "fast") -> None:
         """`fast`: connections cut, a clean shutdown; `immediate`: as a crash, recovered at the next start."""
@@ -152,8 +165,9 @@ class PostgresServer:
         import psycopg
 
         name = f"percussim_{secrets.token_hex(4)}"
-        with psycopg.connect(f"host=127.0.0.1 port={self.port} user=postgres dbname=postgres",
-                             autocommit=True) as connection:
+        with psycopg.connect(
+            f"host=127.0.0.1 port={self.port} user=postgres dbname=postgres", autocommit=True
+        ) as connection:
             connection.execute(f"CREATE DATABASE {name}")
         return self.url(name)
 
@@ -179,8 +193,14 @@ def postgres_server():
 class Stack:
     """The API and its workers, sharing one results folder (and a broker, if given)."""
 
-    def __init__(self, folder: Path, broker_url: str | None, workers: int = 1,
-                 worker_env: dict | None = None, env: dict | None = None):
+    def __init__(
+        self,
+        folder: Path,
+        broker_url: str | None,
+        workers: int = 1,
+        worker_env: dict | None = None,
+        env: dict | None = None,
+    ):
         self.folder = folder
         self.env = {k: v for k, v in os.environ.items() if not k.startswith("PERCUSSIM_")}
         self.env["PERCUSSIM_RESULTS_DIR"] = str(folder / "results")
@@ -202,12 +222,18 @@ class Stack:
             self.serve_embedded = [*serve, "--workers", str(workers)]
             self.processes.append(Process(self.serve_embedded, self.env, folder / "api.log"))
         self.client = httpx.Client(base_url=self.url, timeout=30)
-        wait_for(lambda: len(self.client.get("/readyz").json().get("workers", [])) >= workers, 60,
-                 f"the API and {workers} worker(s)")
+        wait_for(
+            lambda: len(self.client.get("/readyz").json().get("workers", [])) >= workers,
+            60,
+            f"the API and {workers} worker(s)",
+        )
 
     def add_worker(self, name: str) -> Process:
-        worker = Process([sys.executable, "-m", "percussim", "worker", "--name", f"{name}@percussim"],
-                         self.env | self.worker_env, self.folder / f"worker-{name}.log")
+        worker = Process(
+            [sys.executable, "-m", "percussim", "worker", "--name", f"{name}@percussim"],
+            self.env | self.worker_env,
+            self.folder / f"worker-{name}.log",
+        )
         self.processes.append(worker)
         self.workers[f"{name}@percussim"] = worker
         return worker
@@ -231,11 +257,11 @@ class Stack:
         def status():
             record = self.client.get(f"/v1/jobs/{job_id}").json()
             return record if record["status"] in statuses else None
+
         return wait_for(status, timeout, f"job {job_id} in {statuses}")
 
     def logs(self) -> str:
-        return "\n".join(f"--- {p.log.name}\n{p.log.read_text(errors='replace')[-3000:]}"
-                         for p in self.processes)
+        return "\n".join(f"--- {p.log.name}\n{p.log.read_text(errors='replace')[-3000:]}" for p in self.processes)
 
     def stop(self) -> None:
         self.client.close()

@@ -8,17 +8,14 @@ import subprocess
 import sys
 
 import pytest
-
 from conftest import duration_only, merge
+from percussim.solver.accuracy import ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order, quantity_error
 from percussim.solver.case import CaseError, parse_case
-from percussim.solver.accuracy import (ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order,
-                             quantity_error)
 from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference
 from percussim.solver.presets import preset_json
 from percussim.solver.reference import LinearImpact, true_errors
 from percussim.solver.simulate import simulate
-
 
 
 def truth_of(case: dict) -> dict[str, float]:
@@ -28,11 +25,11 @@ def truth_of(case: dict) -> dict[str, float]:
 
 def errors_against(summary: dict, truth: dict[str, float]) -> dict[str, float]:
     found = estimated_values(summary)
-    return {name: abs(found[name] / value - 1.0) for name, value in truth.items()
-            if name in summary["error_estimate"]}
+    return {name: abs(found[name] / value - 1.0) for name, value in truth.items() if name in summary["error_estimate"]}
 
 
 # --- the estimator --------------------------------------------------------------------------
+
 
 @pytest.mark.parametrize("order", [0.8, 1.0, 2.0, 3.0])
 @pytest.mark.parametrize("cells", [(10, 20, 40), (10, 17, 40)])
@@ -71,6 +68,7 @@ def test_grids_out_of_their_asymptotic_range_give_the_largest_change_and_say_so(
 
 # --- the default accuracy -------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("name", ["fig3", "fig9"])
 def test_a_case_that_gives_only_a_duration_is_within_one_percent_and_says_so(name):
     """The paper's scheme on its default grid was off by up to 23% here without a word."""
@@ -87,10 +85,14 @@ def test_a_case_that_gives_only_a_duration_is_within_one_percent_and_says_so(nam
 def test_a_pulse_from_rest_at_odd_times_is_within_the_tolerance():
     """A force that jumps at instants no grid falls on: each jump is placed where it is, so the
     order does not drop (it came back 1.4% off on the peak force under 1e-2)."""
-    case = merge(duration_only("fig3"), {
-        "striker": {"velocity": 0.0},
-        "force": {"kind": "pulse", "amplitude": 2.2e5, "start": 1.234567e-5, "duration": 1.87654321e-4},
-        "numerics": {"duration": 6e-4, "tolerance": 1e-2}})
+    case = merge(
+        duration_only("fig3"),
+        {
+            "striker": {"velocity": 0.0},
+            "force": {"kind": "pulse", "amplitude": 2.2e5, "start": 1.234567e-5, "duration": 1.87654321e-4},
+            "numerics": {"duration": 6e-4, "tolerance": 1e-2},
+        },
+    )
     summary = simulate(parse_case(case)).summary
     errors = errors_against(summary, truth_of(case))
     print(errors, summary["error_estimate"])
@@ -136,7 +138,8 @@ def test_what_has_no_relative_error_is_left_out_with_the_reason():
 def test_the_transfer_efficiency_is_the_energy_to_the_medium_over_the_energy_put_in():
     energy = simulate(parse_case(duration_only("fig9"))).summary["energy"]
     assert energy["transfer_efficiency"] == pytest.approx(
-        energy["to_medium"] / (energy["initial"] + energy["external_work"]))
+        energy["to_medium"] / (energy["initial"] + energy["external_work"])
+    )
     assert 0.0 < energy["transfer_efficiency"] < 1.0
 
 
@@ -177,6 +180,7 @@ def test_local_runs_read_the_limits_and_say_how_to_raise_them(tmp_path):
 
 # --- closed forms ---------------------------------------------------------------------------
 
+
 @pytest.mark.parametrize("tol", [1e-2, 1e-3])
 def test_the_damped_oscillator_on_a_long_bar_is_met_rebound_included(tol):
     """A mass on a spring on a semi-infinite bar: `δ'' + (k/Z)δ' + (k/m1)δ = 0`, and the striker
@@ -186,15 +190,15 @@ def test_the_damped_oscillator_on_a_long_bar_is_met_rebound_included(tol):
     summary = simulate(parse_case(case)).summary
     errors = true_errors(summary, ref.truth())
     print(tol, errors, summary["error_estimate"])
-    assert set(errors) >= {"co_impact_time", "peak_contact_force", "max_compressive_stress",
-                           "striker_rebound_velocity"}
+    assert set(errors) >= {"co_impact_time", "peak_contact_force", "max_compressive_stress", "striker_rebound_velocity"}
     assert max(errors.values()) <= tol
     assert set(ESTIMATED) - set(summary["error_estimate"]) == set(summary["not_estimated"])
 
 
 def test_a_tolerance_whose_first_grid_is_beyond_the_limits_is_refused_naming_it():
-    case = parse_case(merge(LinearImpact().case(10), {"numerics": {"cells": None, "time_step": None,
-                                                                   "tolerance": 1e-5}}))
+    case = parse_case(
+        merge(LinearImpact().case(10), {"numerics": {"cells": None, "time_step": None, "tolerance": 1e-5}})
+    )
     with pytest.raises(CaseError) as error:
         simulate(case, limits=Limits(max_node_steps=1e3))
     [e] = error.value.errors

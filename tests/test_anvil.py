@@ -18,10 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from closed_forms import AREA, STEEL, V, anvil_case, linear_three_bodies, two_body_impact
 
 import percussim
-
-from closed_forms import (AREA, STEEL, V, anvil_case, linear_three_bodies, two_body_impact)
 
 FINE = {"scheme": "explicit", "cells": 800}
 TOLERANCE = {"tolerance": 0.01}
@@ -43,8 +42,7 @@ def test_a_vanishing_anvil_is_no_anvil(numerics):
     for key in ("peak_contact_force", "max_compressive_stress"):
         assert got[key]["value"] == pytest.approx(want[key]["value"], rel=within)
     # the rebound is small against the impact velocity: held to the same share of that
-    assert got["striker_rebound_velocity"] == pytest.approx(want["striker_rebound_velocity"],
-                                                            abs=within * V)
+    assert got["striker_rebound_velocity"] == pytest.approx(want["striker_rebound_velocity"], abs=within * V)
     assert got["energy"]["to_medium"] == pytest.approx(want["energy"]["to_medium"], rel=within)
     assert abs(got["energy"]["numerical"]) <= 5e-3 * supplied(got)
 
@@ -55,22 +53,24 @@ def test_two_body_impact(numerics, striker_mass, anvil_mass):
     """The striker–anvil contact (k = 1e10 N/m, 26–43 µs) against the closed forms of a
     two-body elastic impact; the anvil rests on a contact 1e4 times as soft."""
     k = 1e10
-    case = anvil_case(anvil_mass, numerics, striker_mass=striker_mass,
-                      anvil_contact={"stiffness": 1e6, "exponent": 0.0},
-                      contact={"stiffness": k, "exponent": 0.0})
+    case = anvil_case(
+        anvil_mass,
+        numerics,
+        striker_mass=striker_mass,
+        anvil_contact={"stiffness": 1e6, "exponent": 0.0},
+        contact={"stiffness": k, "exponent": 0.0},
+    )
     result = percussim.simulate(case)
     s = result.summary
     striker_after, anvil_after, contact_time = two_body_impact(striker_mass, anvil_mass, k)
     assert s["co_impact_time"] == pytest.approx(contact_time, rel=5e-3)
     v1 = s["striker_rebound_velocity"]
-    va = float(np.interp(s["co_impact_time"], result.history["time"],
-                         result.history["anvil/velocity"]))
+    va = float(np.interp(s["co_impact_time"], result.history["time"], result.history["anvil/velocity"]))
     assert v1 == pytest.approx(striker_after, abs=2e-3 * V)
     assert va == pytest.approx(anvil_after, abs=2e-3 * V)
     # momentum and energy pass between the two bodies, not to the tool
     assert striker_mass * v1 + anvil_mass * va == pytest.approx(striker_mass * V, rel=2e-3)
-    assert 0.5 * (striker_mass * v1**2 + anvil_mass * va**2) == pytest.approx(
-        0.5 * striker_mass * V**2, rel=4e-3)
+    assert 0.5 * (striker_mass * v1**2 + anvil_mass * va**2) == pytest.approx(0.5 * striker_mass * V**2, rel=4e-3)
     assert abs(s["energy"]["numerical"]) <= 5e-3 * supplied(s)
 
 
@@ -80,10 +80,14 @@ def test_the_pulse_an_anvil_prolongs(numerics):
     the tool against the linear system's, until the first contact opens, within 1% of the peak;
     a third of the mass as an anvil makes the pulse longer than the striker alone makes it."""
     m1, ma, k = 2.0, 1.0, 2e9
-    case = anvil_case(ma, {**numerics, "duration": 4e-4}, striker_mass=m1,
-                      anvil_contact={"stiffness": k, "exponent": 0.0},
-                      contact={"stiffness": k, "exponent": 0.0},
-                      tool={"length": 5.0, "area": AREA, **STEEL})
+    case = anvil_case(
+        ma,
+        {**numerics, "duration": 4e-4},
+        striker_mass=m1,
+        anvil_contact={"stiffness": k, "exponent": 0.0},
+        contact={"stiffness": k, "exponent": 0.0},
+        tool={"length": 5.0, "area": AREA, **STEEL},
+    )
     result = percussim.simulate(case)
     h = result.history
     opens = result.summary["co_impact_time"]
@@ -110,16 +114,27 @@ def test_energy_closes_with_an_anvil():
     piston = {"velocity": V, "length": 0.2, "area": AREA, **STEEL}
     hertz = {"stiffness": 1e11, "exponent": 0.5, "damping": 300.0, "tension_stiffness": 1e6}
     cases = [
-        anvil_case(0.5, TOLERANCE, anvil_contact={"stiffness": 5e9, "exponent": 0.0},
-                   striker=piston,
-                   medium={"kind": "bilinear", "stiffness": 2e8, "unloading_stiffness": 2e9}),
-        anvil_case(0.5, TOLERANCE, anvil_contact=hertz,
-                   contact={"stiffness": 5e10, "exponent": 0.5, "damping": 100.0},
-                   medium={"stiffness": 5e7, "damping": 1e3}),
-        anvil_case(0.5, TOLERANCE, anvil_contact={"stiffness": 5e9, "exponent": 0.0},
-                   medium={"kind": "smith", "ultimate_resistance": 3e4, "quake": 2.5e-3,
-                           "damping_factor": 0.5},
-                   blows={"count": 4}),
+        anvil_case(
+            0.5,
+            TOLERANCE,
+            anvil_contact={"stiffness": 5e9, "exponent": 0.0},
+            striker=piston,
+            medium={"kind": "bilinear", "stiffness": 2e8, "unloading_stiffness": 2e9},
+        ),
+        anvil_case(
+            0.5,
+            TOLERANCE,
+            anvil_contact=hertz,
+            contact={"stiffness": 5e10, "exponent": 0.5, "damping": 100.0},
+            medium={"stiffness": 5e7, "damping": 1e3},
+        ),
+        anvil_case(
+            0.5,
+            TOLERANCE,
+            anvil_contact={"stiffness": 5e9, "exponent": 0.0},
+            medium={"kind": "smith", "ultimate_resistance": 3e4, "quake": 2.5e-3, "damping_factor": 0.5},
+            blows={"count": 4},
+        ),
     ]
     cases[1]["anvil"]["velocity"] = 1.0
     for case in cases:

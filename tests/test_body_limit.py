@@ -12,7 +12,6 @@ import urllib.request
 import httpx
 import pytest
 import requests
-
 from conftest import BASE_CASE, merge
 from live_stack import Stack
 
@@ -34,7 +33,7 @@ def stack(tmp_path_factory):
 
 def chunks(body: bytes):
     """`body` as an iterator, which every client sends chunked, without a Content-Length."""
-    return (body[k:k + 16384] for k in range(0, len(body), 16384))
+    return (body[k : k + 16384] for k in range(0, len(body), 16384))
 
 
 def with_urllib(url: str, body: bytes, chunked: bool, tmp_path) -> tuple[int, bytes]:
@@ -60,8 +59,21 @@ def with_curl(url: str, body: bytes, chunked: bool, tmp_path) -> tuple[int, byte
     curl = shutil.which("curl")
     assert curl, "curl is not installed: these tests need it (apt-get install curl)"
     (tmp_path / "body.json").write_bytes(body)
-    args = [curl, "-sS", "--max-time", "30", "-o", str(tmp_path / "answer"), "-w", "%{http_code}",
-            "-H", "Content-Type: application/json", "--data-binary", f"@{tmp_path / 'body.json'}", url]
+    args = [
+        curl,
+        "-sS",
+        "--max-time",
+        "30",
+        "-o",
+        str(tmp_path / "answer"),
+        "-w",
+        "%{http_code}",
+        "-H",
+        "Content-Type: application/json",
+        "--data-binary",
+        f"@{tmp_path / 'body.json'}",
+        url,
+    ]
     if chunked:
         args[1:1] = ["-H", "Transfer-Encoding: chunked"]
     run = subprocess.run(args, capture_output=True, text=True)
@@ -70,13 +82,15 @@ def with_curl(url: str, body: bytes, chunked: bool, tmp_path) -> tuple[int, byte
 
 
 @pytest.mark.parametrize("chunked", [False, True], ids=["content-length", "chunked"])
-@pytest.mark.parametrize("post", [with_urllib, with_requests, with_httpx, with_curl],
-                         ids=["urllib", "requests", "httpx", "curl"])
+@pytest.mark.parametrize(
+    "post", [with_urllib, with_requests, with_httpx, with_curl], ids=["urllib", "requests", "httpx", "curl"]
+)
 def test_every_client_reads_the_413_of_an_oversized_body(stack, post, chunked, tmp_path):
     status, body = post(f"{stack.url}/v1/jobs", BIG, chunked, tmp_path)
     assert status == 413, body
-    assert json.loads(body)["detail"] == [{"field": "body", "message":
-                                          f"is larger than the limit of {LIMIT} bytes (PERCUSSIM_MAX_BODY_BYTES)"}]
+    assert json.loads(body)["detail"] == [
+        {"field": "body", "message": f"is larger than the limit of {LIMIT} bytes (PERCUSSIM_MAX_BODY_BYTES)"}
+    ]
 
 
 def test_a_body_under_the_limit_is_accepted_and_a_413_leaves_the_client_usable(stack):

@@ -22,8 +22,14 @@ print(json.dumps({"hits": sum(s.cache_hits.values()), "misses": sum(s.cache_miss
 
 def test_a_new_process_loads_the_compiled_kernel():
     root = Path(__file__).resolve().parents[1]
-    runs = [json.loads(subprocess.run([sys.executable, "-c", PROBE], cwd=root, capture_output=True,
-                                      text=True, check=True, timeout=300).stdout) for _ in range(2)]
+    runs = [
+        json.loads(
+            subprocess.run(
+                [sys.executable, "-c", PROBE], cwd=root, capture_output=True, text=True, check=True, timeout=300
+            ).stdout
+        )
+        for _ in range(2)
+    ]
     # The first run may have filled the cache; the second must only read it.
     assert runs[1] == {"hits": 1, "misses": 0}
 
@@ -56,8 +62,9 @@ def test_a_changed_slot_constant_recompiles_the_kernel(tmp_path):
     env.pop("NUMBA_CACHE_DIR", None)  # the copy's own cache, in its __pycache__
 
     def probe() -> dict:
-        done = subprocess.run([sys.executable, "-c", STALE_PROBE], cwd=tmp_path, capture_output=True, text=True,
-                              env=env, timeout=600)
+        done = subprocess.run(
+            [sys.executable, "-c", STALE_PROBE], cwd=tmp_path, capture_output=True, text=True, env=env, timeout=600
+        )
         assert done.returncode == 0, done.stderr
         return json.loads(done.stdout)
 

@@ -10,15 +10,15 @@ import math
 
 import numpy as np
 import pytest
-
-from percussim.cli import main
 from percussim.solver.calibrate import calibrate, record_noise
-from percussim.solver.study import check_calibration, parse_calibration
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.evaluate import Space
 from percussim.solver.presets import preset_json
 from percussim.solver.record import Record, parse_record, read_record, record_from_csv, record_to_csv
+from percussim.solver.study import check_calibration, parse_calibration
+
+from percussim.cli import main
 
 TRUE = {"contact.stiffness": 8e11, "medium.stiffness": 2e9, "medium.damping": 1e5}
 BOUNDS = {"contact.stiffness": [1e9, 1e15], "medium.stiffness": [1e7, 1e11], "medium.damping": [0.0, 1e6]}
@@ -42,12 +42,19 @@ def other_setting_record(quantity: str, end: float = 1.5e-3, seed: int = 1) -> d
     case["outputs"] = {"probes": [GAUGE]}
     run = simulate_rod(parse_case(case))
     t = np.arange(0.0, end, 1e-6)
-    samples = {"contact_force": run.history["contact/force"], "medium_force": run.history["medium/force"],
-               "stress": run.probe_stress[:, 0]}[quantity]
+    samples = {
+        "contact_force": run.history["contact/force"],
+        "medium_force": run.history["medium/force"],
+        "stress": run.probe_stress[:, 0],
+    }[quantity]
     values = np.interp(t, run.history["time"], samples)
     values += NOISE * np.abs(values).max() * np.random.default_rng(seed).standard_normal(len(t))
-    return {"quantity": quantity, "time": t.tolist(), "values": values.tolist(),
-            **({"x": GAUGE} if quantity == "stress" else {})}
+    return {
+        "quantity": quantity,
+        "time": t.tolist(),
+        "values": values.tolist(),
+        **({"x": GAUGE} if quantity == "stress" else {}),
+    }
 
 
 START = {"contact.stiffness": 1e11, "medium.stiffness": 5e8, "medium.damping": 4e5}
@@ -75,8 +82,14 @@ def assert_recovered(fit: dict, names) -> None:
 @pytest.mark.parametrize("quantity", ["contact_force", "stress"])
 def test_two_parameters_are_recovered_within_5_percent_and_3_standard_errors(quantity):
     names = ["contact.stiffness", "medium.stiffness"]
-    fit = calibrate({"case": start_case(names), "record": other_setting_record(quantity),
-                     "parameters": {n: BOUNDS[n] for n in names}}, processes=1)
+    fit = calibrate(
+        {
+            "case": start_case(names),
+            "record": other_setting_record(quantity),
+            "parameters": {n: BOUNDS[n] for n in names},
+        },
+        processes=1,
+    )
     assert_recovered(fit, names)
     assert fit["warnings"] == []
     # The misfit is the noise: nothing systematic is left.
@@ -91,8 +104,9 @@ def test_two_parameters_are_recovered_within_5_percent_and_3_standard_errors(qua
 
 @pytest.mark.parametrize("quantity", ["contact_force", "stress"])
 def test_three_parameters_are_recovered_within_5_percent_and_3_standard_errors(quantity):
-    fit = calibrate({"case": start_case(), "record": other_setting_record(quantity, seed=3),
-                     "parameters": BOUNDS}, processes=1)
+    fit = calibrate(
+        {"case": start_case(), "record": other_setting_record(quantity, seed=3), "parameters": BOUNDS}, processes=1
+    )
     assert_recovered(fit, BOUNDS)
     assert fit["warnings"] == []
 
@@ -101,8 +115,17 @@ def test_the_standard_errors_match_the_scatter_of_repeated_fits():
     """Ten records differing only in their noise: the values found scatter as the standard errors
     say (their ratio within 0.5–2, a loose band for ten samples)."""
     names = ["contact.stiffness", "medium.stiffness"]
-    fits = [calibrate({"case": start_case(names), "record": other_setting_record("stress", seed=seed),
-                       "parameters": {n: BOUNDS[n] for n in names}}, processes=1) for seed in range(10)]
+    fits = [
+        calibrate(
+            {
+                "case": start_case(names),
+                "record": other_setting_record("stress", seed=seed),
+                "parameters": {n: BOUNDS[n] for n in names},
+            },
+            processes=1,
+        )
+        for seed in range(10)
+    ]
     for name in names:
         values = np.array([f["parameters"][name]["value"] for f in fits])
         stated = np.mean([f["parameters"][name]["standard_error"] for f in fits])
@@ -112,9 +135,17 @@ def test_the_standard_errors_match_the_scatter_of_repeated_fits():
 def test_a_record_that_cannot_determine_a_parameter_is_warned_about():
     """The contact force before the wave's return from the medium (2L/a = 0.23 ms) says nothing
     of the medium."""
-    fit = calibrate({"case": start_case(("contact.stiffness", "medium.stiffness")), "record": other_setting_record("contact_force", end=0.2e-3),
-                     "parameters": {"contact.stiffness": BOUNDS["contact.stiffness"],
-                                    "medium.stiffness": BOUNDS["medium.stiffness"]}}, processes=1)
+    fit = calibrate(
+        {
+            "case": start_case(("contact.stiffness", "medium.stiffness")),
+            "record": other_setting_record("contact_force", end=0.2e-3),
+            "parameters": {
+                "contact.stiffness": BOUNDS["contact.stiffness"],
+                "medium.stiffness": BOUNDS["medium.stiffness"],
+            },
+        },
+        processes=1,
+    )
     warned = [w for w in fit["warnings"] if w.startswith("medium.stiffness is not determined")]
     assert warned and "not unique" in warned[0]
     assert fit["parameters"]["medium.stiffness"]["standard_error"] is None
@@ -122,19 +153,27 @@ def test_a_record_that_cannot_determine_a_parameter_is_warned_about():
 
 
 def test_a_parameter_at_its_bound_is_warned_about():
-    fit = calibrate({"case": start_case(("contact.stiffness", "medium.stiffness")),
-                     "record": other_setting_record("stress"),
-                     "parameters": {"contact.stiffness": BOUNDS["contact.stiffness"],
-                                    "medium.stiffness": [1e7, 1e9]}}, processes=1)
+    fit = calibrate(
+        {
+            "case": start_case(("contact.stiffness", "medium.stiffness")),
+            "record": other_setting_record("stress"),
+            "parameters": {"contact.stiffness": BOUNDS["contact.stiffness"], "medium.stiffness": [1e7, 1e9]},
+        },
+        processes=1,
+    )
     assert any(w.startswith("medium.stiffness ended at its upper bound") for w in fit["warnings"])
 
 
 def test_strongly_correlated_parameters_are_warned_about():
     """A Hertz contact's stiffness and exponent trade off against each other over one contact."""
-    fit = calibrate({"case": start_case(("contact.stiffness",)),
-                     "record": other_setting_record("contact_force", end=0.12e-3),
-                     "parameters": {"contact.stiffness": [1e10, 1e13], "contact.exponent": [0.3, 0.5]}},
-                    processes=1)
+    fit = calibrate(
+        {
+            "case": start_case(("contact.stiffness",)),
+            "record": other_setting_record("contact_force", end=0.12e-3),
+            "parameters": {"contact.stiffness": [1e10, 1e13], "contact.exponent": [0.3, 0.5]},
+        },
+        processes=1,
+    )
     assert any("strongly correlated" in w and "contact.exponent" in w for w in fit["warnings"]), fit["warnings"]
 
 
@@ -146,22 +185,32 @@ def test_the_record_noise_estimate_reads_the_added_noise():
 
 # Bad records: refused with the reason, naming the field.
 
+
 def good_record() -> dict:
-    return {"quantity": "contact_force", "time": [i * 1e-6 for i in range(50)],
-            "values": [math.sin(i / 10.0) * 1e5 for i in range(50)]}
+    return {
+        "quantity": "contact_force",
+        "time": [i * 1e-6 for i in range(50)],
+        "values": [math.sin(i / 10.0) * 1e5 for i in range(50)],
+    }
 
 
-@pytest.mark.parametrize("change, field, words", [
-    ({"time": [i * 1e-6 for i in range(49)] + [10e-6]}, "record.time[49]", "must increase"),
-    ({"values": [1.0] * 20 + [float("nan")] + [1.0] * 29}, "record.values[20]", "finite"),
-    ({"time": [i * 1e-6 for i in range(10)], "values": [float(i) for i in range(10)]}, "record.time",
-     "at least 20"),
-    ({"quantity": "stress"}, "record.x", "is required"),
-    ({"quantity": "displacement"}, "record.quantity", ""),
-    ({"values": [1.0] * 49}, "record.values", "one value per time"),
-    ({"values": [1.0] * 3 + [True] + [1.0] * 46}, "record.values[3]", "must be a number, not true"),
-    ({"time": ["0"] + [i * 1e-6 for i in range(1, 50)]}, "record.time[0]", 'not the string "0"'),
-])
+@pytest.mark.parametrize(
+    "change, field, words",
+    [
+        ({"time": [i * 1e-6 for i in range(49)] + [10e-6]}, "record.time[49]", "must increase"),
+        ({"values": [1.0] * 20 + [float("nan")] + [1.0] * 29}, "record.values[20]", "finite"),
+        (
+            {"time": [i * 1e-6 for i in range(10)], "values": [float(i) for i in range(10)]},
+            "record.time",
+            "at least 20",
+        ),
+        ({"quantity": "stress"}, "record.x", "is required"),
+        ({"quantity": "displacement"}, "record.quantity", ""),
+        ({"values": [1.0] * 49}, "record.values", "one value per time"),
+        ({"values": [1.0] * 3 + [True] + [1.0] * 46}, "record.values[3]", "must be a number, not true"),
+        ({"time": ["0"] + [i * 1e-6 for i in range(1, 50)]}, "record.time[0]", 'not the string "0"'),
+    ],
+)
 def test_bad_records_are_refused_naming_the_field(change, field, words):
     with pytest.raises(CaseError) as refused:
         parse_record(good_record() | change)
@@ -174,14 +223,16 @@ def test_a_gauge_off_the_tool_and_a_record_past_the_case_are_refused():
     record = other_setting_record("stress")
     off = dict(record, x=0.9)  # the tool is 0.6 m long
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": start_case(), "record": off,
-                                             "parameters": {"contact.stiffness": [1e9, 1e13]}}))
+        check_calibration(
+            parse_calibration({"case": start_case(), "record": off, "parameters": {"contact.stiffness": [1e9, 1e13]}})
+        )
     assert refused.value.errors[0].field == "record.x"
     assert "off the tool" in refused.value.errors[0].message
     late = dict(record, time=[t * 1000.0 for t in record["time"]])  # ms given as s
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": start_case(), "record": late,
-                                             "parameters": {"contact.stiffness": [1e9, 1e13]}}))
+        check_calibration(
+            parse_calibration({"case": start_case(), "record": late, "parameters": {"contact.stiffness": [1e9, 1e13]}})
+        )
     assert refused.value.errors[0].field == "record.time"
     assert "seconds" in refused.value.errors[0].message
 
@@ -212,16 +263,31 @@ def test_csv_round_trip_and_refusals(tmp_path):
 
 def test_parameters_must_be_continuous_fields_the_case_can_take():
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": start_case(), "record": good_record(),
-                                             "parameters": {"striker.colour": [1.0, 2.0],
-                                                            "contact.exponent": [0.2, 0.9],
-                                                            "contact.damping": [5.0, 1.0]}}))
+        check_calibration(
+            parse_calibration(
+                {
+                    "case": start_case(),
+                    "record": good_record(),
+                    "parameters": {
+                        "striker.colour": [1.0, 2.0],
+                        "contact.exponent": [0.2, 0.9],
+                        "contact.damping": [5.0, 1.0],
+                    },
+                }
+            )
+        )
     fields = {e.field for e in refused.value.errors}
     assert fields == {"parameters['contact.damping']"}  # low > high is seen first
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": start_case(), "record": good_record(),
-                                             "parameters": {"striker.colour": [1.0, 2.0],
-                                                            "contact.exponent": [0.2, 0.9]}}))
+        check_calibration(
+            parse_calibration(
+                {
+                    "case": start_case(),
+                    "record": good_record(),
+                    "parameters": {"striker.colour": [1.0, 2.0], "contact.exponent": [0.2, 0.9]},
+                }
+            )
+        )
     fields = {e.field for e in refused.value.errors}
     assert "parameters['striker.colour'][0]" in fields and "parameters['contact.exponent'][1]" in fields
 
@@ -238,9 +304,22 @@ def test_the_command_line_fits_and_refuses(tmp_path, capsys):
     record = Record(**other_setting_record("stress"))
     (tmp_path / "r.csv").write_text(record_to_csv(record))
     (tmp_path / "case.json").write_text(json.dumps(start_case(("contact.stiffness", "medium.stiffness"))))
-    code = main(["calibrate", str(tmp_path / "case.json"), "--record", str(tmp_path / "r.csv"),
-                 "--fit", "contact.stiffness=1e9:1e15", "--fit", "medium.stiffness=1e7:1e11",
-                 "--output", str(tmp_path / "fit.json"), "--plot", str(tmp_path / "fit.png")])
+    code = main(
+        [
+            "calibrate",
+            str(tmp_path / "case.json"),
+            "--record",
+            str(tmp_path / "r.csv"),
+            "--fit",
+            "contact.stiffness=1e9:1e15",
+            "--fit",
+            "medium.stiffness=1e7:1e11",
+            "--output",
+            str(tmp_path / "fit.json"),
+            "--plot",
+            str(tmp_path / "fit.png"),
+        ]
+    )
     assert code == 0
     shown = json.loads(capsys.readouterr().out)
     assert abs(shown["parameters"]["medium.stiffness"]["value"] / TRUE["medium.stiffness"] - 1) < 0.05
@@ -248,7 +327,15 @@ def test_the_command_line_fits_and_refuses(tmp_path, capsys):
     assert len(saved["series"]["model"]) == len(record.time)
     assert (tmp_path / "fit.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
     (tmp_path / "bad.csv").write_text(record_to_csv(record).replace("\n1e-06,", "\n-1e-06,", 1))
-    code = main(["calibrate", str(tmp_path / "case.json"), "--record", str(tmp_path / "bad.csv"),
-                 "--fit", "contact.stiffness=1e9:1e15"])
+    code = main(
+        [
+            "calibrate",
+            str(tmp_path / "case.json"),
+            "--record",
+            str(tmp_path / "bad.csv"),
+            "--fit",
+            "contact.stiffness=1e9:1e15",
+        ]
+    )
     assert code == 2
     assert "record.time[1]: must increase" in capsys.readouterr().err

@@ -3,7 +3,6 @@
 import json
 
 import pytest
-
 from conftest import BASE_CASE, merge
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.grid import resolve_numerics
@@ -18,30 +17,45 @@ def _refusal(changes: dict) -> dict[str, str]:
     return {e.field: e.message for e in caught.value.errors}
 
 
-@pytest.mark.parametrize("changes, field, words", [
-    ({"striker": {"mass": -1.0}}, "striker.mass", "must be > 0"),
-    ({"tool": {"area": 0.0}}, "tool.area", "must be > 0"),
-    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.2], "area": [0.01, 0.01, -0.005, 0.004]}}},
-     "tool.profile.area[2]", "must be > 0"),
-    ({"tool": {**PROFILE, "profile": {"x": [0, 0.7, 0.5, 1.2], "area": [0.01, 0.01, 0.005, 0.004]}}},
-     "tool.profile.x", "strictly increasing: x[2]"),
-    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0], "area": [0.01, 0.01, 0.005, 0.004]}}},
-     "tool.profile.area", "one area per station"),
-    ({"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.3], "area": [0.01, 0.01, 0.005, 0.004]}}},
-     "tool.profile.x[3]", "must equal tool.length"),
-    ({"tool": {"profile": PROFILE["profile"]}}, "tool.area", "exactly one"),
-    ({"contact": {"exponent": 0.7}}, "contact.exponent", "must be ≤ 0.5"),
-    ({"contact": {"exponent": -0.1}}, "contact.exponent", "must be ≥ 0"),
-    ({"contact": {"tension_stiffness": -1.0}}, "contact.tension_stiffness", "must be ≥ 0"),
-    ({"medium": {"damping": -5.0}}, "medium.damping", "must be ≥ 0"),
-    ({"numerics": {"gamma": 0.3}}, "numerics.gamma", "must be ≥ 0.5"),
-    ({"numerics": {"duration": None}}, "numerics.duration", "is required"),
-    ({"numerics": {"cells": 10.5}}, "numerics.cells", "whole number"),
-    ({"outputs": {"probes": [0.1, 1.5]}}, "outputs.probes[1]", "must lie on the tool"),
-    ({"striker": {"speed": 5.0}}, "striker.speed", "not a known field"),
-    ({"force": {"kind": "square", "amplitude": 1.0}}, "force", "kind must be one of"),
-    ({"force": {"kind": "pulse", "amplitude": 1.0, "duration": 0.0}}, "force.duration", "must be > 0"),
-])
+@pytest.mark.parametrize(
+    "changes, field, words",
+    [
+        ({"striker": {"mass": -1.0}}, "striker.mass", "must be > 0"),
+        ({"tool": {"area": 0.0}}, "tool.area", "must be > 0"),
+        (
+            {"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.2], "area": [0.01, 0.01, -0.005, 0.004]}}},
+            "tool.profile.area[2]",
+            "must be > 0",
+        ),
+        (
+            {"tool": {**PROFILE, "profile": {"x": [0, 0.7, 0.5, 1.2], "area": [0.01, 0.01, 0.005, 0.004]}}},
+            "tool.profile.x",
+            "strictly increasing: x[2]",
+        ),
+        (
+            {"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0], "area": [0.01, 0.01, 0.005, 0.004]}}},
+            "tool.profile.area",
+            "one area per station",
+        ),
+        (
+            {"tool": {**PROFILE, "profile": {"x": [0, 0.5, 1.0, 1.3], "area": [0.01, 0.01, 0.005, 0.004]}}},
+            "tool.profile.x[3]",
+            "must equal tool.length",
+        ),
+        ({"tool": {"profile": PROFILE["profile"]}}, "tool.area", "exactly one"),
+        ({"contact": {"exponent": 0.7}}, "contact.exponent", "must be ≤ 0.5"),
+        ({"contact": {"exponent": -0.1}}, "contact.exponent", "must be ≥ 0"),
+        ({"contact": {"tension_stiffness": -1.0}}, "contact.tension_stiffness", "must be ≥ 0"),
+        ({"medium": {"damping": -5.0}}, "medium.damping", "must be ≥ 0"),
+        ({"numerics": {"gamma": 0.3}}, "numerics.gamma", "must be ≥ 0.5"),
+        ({"numerics": {"duration": None}}, "numerics.duration", "is required"),
+        ({"numerics": {"cells": 10.5}}, "numerics.cells", "whole number"),
+        ({"outputs": {"probes": [0.1, 1.5]}}, "outputs.probes[1]", "must lie on the tool"),
+        ({"striker": {"speed": 5.0}}, "striker.speed", "not a known field"),
+        ({"force": {"kind": "square", "amplitude": 1.0}}, "force", "kind must be one of"),
+        ({"force": {"kind": "pulse", "amplitude": 1.0, "duration": 0.0}}, "force.duration", "must be > 0"),
+    ],
+)
 def test_refusal_names_the_field(changes, field, words):
     errors = _refusal(changes)
     assert field in errors, errors
@@ -62,11 +76,14 @@ def test_valid_profile_and_defaults():
     assert 0 < numerics.courant <= 1.0  # the default step never exceeds the wave's Courant limit
 
 
-@pytest.mark.parametrize("changes, limits, field, words", [
-    ({"numerics": {"cells": 5000}}, Limits(max_cells=1000), "numerics.cells", "limit of 1000"),
-    ({"numerics": {"duration": 1.0}}, Limits(max_steps=10**6), "numerics.time_step", "limit of 1000000"),
-    ({"outputs": {"fields": True, "field_stride": 1}}, Limits(max_output_values=1e5), "outputs", "limit"),
-])
+@pytest.mark.parametrize(
+    "changes, limits, field, words",
+    [
+        ({"numerics": {"cells": 5000}}, Limits(max_cells=1000), "numerics.cells", "limit of 1000"),
+        ({"numerics": {"duration": 1.0}}, Limits(max_steps=10**6), "numerics.time_step", "limit of 1000000"),
+        ({"outputs": {"fields": True, "field_stride": 1}}, Limits(max_output_values=1e5), "outputs", "limit"),
+    ],
+)
 def test_a_case_over_a_limit_is_refused_up_front(changes, limits, field, words):
     case = parse_case(merge(BASE_CASE, changes))
     with pytest.raises(CaseError) as caught:
@@ -76,8 +93,7 @@ def test_a_case_over_a_limit_is_refused_up_front(changes, limits, field, words):
 
 
 def test_a_case_whose_time_step_cannot_be_chosen_is_refused():
-    case = parse_case(merge(BASE_CASE, {"striker": {"mass": 5e-324},
-                                        "numerics": {"time_step": None}}))
+    case = parse_case(merge(BASE_CASE, {"striker": {"mass": 5e-324}, "numerics": {"time_step": None}}))
     with pytest.raises(CaseError) as caught:
         resolve_numerics(case)
     assert caught.value.errors[0].field == "numerics.time_step"
@@ -85,12 +101,15 @@ def test_a_case_whose_time_step_cannot_be_chosen_is_refused():
 
 def test_blows_count_toward_the_limits_and_the_refusal_says_so():
     """1000 blows of 1 ms: every blow's steps count, and fewer blows is offered as a way out."""
-    case = parse_case(merge(BASE_CASE, {
-        "numerics": {"scheme": "explicit", "time_step": None, "gamma": None},
-        "blows": {"count": 1000}}))
+    case = parse_case(
+        merge(
+            BASE_CASE, {"numerics": {"scheme": "explicit", "time_step": None, "gamma": None}, "blows": {"count": 1000}}
+        )
+    )
     numerics = resolve_numerics(case)
-    one_blow = resolve_numerics(parse_case(merge(BASE_CASE, {
-        "numerics": {"scheme": "explicit", "time_step": None, "gamma": None}})))
+    one_blow = resolve_numerics(
+        parse_case(merge(BASE_CASE, {"numerics": {"scheme": "explicit", "time_step": None, "gamma": None}}))
+    )
     assert numerics.steps == 1000 * one_blow.steps
     with pytest.raises(CaseError) as caught:
         check_limits(case, numerics, Limits(max_steps=numerics.steps - 1))

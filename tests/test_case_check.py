@@ -6,16 +6,13 @@ from __future__ import annotations
 import json
 
 import pytest
-from fastapi.testclient import TestClient
-
 from conftest import BASE_CASE, merge
+from fastapi.testclient import TestClient
 from percussim.service.app import create_app
 from percussim.worker.settings import Settings
 
 # Only what a test sets: nothing from the caller's shell.
 pytestmark = pytest.mark.usefixtures("clean_environment")
-
-
 
 
 @pytest.fixture
@@ -33,15 +30,16 @@ BAD = {
     "a negative mass": merge(BASE_CASE, {"striker": {"mass": -1.0}}),
     "an exponent over 0.5": merge(BASE_CASE, {"contact": {"exponent": 0.9}}),
     "an unknown field": merge(BASE_CASE, {"colour": "red"}),
-    "a profile whose x does not increase": merge(BASE_CASE, {"tool": {
-        "area": None, "profile": {"x": [0.0, 0.6, 0.5], "area": [0.01, 0.01, 0.01]}}}),
+    "a profile whose x does not increase": merge(
+        BASE_CASE, {"tool": {"area": None, "profile": {"x": [0.0, 0.6, 0.5], "area": [0.01, 0.01, 0.01]}}}
+    ),
     "more cells than the limit": BASE_CASE,
     "more steps than the limit": merge(BASE_CASE, {"numerics": {"duration": 1e-2, "cells": 50}}),
     "no striker": merge(BASE_CASE, {"striker": None}),
-    "several fields at once": merge(BASE_CASE, {"striker": {"mass": 0}, "contact": {"exponent": -1},
-                                                "numerics": {"cells": 10.5}}),
-    "a Courant number over 1": merge(BASE_CASE, {"numerics": {"scheme": "explicit", "time_step": 1e-5,
-                                                               "cells": 50}}),
+    "several fields at once": merge(
+        BASE_CASE, {"striker": {"mass": 0}, "contact": {"exponent": -1}, "numerics": {"cells": 10.5}}
+    ),
+    "a Courant number over 1": merge(BASE_CASE, {"numerics": {"scheme": "explicit", "time_step": 1e-5, "cells": 50}}),
     "a list": [1, 2],
     "a number": 3,
     "null": None,
@@ -61,9 +59,11 @@ def test_the_check_names_what_submitting_would_refuse_and_makes_no_job(client, b
 def test_the_problems_are_the_fields_and_the_limits_in_the_services_words(client):
     """Not only the same as the submission's: what an engineer reads."""
     problems = client.post("/v1/cases/check", json=BAD["several fields at once"]).json()["problems"]
-    assert problems == [{"field": "striker.mass", "message": "must be > 0.0"},
-                        {"field": "contact.exponent", "message": "must be ≥ 0.0"},
-                        {"field": "numerics.cells", "message": "must be a whole number"}]
+    assert problems == [
+        {"field": "striker.mass", "message": "must be > 0.0"},
+        {"field": "contact.exponent", "message": "must be ≥ 0.0"},
+        {"field": "numerics.cells", "message": "must be a whole number"},
+    ]
     [over] = client.post("/v1/cases/check", json=BASE_CASE).json()["problems"]
     assert over["field"] == "numerics.cells" and "100 cells exceed the limit of 80" in over["message"]
     [profile] = client.post("/v1/cases/check", json=BAD["a profile whose x does not increase"]).json()["problems"]
@@ -79,10 +79,13 @@ def test_a_valid_case_is_valid_and_makes_no_job(client):
     assert client.post("/v1/jobs", json=case).status_code == 202  # as the check said
 
 
-@pytest.mark.parametrize("content, headers", [
-    ("", {"content-type": "application/json"}),
-    (json.dumps(BASE_CASE), {"content-type": "text/plain"}),
-])
+@pytest.mark.parametrize(
+    "content, headers",
+    [
+        ("", {"content-type": "application/json"}),
+        (json.dumps(BASE_CASE), {"content-type": "text/plain"}),
+    ],
+)
 def test_an_empty_body_or_one_not_sent_as_json_is_a_problem_of_the_body(client, content, headers):
     checked = client.post("/v1/cases/check", content=content, headers=headers)
     submitted = client.post("/v1/jobs", content=content, headers=headers)

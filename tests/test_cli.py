@@ -6,7 +6,6 @@ import sys
 from pathlib import Path
 
 import h5py
-
 from conftest import BASE_CASE, merge
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -14,8 +13,9 @@ PRESETS = ROOT / "solver" / "presets"  # the presets as shipped
 
 
 def _percussim(*args, cwd):
-    return subprocess.run([sys.executable, "-m", "percussim", *args], cwd=cwd, capture_output=True,
-                          text=True, env=None, timeout=120)
+    return subprocess.run(
+        [sys.executable, "-m", "percussim", *args], cwd=cwd, capture_output=True, text=True, env=None, timeout=120
+    )
 
 
 def test_run_prints_and_writes_the_summary_and_result(tmp_path):
@@ -47,9 +47,13 @@ def test_invalid_case_exits_2_with_the_field(tmp_path):
 def test_files_are_written_even_when_stdout_closes_early(tmp_path):
     case = tmp_path / "case.json"
     case.write_text(json.dumps(merge(BASE_CASE, {"numerics": {"duration": 5e-4}})))
-    reader = subprocess.Popen([sys.executable, "-m", "percussim", "run", str(case), "--summary", "s.json",
-                               "--output", "r.h5"], cwd=tmp_path, stdout=subprocess.PIPE,
-                              stderr=subprocess.PIPE, text=True)
+    reader = subprocess.Popen(
+        [sys.executable, "-m", "percussim", "run", str(case), "--summary", "s.json", "--output", "r.h5"],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     reader.stdout.close()  # like `| head -0`: nobody reads the summary
     assert reader.wait(timeout=120) == 141, "as a process stopped by SIGPIPE"
     assert "Traceback" not in reader.stderr.read()
@@ -77,7 +81,8 @@ def test_presets_are_listed_printed_and_written(tmp_path):
     assert [line.split()[0] for line in lines] == sorted(path.stem for path in PRESETS.glob("*.json"))
     assert lines[0].split(maxsplit=1)[1].startswith("Fig. 3 of the paper: a 20-kg striker")
     assert json.loads(_percussim("presets", "fig9", cwd=tmp_path).stdout) == json.loads(
-        (PRESETS / "fig9.json").read_text())
+        (PRESETS / "fig9.json").read_text()
+    )
     assert _percussim("presets", "fig3", "-o", "f.json", cwd=tmp_path).returncode == 0
     assert json.loads((tmp_path / "f.json").read_text())["name"] == "fig3"
     assert _percussim("presets", "--write", "all", cwd=tmp_path).returncode == 0
@@ -103,18 +108,26 @@ def test_a_bad_setting_is_one_line_naming_the_variable_with_exit_2(tmp_path):
     import os
 
     def percussim(env: dict, *args):
-        return subprocess.run([sys.executable, "-m", "percussim", *args], cwd=tmp_path, capture_output=True,
-                              text=True, env={**os.environ, "PERCUSSIM_RESULTS_DIR": str(tmp_path), **env},
-                              timeout=120)
+        return subprocess.run(
+            [sys.executable, "-m", "percussim", *args],
+            cwd=tmp_path,
+            capture_output=True,
+            text=True,
+            env={**os.environ, "PERCUSSIM_RESULTS_DIR": str(tmp_path), **env},
+            timeout=120,
+        )
 
     for command in (["run", "fig3"], ["serve", "--port", "1"], ["worker"]):
         done = percussim({"PERCUSSIM_MAX_STEPS": "1e8.5", "PERCUSSIM_MAX_NODE_STEPS": "lots"}, *command)
         assert done.returncode == 2, (command, done.stderr)
         assert done.stderr.splitlines() == [
             "percussim: PERCUSSIM_MAX_STEPS=1e8.5: must be a whole number, as 20000000 or 2e7",
-            "percussim: PERCUSSIM_MAX_NODE_STEPS=lots: must be a number, as 2e10"], command
+            "percussim: PERCUSSIM_MAX_NODE_STEPS=lots: must be a number, as 2e10",
+        ], command
     refused = percussim({"PERCUSSIM_JOB_TIME_LIMIT": "-1"}, "serve", "--port", "1")
-    assert refused.returncode == 2 and refused.stderr == "percussim: PERCUSSIM_JOB_TIME_LIMIT=-1: must be greater than 0\n"
+    assert (
+        refused.returncode == 2 and refused.stderr == "percussim: PERCUSSIM_JOB_TIME_LIMIT=-1: must be greater than 0\n"
+    )
     # 1e8 and 1e3 are whole numbers: the limit applies (fig3 on the paper's grid takes 4820 steps)
     assert percussim({"PERCUSSIM_MAX_STEPS": "1e8"}, "run", "fig3").returncode == 0
     small = percussim({"PERCUSSIM_MAX_STEPS": "1e3"}, "run", "fig3")

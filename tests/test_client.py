@@ -15,10 +15,8 @@ import h5py
 import httpx
 import numpy as np
 import pytest
-
 from conftest import CHATTERS, merge
 from live_stack import ROOT, Stack, wait_for
-from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 from percussim.solver.case import load_case
 from percussim.solver.io import read_result
 from percussim.solver.presets import load_preset, preset_json
@@ -27,6 +25,8 @@ from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import COLUMNS, Sweep
 from test_cli import _percussim
 from test_live import LONG
+
+from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -82,7 +82,9 @@ def test_a_preset_runs_to_the_local_summary_and_arrays(api, tmp_path):
 
 
 def test_a_case_file_and_a_case_object_are_submitted_as_they_are(api, tmp_path):
-    assert api.run(ROOT / "solver" / "presets" / "fig3.json") == api.run(load_case(ROOT / "solver" / "presets" / "fig3.json"))
+    assert api.run(ROOT / "solver" / "presets" / "fig3.json") == api.run(
+        load_case(ROOT / "solver" / "presets" / "fig3.json")
+    )
     broken = tmp_path / "broken.json"
     broken.write_text("{not json")
     with pytest.raises(Refused) as refused:
@@ -135,8 +137,7 @@ def test_a_sweep_runs_to_the_table_a_local_sweep_gives(api, tmp_path):
     path = tmp_path / "fig5.json"
     path.write_text(json.dumps(preset_json("fig5")))
     seen = []
-    rows = api.run_sweep(path, parameters, progress=lambda fraction, sweep: seen.append(fraction),
-                         timeout=60)
+    rows = api.run_sweep(path, parameters, progress=lambda fraction, sweep: seen.append(fraction), timeout=60)
     local = run_sweep(Sweep(case=load_preset("fig5"), parameters=parameters), processes=1)
     assert [row["values"] for row in rows] == [{k: row[k] for k in parameters} for row in local]
     for row, expected in zip(rows, local):
@@ -179,8 +180,7 @@ def test_sweep_url_runs_the_variants_on_the_service_into_the_same_table(stack, t
     for mine, theirs in zip(local, remote, strict=True):
         assert {k: theirs[k] for k in mine} == mine  # the service's rows carry the job and status too
     assert list(csv.DictReader((tmp_path / "t.csv").open()))[1]["striker.velocity"] == "5"
-    refused = _percussim("sweep", str(case), "--vary", "contact.exponent=0.5,0.9", "--url", stack.url,
-                         cwd=tmp_path)
+    refused = _percussim("sweep", str(case), "--vary", "contact.exponent=0.5,0.9", "--url", stack.url, cwd=tmp_path)
     assert refused.returncode == 2
     assert "parameters['contact.exponent'][1]" in refused.stderr
 
@@ -188,8 +188,7 @@ def test_sweep_url_runs_the_variants_on_the_service_into_the_same_table(stack, t
 def test_submit_prints_the_summary_and_downloads_the_result(stack, tmp_path):
     case = tmp_path / "case.json"
     case.write_text(json.dumps(preset_json("fig3")))
-    done = _percussim("submit", str(case), "--url", stack.url, "--summary", "s.json", "--output", "r.h5",
-                      cwd=tmp_path)
+    done = _percussim("submit", str(case), "--url", stack.url, "--summary", "s.json", "--output", "r.h5", cwd=tmp_path)
     assert done.returncode == 0, done.stderr
     printed = json.loads(done.stdout)
     assert json.loads((tmp_path / "s.json").read_text()) == printed
@@ -218,10 +217,16 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
     # SIGINT at its default in the child, as in a terminal: a shell's background job inherits it
     # ignored, and Python then never turns it into KeyboardInterrupt.
-    submit = subprocess.Popen([sys.executable, "-m", "percussim", "submit", str(case), "--url", stack.url],
-                              cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                              preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    submit = subprocess.Popen(
+        [sys.executable, "-m", "percussim", "submit", str(case), "--url", stack.url],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     try:
+
         def newest_running():  # the job just submitted is the newest
             jobs = stack.client.get("/v1/jobs", params={"limit": 1}).json()["jobs"]
             return jobs[0] if jobs and jobs[0]["status"] == "running" and jobs[0]["name"] == "fig3" else None
@@ -239,11 +244,16 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
 def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_path):
     case = tmp_path / "long.json"
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
-    sweep = subprocess.Popen([sys.executable, "-m", "percussim", "sweep", str(case), "--vary",
-                              "striker.velocity=4,5", "--url", stack.url],
-                             cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                             preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    sweep = subprocess.Popen(
+        [sys.executable, "-m", "percussim", "sweep", str(case), "--vary", "striker.velocity=4,5", "--url", stack.url],
+        cwd=tmp_path,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
+    )
     try:
+
         def newest_running():
             jobs = stack.client.get("/v1/jobs", params={"limit": 2}).json()["jobs"]
             return any(j["status"] == "running" and j["name"] == "fig3" for j in jobs)
@@ -255,8 +265,11 @@ def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_pa
         sweep.kill()
     assert sweep.returncode == 130 and out == "", err
     sweep_id = err.split("percussim: cancelled sweep ")[1].split()[0]
-    done = wait_for(lambda: (v := stack.client.get(f"/v1/sweeps/{sweep_id}").json())["finished"] and v,
-                    30, "the sweep's variants ended")
+    done = wait_for(
+        lambda: (v := stack.client.get(f"/v1/sweeps/{sweep_id}").json())["finished"] and v,
+        30,
+        "the sweep's variants ended",
+    )
     assert done["counts"] == {"cancelled": 2}, done
 
 
@@ -279,8 +292,11 @@ def test_a_calibration_from_a_csv_file_gives_the_local_fit(api, tmp_path):
     from test_calibrate import BOUNDS, TRUE, start_case
 
     names = ("contact.stiffness", "medium.stiffness")
-    request = {"case": start_case(names), "record": str(_csv_record(tmp_path / "record.csv", "stress")),
-               "parameters": {n: BOUNDS[n] for n in names}}
+    request = {
+        "case": start_case(names),
+        "record": str(_csv_record(tmp_path / "record.csv", "stress")),
+        "parameters": {n: BOUNDS[n] for n in names},
+    }
     seen = []
     fit = api.calibrate(request, progress=lambda fraction, study: seen.append(study["kind"]))
     assert seen and set(seen) == {"calibration"}
@@ -306,8 +322,18 @@ def test_calibrate_and_optimize_url_print_what_they_print_here(stack, tmp_path):
     _csv_record(tmp_path / "record.csv", "contact_force")
     _csv_record(tmp_path / "late.csv", "contact_force", stretch=1e3)
     fit = ["calibrate", "case.json", "--record", "record.csv", "--fit", "contact.stiffness=1e9:1e15"]
-    optimise = ["optimize", "drill.json", "--vary", "striker.length=0.1:0.6", "--maximize", "energy.to_medium",
-                "--limit", "max_compressive_stress<=250e6", "--evaluations", "40"]
+    optimise = [
+        "optimize",
+        "drill.json",
+        "--vary",
+        "striker.length=0.1:0.6",
+        "--maximize",
+        "energy.to_medium",
+        "--limit",
+        "max_compressive_stress<=250e6",
+        "--evaluations",
+        "40",
+    ]
     printed = {}
     for name, arguments in (("fit", fit), ("optimum", optimise)):
         here = _percussim(*arguments, "--processes", "1", cwd=tmp_path)
@@ -357,16 +383,26 @@ def test_the_key_is_sent_and_a_401_says_so():
 
 
 def test_the_client_imports_without_the_service_or_the_solver():
-    loaded = subprocess.run([sys.executable, "-c", "import sys, percussim.client; print(*sorted(sys.modules))"],
-                            cwd=ROOT, capture_output=True, text=True, check=True).stdout.split()
+    loaded = subprocess.run(
+        [sys.executable, "-c", "import sys, percussim.client; print(*sorted(sys.modules))"],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout.split()
     assert not {"fastapi", "celery", "numba", "numpy", "percussim.solver", "percussim.service"} & set(loaded)
 
 
 def test_the_worked_example_runs_a_preset_and_downloads_its_result(stack, tmp_path):
     """examples/submit.py, as `scripts/run` runs it."""
     output = tmp_path / "fig3.h5"
-    done = subprocess.run([sys.executable, "examples/submit.py", "--url", stack.url, "--preset", "fig3",
-                           "--output", str(output)], cwd=ROOT, capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [sys.executable, "examples/submit.py", "--url", stack.url, "--preset", "fig3", "--output", str(output)],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     assert "succeeded" in done.stdout and f"result written to {output}" in done.stdout
     assert read_result(output).summary["name"] == "fig3"

@@ -2,9 +2,8 @@
 and a streamed run's memory stays bounded."""
 
 import numpy as np
-import pytest
-
 import percussim.solver.controller as controller
+import pytest
 from conftest import BASE_CASE, merge
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
@@ -14,8 +13,9 @@ from percussim.solver.limits import output_values
 from percussim.solver.simulate import simulate
 from percussim.solver.summary import FORCE_HISTORY_POINTS, _downsample
 
-CASE = merge(BASE_CASE, {"numerics": {"duration": 1e-3},
-                         "outputs": {"probes": [0.3], "fields": True, "field_stride": 7}})
+CASE = merge(
+    BASE_CASE, {"numerics": {"duration": 1e-3}, "outputs": {"probes": [0.3], "fields": True, "field_stride": 7}}
+)
 
 
 def test_chunk_size_does_not_change_the_result(monkeypatch):
@@ -61,16 +61,23 @@ def test_probe_at_a_node_and_at_the_ends_match_the_field():
     for k, node in enumerate((0, 30, 100)):
         np.testing.assert_allclose(result.probe_stress[:, k], result.fields.stress[:, node], rtol=1e-12)
     # At the struck end the stress is the contact force over the area (boundary row (9)).
-    np.testing.assert_allclose(result.fields.stress[2:, 0],
-                               -result.history["contact/force"][2:] / 0.014209, rtol=1e-6, atol=1e3)
+    np.testing.assert_allclose(
+        result.fields.stress[2:, 0], -result.history["contact/force"][2:] / 0.014209, rtol=1e-6, atol=1e3
+    )
 
 
 def test_a_summary_only_run_allocates_nothing_of_size_cells_times_steps():
     import tracemalloc
 
-    case = parse_case(merge(CASE, {"numerics": {"cells": 2000, "time_step": 1e-8, "duration": 5e-5,
-                                                "scheme": "explicit"},
-                                   "outputs": {"probes": [], "fields": False}}))
+    case = parse_case(
+        merge(
+            CASE,
+            {
+                "numerics": {"cells": 2000, "time_step": 1e-8, "duration": 5e-5, "scheme": "explicit"},
+                "outputs": {"probes": [], "fields": False},
+            },
+        )
+    )
     simulate_rod(case)  # compiled and loaded before measuring
     tracemalloc.start()
     result = simulate_rod(case)
@@ -91,16 +98,24 @@ def test_the_force_history_is_the_whole_history_downsampled():
 def test_a_streamed_run_holds_a_bounded_part_of_its_outputs(tmp_path):
     import tracemalloc
 
-    case = parse_case(merge(CASE, {"numerics": {"cells": 2000, "time_step": 1e-8, "duration": 2e-4,
-                                                "scheme": "explicit"},
-                                   "outputs": {"probes": [0.3], "fields": True, "field_stride": 10}}))
+    case = parse_case(
+        merge(
+            CASE,
+            {
+                "numerics": {"cells": 2000, "time_step": 1e-8, "duration": 2e-4, "scheme": "explicit"},
+                "outputs": {"probes": [0.3], "fields": True, "field_stride": 10},
+            },
+        )
+    )
     simulate(parse_case(CASE), result_path=tmp_path / "warm.h5")  # compiled and loaded before measuring
     tracemalloc.start()
     result = simulate(case, result_path=tmp_path / "r.h5")
     _, peak = tracemalloc.get_traced_memory()
     tracemalloc.stop()
     held = 8 * output_values(case, result.numerics)
-    print(f"{result.numerics.cells} cells × {result.numerics.steps} steps: outputs {held / 1e6:.1f} MB, "
-          f"peak {peak / 1e6:.2f} MB traced")
+    print(
+        f"{result.numerics.cells} cells × {result.numerics.steps} steps: outputs {held / 1e6:.1f} MB, "
+        f"peak {peak / 1e6:.2f} MB traced"
+    )
     assert held > 60e6 and peak < 0.25 * held  # holding the outputs would take 1×
     assert len(read_result(tmp_path / "r.h5").history["time"]) == result.numerics.steps + 1

@@ -6,7 +6,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from conftest import merge
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
@@ -16,8 +15,7 @@ WAVE_SPEED = math.sqrt(2.1e11 / 7800.0)
 
 
 def _quantities(cells: int) -> dict[str, float]:
-    case = parse_case(merge(TAPERED, {"numerics": {"cells": cells,
-                                                   "time_step": 0.5 * (0.5 / cells) / WAVE_SPEED}}))
+    case = parse_case(merge(TAPERED, {"numerics": {"cells": cells, "time_step": 0.5 * (0.5 / cells) / WAVE_SPEED}}))
     result = simulate_rod(case)
     s = result.summary
     assert s["warnings"] == []
@@ -35,14 +33,17 @@ def ladder() -> dict[int, dict[str, float]]:
     return {cells: _quantities(cells) for cells in (50, 100, 200, 400, 800, 1600)}
 
 
-@pytest.mark.parametrize("name, grids", [
-    ("co_impact_time", (50, 100, 200, 400)),
-    ("peak_contact_force", (50, 100, 200, 400)),
-    ("max_tensile_stress", (50, 100, 200, 400)),
-    # The peak moves from the struck end into the cone once the grid resolves the cone's front.
-    ("max_compressive_stress", (400, 800, 1600)),
-    ("cone_probe_compression", (400, 800, 1600)),
-])
+@pytest.mark.parametrize(
+    "name, grids",
+    [
+        ("co_impact_time", (50, 100, 200, 400)),
+        ("peak_contact_force", (50, 100, 200, 400)),
+        ("max_tensile_stress", (50, 100, 200, 400)),
+        # The peak moves from the struck end into the cone once the grid resolves the cone's front.
+        ("max_compressive_stress", (400, 800, 1600)),
+        ("cone_probe_compression", (400, 800, 1600)),
+    ],
+)
 def test_differences_shrink_at_first_order(ladder, name, grids):
     values = np.array([ladder[g][name] for g in grids])
     differences = np.abs(np.diff(values))

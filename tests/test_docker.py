@@ -136,8 +136,11 @@ def test_two_stages_on_the_slim_python_image(stages):
 def test_the_builder_installs_the_project_not_editable(stages):
     builder = stages[0]
     pyproject = tomllib.loads((ROOT / "pyproject.toml").read_text())
-    needed = {"pyproject.toml", pyproject["project"]["readme"],
-              *pyproject["tool"]["setuptools"]["package-dir"].values()}
+    needed = {
+        "pyproject.toml",
+        pyproject["project"]["readme"],
+        *pyproject["tool"]["setuptools"]["package-dir"].values(),
+    }
     copied = {Path(src).as_posix() for args in builder.all("COPY") for src in split_args(args)[1][:-1]}
     assert needed <= copied, f"`pip install .` needs {sorted(needed - copied)} in the builder"
     installs = [a for a in builder.all("RUN") if "pip install" in a and " ." in a]
@@ -148,12 +151,16 @@ def test_the_builder_installs_the_project_not_editable(stages):
 def test_a_non_editable_install_carries_the_job_page_and_the_presets():
     """`pip install .` copies only Python modules unless package data names the rest."""
     data = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]
-    for package, folder in (("percussim.service", ROOT / "service"),
-                            ("percussim.solver.presets", ROOT / "solver" / "presets")):
-        files = [p.relative_to(folder).as_posix() for p in folder.rglob("*")
-                 if p.is_file() and p.suffix != ".py" and "__pycache__" not in p.parts]
-        assert files and all(any(fnmatch(f, pattern) for pattern in data[package]) for f in files), (
-            package, files)
+    for package, folder in (
+        ("percussim.service", ROOT / "service"),
+        ("percussim.solver.presets", ROOT / "solver" / "presets"),
+    ):
+        files = [
+            p.relative_to(folder).as_posix()
+            for p in folder.rglob("*")
+            if p.is_file() and p.suffix != ".py" and "__pycache__" not in p.parts
+        ]
+        assert files and all(any(fnmatch(f, pattern) for pattern in data[package]) for f in files), (package, files)
 
 
 def test_the_runtime_user_is_not_root(final):
@@ -203,7 +210,8 @@ def test_every_copied_path_exists_and_reaches_the_build_context(stages):
                     for k in range(1, len(parts) + 1):
                         prefix = "/".join(parts[:k])
                         assert not fnmatch(prefix, pattern.removeprefix("**/")), (
-                            f"COPY {src}: excluded from the build context by .dockerignore {pattern!r}")
+                            f"COPY {src}: excluded from the build context by .dockerignore {pattern!r}"
+                        )
 
 
 def test_the_image_environment(final):
@@ -211,7 +219,8 @@ def test_the_image_environment(final):
     assert env.get("PERCUSSIM_RESULTS_DIR") == "/data"
     assert "PERCUSSIM_PRESETS" not in env, "the presets ship in the package"
     assert any("/data" in a and "chown" in a for a in final.all("RUN")), (
-        "/data is owned by the runtime user, so a new named volume mounted there is writable")
+        "/data is owned by the runtime user, so a new named volume mounted there is writable"
+    )
 
 
 def test_dockerignore_keeps_the_local_state_out():
@@ -312,7 +321,8 @@ def check_stack(config: dict) -> None:
         assert key not in worker, f"worker.{key} stops `--scale worker=N`"
     test = healthcheck_test(worker)
     assert test and test[0] != "NONE" and "healthz" not in " ".join(test), (
-        "the worker replaces the image's HTTP health check (a worker serves no HTTP)")
+        "the worker replaces the image's HTTP health check (a worker serves no HTTP)"
+    )
 
     # API and workers: one image, one results volume, one broker.
     for name in ("api", "worker"):
@@ -350,11 +360,14 @@ def test_docker_compose_config_accepts_and_resolves_the_file():
     if command is None:
         if os.environ.get("CI", "").lower() in ("true", "1"):
             pytest.fail("docker-compose is missing in CI: the test setup installs it (apt-get install docker-compose)")
-        pytest.skip("docker-compose is not installed (apt-get install docker-compose); "
-                    "test_compose_file_structure still checks the file as YAML")
+        pytest.skip(
+            "docker-compose is not installed (apt-get install docker-compose); "
+            "test_compose_file_structure still checks the file as YAML"
+        )
     env = {k: v for k, v in os.environ.items() if not k.startswith(("COMPOSE_", "PERCUSSIM_"))}
-    done = subprocess.run([*command, "-f", str(COMPOSE), "config"], cwd=ROOT, env=env,
-                          capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [*command, "-f", str(COMPOSE), "config"], cwd=ROOT, env=env, capture_output=True, text=True, timeout=120
+    )
     assert done.returncode == 0, done.stderr
     config = yaml.safe_load(done.stdout)
     check_stack(config)
@@ -395,8 +408,9 @@ def run_check(code: str, port: int | None = None, env: dict | None = None) -> in
     if port is not None:
         assert "127.0.0.1:8000" in code
         code = code.replace("127.0.0.1:8000", f"127.0.0.1:{port}")
-    return subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, timeout=60,
-                          env={**os.environ, **(env or {})}).returncode
+    return subprocess.run(
+        [sys.executable, "-c", code], cwd=ROOT, capture_output=True, timeout=60, env={**os.environ, **(env or {})}
+    ).returncode
 
 
 def http_checks(final: Stage) -> list[str]:

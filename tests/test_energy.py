@@ -6,20 +6,22 @@ fields with other quadratures, so a wrong term in the kernel's audit cannot hide
 
 import numpy as np
 import pytest
-from scipy.integrate import trapezoid
-
 from conftest import BASE_CASE, merge
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import tool_area
+from scipy.integrate import trapezoid
 
-DAMPED_DRIVEN = merge(BASE_CASE, {
-    "force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 800.0},
-    "contact": {"damping": 5e3},
-    "medium": {"stiffness": 2e8, "damping": 2e4},
-    "numerics": {"duration": 2e-3, "time_step": 4e-7, "cells": 100},
-    "outputs": {"fields": True, "field_stride": 1},
-})
+DAMPED_DRIVEN = merge(
+    BASE_CASE,
+    {
+        "force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 800.0},
+        "contact": {"damping": 5e3},
+        "medium": {"stiffness": 2e8, "damping": 2e4},
+        "numerics": {"duration": 2e-3, "time_step": 4e-7, "cells": 100},
+        "outputs": {"fields": True, "field_stride": 1},
+    },
+)
 
 
 def _independent_budget(result) -> dict[str, float]:
@@ -76,8 +78,11 @@ def test_the_scheme_dissipates_and_never_creates_energy(driven):
 
 def test_numerical_dissipation_halves_with_the_step():
     coarse, fine = (
-        simulate_rod(parse_case(merge(DAMPED_DRIVEN, {
-            "numerics": {"time_step": tau, "cells": cells}, "outputs": {"fields": False}})))
-        .summary["energy"]["numerical"]
-        for tau, cells in ((4e-7, 100), (2e-7, 200)))
+        simulate_rod(
+            parse_case(
+                merge(DAMPED_DRIVEN, {"numerics": {"time_step": tau, "cells": cells}, "outputs": {"fields": False}})
+            )
+        ).summary["energy"]["numerical"]
+        for tau, cells in ((4e-7, 100), (2e-7, 200))
+    )
     assert 1.6 < coarse / fine < 2.4

@@ -13,10 +13,10 @@ import math
 
 import numpy as np
 import pytest
-
 from conftest import BASE_CASE, merge
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.simulate import simulate
+
 CREATED_AT_MOST = 0.005  # of the input energy: what no scheme may create at any instant
 
 # The shared test case (Fig. 3-like) on 60 cells with the default time step.
@@ -31,27 +31,50 @@ def critical_damping(stiffness: float, mass: float) -> float:
 
 
 CASES = {
-    **{f"c1={c1:g},alpha={alpha}": {"contact": {"stiffness": c1, "exponent": alpha}}
-       for c1 in (1e6, 1e8, 1e10, 1e12, 1e14) for alpha in (0.0, 0.5)},
+    **{
+        f"c1={c1:g},alpha={alpha}": {"contact": {"stiffness": c1, "exponent": alpha}}
+        for c1 in (1e6, 1e8, 1e10, 1e12, 1e14)
+        for alpha in (0.0, 0.5)
+    },
     **{f"c0={c0:g}": {"contact": {"tension_stiffness": c0}} for c0 in (0.0, 1e3, 1e9, 1e12)},
     **{f"mass_ratio={ratio:g}": {"striker": {"mass": ratio * TOOL_MASS}} for ratio in (1e-3, 1e-1, 1e1, 1e3)},
     **{f"gamma={gamma}": {"numerics": {"gamma": gamma}} for gamma in (0.5, 0.75, 1.0)},
-    **{f"contact_damping={f}xcritical": {"contact": {"stiffness": 1e9, "exponent": 0.0,
-                                                    "damping": f * critical_damping(1e9, CONTACT_MASS)}}
-       for f in (0.0, 1.0, 100.0)},
-    **{f"medium_damping={f}xcritical": {"medium": {"damping": f * critical_damping(2e8, TOOL_MASS)}}
-       for f in (0.0, 1.0, 100.0)},
-    **{f"taper=1:{ratio},{shape}": {"tool": {"area": None, "profile": {
-        "x": [0.0, 0.6, 1.2] if shape == "cone" else [0.0, 0.6, 0.6 + 1e-4, 1.2],
-        "area": ([0.014209, 0.014209, 0.014209 / ratio] if shape == "cone"
-                 else [0.014209, 0.014209, 0.014209 / ratio, 0.014209 / ratio])}}}
-       for ratio in (10, 100) for shape in ("cone", "step")},
+    **{
+        f"contact_damping={f}xcritical": {
+            "contact": {"stiffness": 1e9, "exponent": 0.0, "damping": f * critical_damping(1e9, CONTACT_MASS)}
+        }
+        for f in (0.0, 1.0, 100.0)
+    },
+    **{
+        f"medium_damping={f}xcritical": {"medium": {"damping": f * critical_damping(2e8, TOOL_MASS)}}
+        for f in (0.0, 1.0, 100.0)
+    },
+    **{
+        f"taper=1:{ratio},{shape}": {
+            "tool": {
+                "area": None,
+                "profile": {
+                    "x": [0.0, 0.6, 1.2] if shape == "cone" else [0.0, 0.6, 0.6 + 1e-4, 1.2],
+                    "area": (
+                        [0.014209, 0.014209, 0.014209 / ratio]
+                        if shape == "cone"
+                        else [0.014209, 0.014209, 0.014209 / ratio, 0.014209 / ratio]
+                    ),
+                },
+            }
+        }
+        for ratio in (10, 100)
+        for shape in ("cone", "step")
+    },
     "medium=very_soft": {"medium": {"stiffness": 1e3, "damping": 0.0}},
     "medium=very_stiff": {"medium": {"stiffness": 1e13, "damping": 0.0}},
     "medium=none": {"medium": None},
-    "many_contacts": {"force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 800.0},
-                      "striker": {"mass": 13.0}, "contact": {"damping": 0.0},
-                      "numerics": {"duration": 0.1, "cells": 20}},
+    "many_contacts": {
+        "force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 800.0},
+        "striker": {"mass": 13.0},
+        "contact": {"damping": 0.0},
+        "numerics": {"duration": 0.1, "cells": 20},
+    },
 }
 
 
@@ -61,16 +84,27 @@ def run(changes: dict, scheme: str) -> dict:
 
 
 def check_finished(summary: dict) -> None:
-    numbers = [summary["peak_contact_force"]["value"], summary["max_compressive_stress"]["value"],
-               summary["max_tensile_stress"]["value"], *summary["energy"].values(),
-               *summary["force_history"]["contact"], *summary["force_history"]["medium"]]
+    numbers = [
+        summary["peak_contact_force"]["value"],
+        summary["max_compressive_stress"]["value"],
+        summary["max_tensile_stress"]["value"],
+        *summary["energy"].values(),
+        *summary["force_history"]["contact"],
+        *summary["force_history"]["medium"],
+    ]
     assert np.all(np.isfinite(numbers))
     assert summary["energy"]["max_excess_fraction"] <= CREATED_AT_MOST, summary["energy"]
 
 
 # What a fixed grid of the paper's or the σ-scheme may refuse: the stiff links its ends ring against.
-STIFF = {"c1=1e+12,alpha=0.0", "c1=1e+14,alpha=0.0", "c1=1e+14,alpha=0.5", "c0=1e+12",
-         "contact_damping=100.0xcritical", "medium=very_stiff"}
+STIFF = {
+    "c1=1e+12,alpha=0.0",
+    "c1=1e+14,alpha=0.0",
+    "c1=1e+14,alpha=0.5",
+    "c0=1e+12",
+    "contact_damping=100.0xcritical",
+    "medium=very_stiff",
+}
 
 
 @pytest.mark.parametrize("scheme", ["paper", "sigma", "explicit"])
@@ -113,8 +147,17 @@ def test_explicit_scheme_beyond_courant_one_is_refused_up_front(courant):
 
 
 @pytest.mark.parametrize("tol", [0.2, 1e-2, 1e-3])
-@pytest.mark.parametrize("name", ["c1=1e+14,alpha=0.5", "c1=1e+06,alpha=0.0", "mass_ratio=0.001",
-                                  "mass_ratio=1000", "taper=1:100,step", "medium=very_stiff"])
+@pytest.mark.parametrize(
+    "name",
+    [
+        "c1=1e+14,alpha=0.5",
+        "c1=1e+06,alpha=0.0",
+        "mass_ratio=0.001",
+        "mass_ratio=1000",
+        "taper=1:100,step",
+        "medium=very_stiff",
+    ],
+)
 def test_extreme_cases_under_a_tolerance(name, tol):
     changes = merge(CASES[name], {"numerics": {"cells": None, "tolerance": tol}})
     summary = simulate(parse_case(merge(BASE, changes))).summary
@@ -126,35 +169,36 @@ def test_extreme_cases_under_a_tolerance(name, tol):
 # the ends that integrate their own equations: the explicit scheme on a fixed grid (60 cells), and
 # under a tolerance.
 STRIKER_AREA = 0.014209
-PISTON = {"mass": None, "length": 0.3, "area": STRIKER_AREA, "youngs_modulus": 2.1e11,
-          "density": 7800.0}
+PISTON = {"mass": None, "length": 0.3, "area": STRIKER_AREA, "youngs_modulus": 2.1e11, "density": 7800.0}
 ROCK = {"kind": "bilinear", "stiffness": 2e8, "unloading_stiffness": 2e9}
-SOIL = {"kind": "smith", "stiffness": None, "damping": None, "ultimate_resistance": 2e5,
-        "quake": 2.5e-3, "damping_factor": 0.5}
+SOIL = {
+    "kind": "smith",
+    "stiffness": None,
+    "damping": None,
+    "ultimate_resistance": 2e5,
+    "quake": 2.5e-3,
+    "damping_factor": 0.5,
+}
 ANVIL = {"mass": 5.0, "contact": {"stiffness": 1e11, "exponent": 0.5}}
 BEYOND = {
-    **{f"rock k={k:g}": {"medium": {**ROCK, "stiffness": k, "unloading_stiffness": 10 * k}}
-       for k in (1e3, 1e13)},
-    **{f"rock k_u={ratio:g}k": {"medium": {**ROCK, "unloading_stiffness": ratio * 2e8}}
-       for ratio in (1.0, 1e6)},
+    **{f"rock k={k:g}": {"medium": {**ROCK, "stiffness": k, "unloading_stiffness": 10 * k}} for k in (1e3, 1e13)},
+    **{f"rock k_u={ratio:g}k": {"medium": {**ROCK, "unloading_stiffness": ratio * 2e8}} for ratio in (1.0, 1e6)},
     **{f"soil R_u={r:g}": {"medium": {**SOIL, "ultimate_resistance": r}} for r in (1.0, 1e9)},
     **{f"soil quake={q:g}": {"medium": {**SOIL, "quake": q}} for q in (1e-6, 0.1)},
     **{f"soil J={j:g}": {"medium": {**SOIL, "damping_factor": j}} for j in (0.0, 100.0)},
-    **{f"piston area={ratio:g}": {"striker": {**PISTON, "area": ratio * STRIKER_AREA}}
-       for ratio in (1e-3, 1e3)},
+    **{f"piston area={ratio:g}": {"striker": {**PISTON, "area": ratio * STRIKER_AREA}} for ratio in (1e-3, 1e3)},
     "piston length=10": {"striker": {**PISTON, "length": 10.0}},
     "piston on rock": {"striker": PISTON, "medium": ROCK},
-    **{f"anvil mass={ratio:g}m1": {"anvil": {**ANVIL, "mass": ratio * 20.0}}
-       for ratio in (1e-6, 1e3)},
-    **{f"anvil contact={c:g}": {"anvil": {**ANVIL, "contact": {"stiffness": c, "exponent": 0.0}}}
-       for c in (1e4, 1e14)},
+    **{f"anvil mass={ratio:g}m1": {"anvil": {**ANVIL, "mass": ratio * 20.0}} for ratio in (1e-6, 1e3)},
+    **{f"anvil contact={c:g}": {"anvil": {**ANVIL, "contact": {"stiffness": c, "exponent": 0.0}}} for c in (1e4, 1e14)},
     "anvil, piston, soil": {"anvil": ANVIL, "striker": PISTON, "medium": SOIL},
     "blows=20 on rock": {"medium": ROCK, "blows": {"count": 20}},
 }
 
 
-@pytest.mark.parametrize("numerics", [{"scheme": "explicit"}, {"cells": None, "tolerance": 1e-2}],
-                         ids=["explicit", "tolerance"])
+@pytest.mark.parametrize(
+    "numerics", [{"scheme": "explicit"}, {"cells": None, "tolerance": 1e-2}], ids=["explicit", "tolerance"]
+)
 @pytest.mark.parametrize("name", list(BEYOND))
 def test_models_beyond_the_paper_finish_sound(name, numerics):
     """Finite, no energy created beyond 0.5% at any instant, the audit closed within 0.5% at the
@@ -165,5 +209,6 @@ def test_models_beyond_the_paper_finish_sound(name, numerics):
     energy = summary["energy"]
     assert abs(energy["numerical"]) <= CREATED_AT_MOST * (energy["initial"] + energy["external_work"])
     if "tolerance" in numerics:
-        assert (summary["error_estimate"]["worst"] <= 1e-2
-                or any("tolerance of 0.01 is not met" in w for w in summary["warnings"]))
+        assert summary["error_estimate"]["worst"] <= 1e-2 or any(
+            "tolerance of 0.01 is not met" in w for w in summary["warnings"]
+        )

@@ -13,7 +13,6 @@ import time
 
 import h5py
 import pytest
-
 from conftest import CHATTERS, merge, report
 from live_stack import RedisServer, Stack, children, command_line, wait_for
 from percussim.solver.presets import preset_json
@@ -22,8 +21,13 @@ pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full re
 
 FINISHED = ("succeeded", "failed", "cancelled")
 # About 3 s of work: long enough to be killed or cut off in the middle.
-SECONDS_OF_WORK = merge(preset_json("fig3"), {"numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
-                                              "outputs": {"history_stride": 100, "probes": []}})
+SECONDS_OF_WORK = merge(
+    preset_json("fig3"),
+    {
+        "numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
+        "outputs": {"history_stride": 100, "probes": []},
+    },
+)
 
 
 @pytest.fixture
@@ -32,7 +36,6 @@ def redis(tmp_path):
     server.start()
     yield server
     server.stop()
-
 
 
 def statuses(stack: Stack, ids: list[str]) -> dict[str, int]:
@@ -47,12 +50,17 @@ def wait_all_finished(stack: Stack, ids: list[str], timeout: float) -> dict[str,
     def finished() -> dict[str, int] | None:
         counts = statuses(stack, ids)
         return counts if sum(counts.get(s, 0) for s in FINISHED) == len(ids) else None
+
     return wait_for(finished, timeout, f"{len(ids)} jobs finished", interval=0.5)
 
 
 def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path, capsys):
-    s = Stack(tmp_path, redis.url, workers=2,
-              worker_env={"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"})
+    s = Stack(
+        tmp_path,
+        redis.url,
+        workers=2,
+        worker_env={"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"},
+    )
     try:
         job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
         running = s.wait_status(job["id"], ("running",), timeout=30)
@@ -60,8 +68,11 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         victim = running["worker"]
         s.workers[victim].stop(signal.SIGKILL)  # the worker and its pool, no chance to clean up
         record = s.wait_status(job["id"], FINISHED, timeout=90)
-        report(capsys, f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
-              f"after {record['attempts']} attempts")
+        report(
+            capsys,
+            f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
+            f"after {record['attempts']} attempts",
+        )
         assert record["status"] == "succeeded", (record, s.logs())
         assert record["worker"] != victim and record["attempts"] == 2
         folder = tmp_path / "results" / "jobs" / job["id"]
@@ -85,8 +96,11 @@ def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(
         for pid in [worker, *children(worker)]:  # the worker and its pool, no chance to clean up
             os.kill(pid, signal.SIGKILL)
         record = s.wait_status(job["id"], FINISHED, timeout=90)
-        report(capsys, f"\nembedded worker killed mid-job: the service started it again; the job then "
-                       f"{record['status']} after {record['attempts']} attempts")
+        report(
+            capsys,
+            f"\nembedded worker killed mid-job: the service started it again; the job then "
+            f"{record['status']} after {record['attempts']} attempts",
+        )
         assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
         assert record["worker"] == running["worker"]  # the same worker, started again
         log = s.processes[0].log.read_text()
@@ -109,9 +123,12 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         s.crash_and_restart(while_down=messages[1].unlink)  # and one of them lost while down
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         counts = wait_all_finished(s, queued, timeout=60)
-        report(capsys, f"\nembedded service killed mid-job and started again, one queued job's message "
-                       f"removed meanwhile: the job {record['status']} after {record['attempts']} "
-                       f"attempts; the 3 queued behind it {counts}")
+        report(
+            capsys,
+            f"\nembedded service killed mid-job and started again, one queued job's message "
+            f"removed meanwhile: the job {record['status']} after {record['attempts']} "
+            f"attempts; the 3 queued behind it {counts}",
+        )
         assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
         assert counts == {"succeeded": 3}, s.logs()  # the lost message's job too
         assert "queued again 1 job(s)" in (tmp_path / "api-restarted.log").read_text()
@@ -126,23 +143,28 @@ def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_
         accepted += [s.client.post("/v1/jobs", json=preset_json("fig3")).json()["id"] for _ in range(20)]
         redis.stop()
         refused = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(5)]
-        assert all(a.status_code == 503 and a.headers["retry-after"].isdigit() for a in refused), \
-            [(a.status_code, a.text[:200]) for a in refused]
+        assert all(a.status_code == 503 and a.headers["retry-after"].isdigit() for a in refused), [
+            (a.status_code, a.text[:200]) for a in refused
+        ]
         assert s.client.get("/readyz").status_code == 503
         redis.start()  # the same port and append-only file
         wait_for(lambda: s.client.get("/readyz").status_code == 200, 60, "readiness after Redis is back")
         after = [s.client.post("/v1/jobs", json=preset_json("fig3")) for _ in range(5)]
         assert all(a.status_code == 202 for a in after), "the API recovers without a restart"
         counts = wait_all_finished(s, accepted + [a.json()["id"] for a in after], timeout=180)
-        report(capsys, f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
-              f"5 accepted after; outcomes {counts}")
+        report(
+            capsys,
+            f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
+            f"5 accepted after; outcomes {counts}",
+        )
         assert counts == {"succeeded": len(accepted) + 5}, s.logs()
     finally:
         s.stop()
 
 
 def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(
-        redis, postgres, tmp_path, capsys):
+    redis, postgres, tmp_path, capsys
+):
     s = Stack(tmp_path, redis.url, workers=2, env={"PERCUSSIM_DATABASE_URL": postgres.database()})
     answers, done = [], threading.Event()
 
@@ -169,19 +191,24 @@ def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_
         codes = [a.status_code if hasattr(a, "status_code") else repr(a) for a in answers]
         assert set(codes) <= {202, 503}, [c for c in codes if c not in (202, 503)][:5]
         refused = [a for a in answers if a.status_code == 503]
-        assert refused and all(a.headers["retry-after"].isdigit() and "database" in a.json()["detail"]
-                               for a in refused), [a.text[:200] for a in refused[:3]]
+        assert refused and all(
+            a.headers["retry-after"].isdigit() and "database" in a.json()["detail"] for a in refused
+        ), [a.text[:200] for a in refused[:3]]
         assert codes[-20:] == [202] * 20, "the API recovers without a restart"
         accepted = [a.json()["id"] for a in answers if a.status_code == 202]
         counts = wait_all_finished(s, accepted, timeout=180)
-        report(capsys, f"\nPostgreSQL stopped for 2 s during a burst: {len(answers)} submissions, {len(accepted)} "
-                       f"accepted ({during} answered before it was down), {len(refused)} refused with 503 and Retry-After, "
-                       f"none answered otherwise; the accepted ones {counts}")
+        report(
+            capsys,
+            f"\nPostgreSQL stopped for 2 s during a burst: {len(answers)} submissions, {len(accepted)} "
+            f"accepted ({during} answered before it was down), {len(refused)} refused with 503 and Retry-After, "
+            f"none answered otherwise; the accepted ones {counts}",
+        )
         assert counts == {"succeeded": len(accepted)}, s.logs()
         assert s.client.get("/v1/jobs?limit=1").json()["total"] == len(accepted), "no refused job was kept"
         # What the workers counted, through the metrics.
-        metrics = dict(line.rsplit(" ", 1) for line in s.client.get("/metrics").text.splitlines()
-                       if not line.startswith("#"))
+        metrics = dict(
+            line.rsplit(" ", 1) for line in s.client.get("/metrics").text.splitlines() if not line.startswith("#")
+        )
         assert float(metrics['percussim_jobs{status="succeeded"}']) == len(accepted)
         assert float(metrics["percussim_job_duration_seconds_count"]) == len(accepted)
         assert float(metrics["percussim_solver_seconds_per_node_step_count"]) == len(accepted)
@@ -234,9 +261,12 @@ def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_reco
         _limit_file_size(api, resource.RLIM_INFINITY)
         again = s.client.post("/v1/jobs", json=preset_json("fig3"))
         assert again.status_code == 202 and s.wait_status(again.json()["id"], FINISHED)["status"] == "succeeded"
-        report(capsys, f"\nfile size limit: on the worker (3 MB) the 6.9-MB job {record['status']}: "
-                       f"{record['error']!r}, only its case left; on the API (0 bytes) a new job got "
-                       f"{refused.status_code}: {refused.json()['detail']!r}; limit lifted: the next job succeeded")
+        report(
+            capsys,
+            f"\nfile size limit: on the worker (3 MB) the 6.9-MB job {record['status']}: "
+            f"{record['error']!r}, only its case left; on the API (0 bytes) a new job got "
+            f"{refused.status_code}: {refused.json()['detail']!r}; limit lifted: the next job succeeded",
+        )
     finally:
         s.stop()
 
@@ -246,8 +276,14 @@ def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_pat
     try:
         ids = [s.client.post("/v1/jobs", json=preset_json(name)).json()["id"] for name in ("fig3", "fig9")]
         wait_all_finished(s, ids, timeout=60)
-        before = {i: (s.client.get(f"/v1/jobs/{i}").json(), s.client.get(f"/v1/jobs/{i}/summary").json(),
-                      s.client.get(f"/v1/jobs/{i}/result.h5").content) for i in ids}
+        before = {
+            i: (
+                s.client.get(f"/v1/jobs/{i}").json(),
+                s.client.get(f"/v1/jobs/{i}/summary").json(),
+                s.client.get(f"/v1/jobs/{i}/result.h5").content,
+            )
+            for i in ids
+        }
         s.restart_api()
         for job_id, (record, summary, result) in before.items():
             assert s.client.get(f"/v1/jobs/{job_id}").json() == record

@@ -13,18 +13,17 @@ from collections import Counter
 
 import pytest
 import schemathesis
-from hypothesis import HealthCheck, given, settings, strategies as st
-from hypothesis.errors import Unsatisfiable
-
 from conftest import BASE_CASE, report
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+from hypothesis.errors import Unsatisfiable
 from live_stack import Stack
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
 STATUSES: Counter = Counter()
 EXAMPLES = 100  # a generation mode and operation
-SMALL = {"PERCUSSIM_MAX_NODE_STEPS": "2e6", "PERCUSSIM_MAX_OUTPUT_VALUES": "1e6",
-         "PERCUSSIM_MAX_SWEEP_VARIANTS": "4"}
+SMALL = {"PERCUSSIM_MAX_NODE_STEPS": "2e6", "PERCUSSIM_MAX_OUTPUT_VALUES": "1e6", "PERCUSSIM_MAX_SWEEP_VARIANTS": "4"}
 
 
 @pytest.fixture(scope="module")
@@ -48,13 +47,13 @@ def test_generated_requests_never_get_a_5xx_and_every_422_names_its_field(stack,
     schema = schemathesis.openapi.from_url(f"{stack.url}/openapi.json")
     fuzzed, unbreakable = [], []
     for operation in (result.ok() for result in schema.get_all_operations()):
+
         @given(case=operation.as_strategy(generation_mode=mode))
         @settings(max_examples=EXAMPLES, deadline=None, suppress_health_check=list(HealthCheck))
         def call(case):
             response = case.call()
             # /readyz answers 503 while the worker is busy between heartbeats: that is its job.
-            check_answer(response.status_code, response.content,
-                         unavailable_allowed=operation.path == "/readyz")
+            check_answer(response.status_code, response.content, unavailable_allowed=operation.path == "/readyz")
 
         try:
             call()
@@ -70,12 +69,42 @@ FINITE = st.floats(allow_nan=False, allow_infinity=False)
 ANY_JSON = st.recursive(
     st.none() | st.booleans() | FINITE | st.integers() | st.text(max_size=20),
     lambda children: st.lists(children, max_size=4) | st.dictionaries(st.text(max_size=10), children, max_size=4),
-    max_leaves=20)
-PATHS = [("striker", "mass"), ("striker", "velocity"), ("tool", "length"), ("tool", "area"),
-         ("contact", "exponent"), ("contact", "stiffness"), ("numerics", "duration"),
-         ("numerics", "time_step"), ("numerics", "cells"), ("outputs", "probes"), ("tool", "profile")]
-EXTREMES = st.sampled_from([0, -1, 1e-300, 1e300, -1e300, 2**63, -(2**63), 10**400, "NaN", "Infinity",
-                            "1", True, [], {}, None, [1.0] * 10_000, "x" * 10_000])
+    max_leaves=20,
+)
+PATHS = [
+    ("striker", "mass"),
+    ("striker", "velocity"),
+    ("tool", "length"),
+    ("tool", "area"),
+    ("contact", "exponent"),
+    ("contact", "stiffness"),
+    ("numerics", "duration"),
+    ("numerics", "time_step"),
+    ("numerics", "cells"),
+    ("outputs", "probes"),
+    ("tool", "profile"),
+]
+EXTREMES = st.sampled_from(
+    [
+        0,
+        -1,
+        1e-300,
+        1e300,
+        -1e300,
+        2**63,
+        -(2**63),
+        10**400,
+        "NaN",
+        "Infinity",
+        "1",
+        True,
+        [],
+        {},
+        None,
+        [1.0] * 10_000,
+        "x" * 10_000,
+    ]
+)
 
 
 def test_a_case_with_any_field_replaced_by_anything_is_answered_in_words(stack):
@@ -84,18 +113,28 @@ def test_a_case_with_any_field_replaced_by_anything_is_answered_in_words(stack):
     def replaced(path, value):
         case = json.loads(json.dumps(BASE_CASE))
         case[path[0]] = dict(case.get(path[0]) or {}, **{path[1]: value})
-        response = stack.client.post("/v1/jobs", content=json.dumps(case).encode(),
-                                     headers={"content-type": "application/json"})
+        response = stack.client.post(
+            "/v1/jobs", content=json.dumps(case).encode(), headers={"content-type": "application/json"}
+        )
         check_answer(response.status_code, response.content)
 
     replaced()
 
 
-@pytest.mark.parametrize("raw", [
-    b'{"striker": {"mass": NaN, "velocity": 5}}', b'{"striker": {"mass": Infinity}}', b"-Infinity",
-    b"[" * 10_000 + b"]" * 10_000, b'{"a":' * 5_000 + b"1" + b"}" * 5_000, b"", b"null", b"\xff\xfe",
-    json.dumps({**BASE_CASE, "outputs": {"probes": [0.5] * 200_000}}).encode(),
-])
+@pytest.mark.parametrize(
+    "raw",
+    [
+        b'{"striker": {"mass": NaN, "velocity": 5}}',
+        b'{"striker": {"mass": Infinity}}',
+        b"-Infinity",
+        b"[" * 10_000 + b"]" * 10_000,
+        b'{"a":' * 5_000 + b"1" + b"}" * 5_000,
+        b"",
+        b"null",
+        b"\xff\xfe",
+        json.dumps({**BASE_CASE, "outputs": {"probes": [0.5] * 200_000}}).encode(),
+    ],
+)
 def test_non_finite_numbers_deep_nesting_and_huge_arrays_get_4xx(stack, raw):
     response = stack.client.post("/v1/jobs", content=raw, headers={"content-type": "application/json"})
     check_answer(response.status_code, response.content)
@@ -108,7 +147,10 @@ def test_print_the_counts(stack, capsys):
     total = sum(STATUSES.values())
     jobs = stack.client.get("/v1/jobs", params={"limit": 500}).json()
     outcomes = Counter(j["status"] for j in jobs["jobs"])
-    report(capsys, f"\nfuzzing the live API: {total} requests, statuses {dict(sorted(STATUSES.items()))}; "
-                   f"{jobs['total']} jobs accepted, the last {len(jobs['jobs'])} {dict(outcomes)}")
+    report(
+        capsys,
+        f"\nfuzzing the live API: {total} requests, statuses {dict(sorted(STATUSES.items()))}; "
+        f"{jobs['total']} jobs accepted, the last {len(jobs['jobs'])} {dict(outcomes)}",
+    )
     assert total >= 1000  # each answer was checked as it came
     assert all(j["error"] for j in jobs["jobs"] if j["status"] == "failed")

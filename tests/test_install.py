@@ -24,8 +24,7 @@ pytestmark = pytest.mark.slow
 def run(command: list, cwd: Path, status: int = 0) -> subprocess.CompletedProcess:
     # No PYTHONPATH and a folder outside the repository: only what the wheel installed is found.
     env = {k: v for k, v in os.environ.items() if k not in ("PYTHONPATH", "PERCUSSIM_PRESETS")}
-    done = subprocess.run([str(c) for c in command], cwd=cwd, env=env, capture_output=True, text=True,
-                          timeout=600)
+    done = subprocess.run([str(c) for c in command], cwd=cwd, env=env, capture_output=True, text=True, timeout=600)
     assert done.returncode == status, f"{command}: {done.stderr}"
     return done
 
@@ -43,8 +42,10 @@ def installed(wheel, tmp_path_factory) -> Path:
     """A fresh environment with the wheel and its required dependencies only (no extras)."""
     env = tmp_path_factory.mktemp("env") / "venv"
     venv.create(env, with_pip=True)
-    run([env / "bin" / "python", "-m", "pip", "install", "--quiet", "--disable-pip-version-check", wheel],
-        cwd=env.parent)
+    run(
+        [env / "bin" / "python", "-m", "pip", "install", "--quiet", "--disable-pip-version-check", wheel],
+        cwd=env.parent,
+    )
     return env
 
 

@@ -8,25 +8,37 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-import pytest
-
 import percussim.solver.controller as controller
 import percussim.solver.io as io
+import pytest
+from closed_forms import drilling
 from conftest import BASE_CASE, merge
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.errors import Cancelled
 from percussim.solver.io import read_result, remove_partial, write_result
 from percussim.solver.simulate import simulate
-from closed_forms import drilling
 
 HDF5_DOC = Path(__file__).resolve().parents[1] / "docs" / "hdf5.md"
-CASE = merge(BASE_CASE, {"numerics": {"duration": 5e-4},
-                         "outputs": {"probes": [0.0, 0.6, 1.2], "fields": True, "field_stride": 25}})
+CASE = merge(
+    BASE_CASE,
+    {"numerics": {"duration": 5e-4}, "outputs": {"probes": [0.0, 0.6, 1.2], "fields": True, "field_stride": 25}},
+)
 CONTRACT_DATASETS = [
-    "time", "striker/displacement", "striker/velocity", "tool/struck_end_displacement",
-    "tool/working_end_displacement", "contact/force", "contact/overlap", "medium/force",
-    "probes/x", "probes/stress", "fields/x", "fields/time", "fields/displacement", "fields/stress",
+    "time",
+    "striker/displacement",
+    "striker/velocity",
+    "tool/struck_end_displacement",
+    "tool/working_end_displacement",
+    "contact/force",
+    "contact/overlap",
+    "medium/force",
+    "probes/x",
+    "probes/stress",
+    "fields/x",
+    "fields/time",
+    "fields/displacement",
+    "fields/stress",
 ]
 
 
@@ -74,9 +86,15 @@ def test_a_failed_write_leaves_nothing(tmp_path):
 def _layout(f: h5py.File) -> dict:
     """Every dataset's shape, type, storage and attributes, and the file's attributes."""
     found = {"/": dict(f.attrs)}
-    f.visititems(lambda name, d: found.__setitem__(name, (
-        d.shape, d.dtype, d.chunks, d.compression, d.compression_opts, d.shuffle, dict(d.attrs)))
-        if isinstance(d, h5py.Dataset) else None)
+    f.visititems(
+        lambda name, d: (
+            found.__setitem__(
+                name, (d.shape, d.dtype, d.chunks, d.compression, d.compression_opts, d.shuffle, dict(d.attrs))
+            )
+            if isinstance(d, h5py.Dataset)
+            else None
+        )
+    )
     return found
 
 
@@ -112,8 +130,12 @@ def test_a_streamed_result_is_the_file_write_result_makes(tmp_path, monkeypatch)
 
 
 def test_a_tolerance_ladder_streams_only_its_result(tmp_path):
-    case = parse_case(merge(CASE, {"numerics": {"duration": 2e-3, "tolerance": 1e-2, "scheme": "explicit",
-                                                "cells": None, "time_step": None}}))
+    case = parse_case(
+        merge(
+            CASE,
+            {"numerics": {"duration": 2e-3, "tolerance": 1e-2, "scheme": "explicit", "cells": None, "time_step": None}},
+        )
+    )
     held = simulate(case)
     assert len(held.summary["runs"]) >= 3  # a later run replaced an earlier candidate
     write_result(held, tmp_path / "held.h5")
@@ -167,8 +189,12 @@ def test_a_result_file_gets_the_permissions_of_the_users_umask(tmp_path):
 
 # An elastic piston on bilinear rock, two blows: every dataset the newer models add.
 BLOWS_CASE = drilling(2, {"scheme": "explicit", "cells": 100})
-ADDED_UNITS = {"medium/penetration": "m", "medium/permanent_penetration": "m",
-               "energy/medium_plastic": "J", "energy/striker_strain": "J"}
+ADDED_UNITS = {
+    "medium/penetration": "m",
+    "medium/permanent_penetration": "m",
+    "energy/medium_plastic": "J",
+    "energy/striker_strain": "J",
+}
 
 
 def documented_units() -> dict[str, str]:
@@ -210,12 +236,20 @@ def test_every_dataset_written_is_documented_with_its_units(tmp_path):
     documented = documented_units()
     assert documented["fields/stress"] == "Pa" and documented["energy/tool_strain"] == "J"
     # an elastic striker with its fields, an anvil and blows: every dataset the newer models add
-    anvil = merge(BLOWS_CASE, {"anvil": {"mass": 0.5, "contact": {"stiffness": 1e10, "exponent": 0.0}},
-                               "outputs": {"fields": True, "field_stride": 50}})
+    anvil = merge(
+        BLOWS_CASE,
+        {
+            "anvil": {"mass": 0.5, "contact": {"stiffness": 1e10, "exponent": 0.0}},
+            "outputs": {"fields": True, "field_stride": 50},
+        },
+    )
     for name, case in (("paper", CASE), ("blows", BLOWS_CASE), ("anvil", anvil)):
         with h5py.File(write_result(simulate(parse_case(case)), tmp_path / f"{name}.h5")) as f:
             written = {}
-            f.visititems(lambda path, d: written.__setitem__(path, d.attrs.get("units", ""))
-                         if isinstance(d, h5py.Dataset) else None)
+            f.visititems(
+                lambda path, d: (
+                    written.__setitem__(path, d.attrs.get("units", "")) if isinstance(d, h5py.Dataset) else None
+                )
+            )
         for path, unit in written.items():
             assert documented.get(path) == unit, (name, path, unit)

@@ -8,12 +8,11 @@ vectorised pass, the extreme's node found in its block) against NumPy's sums, mi
 
 import numpy as np
 import pytest
-from scipy.linalg import solve_banded
-
 from percussim.solver import kernel as K
 from percussim.solver.controller import tool_on
 from percussim.solver.grid import make_grid
 from percussim.solver.presets import load_preset
+from scipy.linalg import solve_banded
 
 RNG = np.random.default_rng(7)
 
@@ -35,19 +34,38 @@ def tool_rows(grid, r, weight_new, end_weight, end_stiffness, diag_n):
 
 @pytest.mark.parametrize("cells", [5, 31, 32, 33, 101, 2001])
 @pytest.mark.parametrize("preset", ["fig3", "fig9"])
-@pytest.mark.parametrize("weight_new, centered, end_masses",
-                         [(0.5, False, False), (1.0, False, False), (0.25, True, True)])
+@pytest.mark.parametrize(
+    "weight_new, centered, end_masses", [(0.5, False, False), (1.0, False, False), (0.25, True, True)]
+)
 def test_segmented_solve_equals_a_banded_solve(cells, preset, weight_new, centered, end_masses):
     case = load_preset(preset)
     grid = make_grid(case.tool, cells, end_masses)
     end_stiffness = 2e8
-    rod = K.Rod(cell_length=grid.h, time_step=1e-6, courant_squared=30.0,
-                youngs_modulus=grid.youngs_modulus, density=grid.density,
-                struck_end_stiffness=end_stiffness, working_end_stiffness=end_stiffness)
-    weights = K.Weights(new=weight_new, old=weight_new if centered else 0.0, centered=centered,
-                        end_masses=end_masses, impedance_ends=False)
-    medium = K.Medium(kind=K.MEDIUM_LINEAR, stiffness=5e7, damping=3e3, impedance=0.0,
-                      unloading_stiffness=0.0, ultimate_resistance=0.0, damping_factor=0.0)
+    rod = K.Rod(
+        cell_length=grid.h,
+        time_step=1e-6,
+        courant_squared=30.0,
+        youngs_modulus=grid.youngs_modulus,
+        density=grid.density,
+        struck_end_stiffness=end_stiffness,
+        working_end_stiffness=end_stiffness,
+    )
+    weights = K.Weights(
+        new=weight_new,
+        old=weight_new if centered else 0.0,
+        centered=centered,
+        end_masses=end_masses,
+        impedance_ends=False,
+    )
+    medium = K.Medium(
+        kind=K.MEDIUM_LINEAR,
+        stiffness=5e7,
+        damping=3e3,
+        impedance=0.0,
+        unloading_stiffness=0.0,
+        ultimate_resistance=0.0,
+        damping_factor=0.0,
+    )
     rows = K.factor_tool_rows(tool_on(grid), rod, weights, medium)
     p, inv_den = rows.p, rows.inv_den
     end_weight = weight_new if end_masses else 1.0
@@ -79,12 +97,14 @@ def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     u = RNG.normal(size=(3, cells + 1))
     new, cur, stressed, half_e_over_h = 2, 0, 1, 3.5  # the stresses of a third layer
     kinetic, strain, low, low_block, high, high_block = K.tool_energy_and_stresses(
-        u, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h)
+        u, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h
+    )
 
     ea, eb = np.diff(u[new]), np.diff(u[cur])
     assert kinetic == pytest.approx(grid.node_area @ (u[new] - u[cur]) ** 2, rel=1e-13)
-    assert strain == pytest.approx(grid.area_mid @ (strain_sigma * (ea * ea + eb * eb)
-                                                    + (1 - 2 * strain_sigma) * ea * eb), rel=1e-13)
+    assert strain == pytest.approx(
+        grid.area_mid @ (strain_sigma * (ea * ea + eb * eb) + (1 - 2 * strain_sigma) * ea * eb), rel=1e-13
+    )
     stress = half_e_over_h * (u[stressed, 2:] - u[stressed, :-2])  # interior nodes 1 … n − 1
     if cells < 2:
         assert (low, high) == (np.inf, -np.inf)

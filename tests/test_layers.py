@@ -13,8 +13,18 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 # Each folder, the package it installs as, and the packages it may not import.
 LAYERS = {
-    "solver": ("percussim.solver", ("percussim.service", "percussim.worker", "percussim.cli",
-                                    "percussim.client", "fastapi", "celery", "starlette")),
+    "solver": (
+        "percussim.solver",
+        (
+            "percussim.service",
+            "percussim.worker",
+            "percussim.cli",
+            "percussim.client",
+            "fastapi",
+            "celery",
+            "starlette",
+        ),
+    ),
     "worker": ("percussim.worker", ("percussim.service", "percussim.cli", "fastapi")),
     "service": ("percussim.service", ("percussim.cli",)),
 }
@@ -28,7 +38,7 @@ def imported(path: Path, folder: str) -> set[str]:
         if isinstance(node, ast.Import):
             names |= {alias.name for alias in node.names}
         elif isinstance(node, ast.ImportFrom):
-            base = here[:len(here) - node.level + 1] if node.level else []
+            base = here[: len(here) - node.level + 1] if node.level else []
             module = ".".join(base + ([node.module] if node.module else []))
             names |= {module} | {f"{module}.{alias.name}" for alias in node.names}
     return names
@@ -37,10 +47,12 @@ def imported(path: Path, folder: str) -> set[str]:
 @pytest.mark.parametrize("folder", LAYERS)
 def test_a_layer_imports_nothing_above_it(folder):
     package, forbidden = LAYERS[folder]
-    wrong = {f"{path.relative_to(ROOT)}: {name}"
-             for path in (ROOT / folder).rglob("*.py")
-             for name in imported(path, folder)
-             if any(name == f or name.startswith(f + ".") for f in forbidden)}
+    wrong = {
+        f"{path.relative_to(ROOT)}: {name}"
+        for path in (ROOT / folder).rglob("*.py")
+        for name in imported(path, folder)
+        if any(name == f or name.startswith(f + ".") for f in forbidden)
+    }
     assert not wrong, sorted(wrong)
 
 
@@ -57,14 +69,17 @@ def loaded_after(statement: str) -> set[str]:
     return set(done.stdout.split())
 
 
-@pytest.mark.parametrize("statement", [
-    "import percussim",
-    "import percussim; percussim.Case, percussim.load_preset('fig3'), percussim.Client",
-    "from percussim.solver.case import parse_case",
-    "from percussim.service.app import create_app; create_app()",
-    "from percussim.solver.summary import Summary",
-    "from percussim.solver.limits import check_case",
-])
+@pytest.mark.parametrize(
+    "statement",
+    [
+        "import percussim",
+        "import percussim; percussim.Case, percussim.load_preset('fig3'), percussim.Client",
+        "from percussim.solver.case import parse_case",
+        "from percussim.service.app import create_app; create_app()",
+        "from percussim.solver.summary import Summary",
+        "from percussim.solver.limits import check_case",
+    ],
+)
 def test_validating_input_loads_no_kernel(statement):
     heavy = {"numba", "percussim.solver.kernel", "percussim.solver.controller"} & loaded_after(statement)
     assert not heavy, sorted(heavy)

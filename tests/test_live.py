@@ -12,7 +12,6 @@ from datetime import datetime
 import h5py
 import numpy as np
 import pytest
-
 from conftest import merge
 from live_stack import Stack, redis_server, wait_for
 from percussim.solver.case import parse_case
@@ -22,8 +21,10 @@ from percussim.solver.simulate import simulate
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
 # A job of several seconds: long enough to watch progress and to cancel it while it runs.
-LONG = {"numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
-        "outputs": {"history_stride": 100, "probes": []}}
+LONG = {
+    "numerics": {"duration": 1.5, "cells": 600, "time_step": 8.3e-7},
+    "outputs": {"history_stride": 100, "probes": []},
+}
 
 
 @pytest.fixture(scope="module")
@@ -65,8 +66,9 @@ def test_a_preset_runs_to_the_same_summary_as_the_solver(stack, preset):
 
 
 def test_a_tolerance_job_runs_the_ladder_and_reports_its_estimate(stack):
-    case = merge(preset_json("fig9"), {"numerics": {"time_step": None, "cells": None, "gamma": None,
-                                                    "tolerance": 1e-3}})
+    case = merge(
+        preset_json("fig9"), {"numerics": {"time_step": None, "cells": None, "gamma": None, "tolerance": 1e-3}}
+    )
     job = _submit(stack, case)
     record = stack.wait_status(job["id"], ("succeeded", "failed"))
     assert record["status"] == "succeeded", (record, stack.logs())
@@ -83,16 +85,25 @@ def test_a_sweep_fans_out_over_two_workers_into_one_table(redis_url, tmp_path):
         parameters = {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}
         answer = s.client.post("/v1/sweeps", json={"case": preset_json("fig5"), "parameters": parameters})
         assert answer.status_code == 202, answer.text
-        sweep = wait_for(lambda: (v := s.client.get(f"/v1/sweeps/{answer.json()['id']}").json())["finished"]
-                         and v, 60, "the sweep")
+        sweep = wait_for(
+            lambda: (v := s.client.get(f"/v1/sweeps/{answer.json()['id']}").json())["finished"] and v, 60, "the sweep"
+        )
         assert sweep["counts"] == {"succeeded": 6}, (sweep, s.logs())
         workers = {s.client.get(f"/v1/jobs/{row['job']}").json()["worker"] for row in sweep["rows"]}
         print(f"sweep: 6 variants on workers {sorted(workers)}")
         assert len(workers) == 2, "both workers took variants"
         for row in sweep["rows"]:
-            direct = simulate(parse_case(merge(preset_json("fig5"), {
-                "striker": {"velocity": row["values"]["striker.velocity"]},
-                "contact": {"stiffness": row["values"]["contact.stiffness"]}}))).summary
+            direct = simulate(
+                parse_case(
+                    merge(
+                        preset_json("fig5"),
+                        {
+                            "striker": {"velocity": row["values"]["striker.velocity"]},
+                            "contact": {"stiffness": row["values"]["contact.stiffness"]},
+                        },
+                    )
+                )
+            ).summary
             assert row["peak_contact_force"] == direct["peak_contact_force"]["value"]
             assert row["co_impact_time"] == direct["co_impact_time"]
     finally:
@@ -131,9 +142,15 @@ def test_progress_rises_and_cancel_stops_running_and_queued_jobs(stack):
     assert stack.client.get(f"/v1/jobs/{queued['id']}").json()["started"] is None
     assert stack.client.get(f"/v1/jobs/{running['id']}/summary").status_code == 409
     cancelled = stack.client.get("/v1/jobs?status=cancelled").json()
-    assert {j["id"] for j in cancelled["jobs"]} == {queued["id"], running["id"]} == {
-        j["id"] for j in stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["jobs"]
-        + stack.client.get(stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["next"]).json()["jobs"]}
+    assert (
+        {j["id"] for j in cancelled["jobs"]}
+        == {queued["id"], running["id"]}
+        == {
+            j["id"]
+            for j in stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["jobs"]
+            + stack.client.get(stack.client.get("/v1/jobs?status=cancelled&limit=1").json()["next"]).json()["jobs"]
+        }
+    )
     # A finished job is removed with its files: 204, then 404.
     folder = stack.folder / "results" / "jobs" / after["id"]
     assert (folder / "result.h5").is_file()
@@ -174,8 +191,11 @@ def test_a_calibration_runs_as_a_job_and_recovers_the_parameters(stack):
     from test_calibrate import TRUE, other_setting_record, start_case
 
     names = ("contact.stiffness", "medium.stiffness")
-    request = {"case": start_case(names), "record": other_setting_record("stress"),
-               "parameters": {"contact.stiffness": [1e9, 1e15], "medium.stiffness": [1e7, 1e11]}}
+    request = {
+        "case": start_case(names),
+        "record": other_setting_record("stress"),
+        "parameters": {"contact.stiffness": [1e9, 1e15], "medium.stiffness": [1e7, 1e11]},
+    }
     answer = stack.client.post("/v1/calibrations", json=request)
     assert answer.status_code == 202, answer.text
     assert answer.headers["Location"] == answer.json()["links"]["self"]
@@ -201,11 +221,16 @@ def test_an_optimisation_spreads_its_runs_over_the_workers_and_keeps_its_limit(r
     s = Stack(tmp_path, redis_url, workers=2)
     try:
         allowable = 250e6
-        answer = s.client.post("/v1/optimizations", json={
-            "case": short_rock_drill(),
-            "variables": {"striker.length": [0.1, 0.6], "striker.velocity": [5.0, 20.0]},
-            "objective": {"maximize": "energy.to_medium"},
-            "limits": {"max_compressive_stress": {"max": allowable}}, "max_evaluations": 120})
+        answer = s.client.post(
+            "/v1/optimizations",
+            json={
+                "case": short_rock_drill(),
+                "variables": {"striker.length": [0.1, 0.6], "striker.velocity": [5.0, 20.0]},
+                "objective": {"maximize": "energy.to_medium"},
+                "limits": {"max_compressive_stress": {"max": allowable}},
+                "max_evaluations": 120,
+            },
+        )
         assert answer.status_code == 202, answer.text
         done = s.wait_status(answer.json()["id"], ("succeeded", "failed"), timeout=300)
         assert done["status"] == "succeeded", (done, s.logs())
@@ -222,9 +247,15 @@ def test_an_optimisation_spreads_its_runs_over_the_workers_and_keeps_its_limit(r
 def test_a_running_optimisation_can_be_cancelled(stack):
     from test_optimize import short_rock_drill
 
-    answer = stack.client.post("/v1/optimizations", json={
-        "case": short_rock_drill(), "variables": {"striker.length": [0.1, 0.6]},
-        "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 5000})
+    answer = stack.client.post(
+        "/v1/optimizations",
+        json={
+            "case": short_rock_drill(),
+            "variables": {"striker.length": [0.1, 0.6]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": 5000,
+        },
+    )
     assert answer.status_code == 202, answer.text
     study = answer.json()["links"]["self"]
     wait_for(lambda: stack.client.get(study).json()["status"] == "running", 60, "the optimisation")

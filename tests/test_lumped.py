@@ -4,14 +4,13 @@ import math
 
 import numpy as np
 import pytest
-from scipy.integrate import trapezoid
-
 from conftest import BASE_CASE, STEEL, merge
 from percussim.solver.case import parse_case
 from percussim.solver.controller import HISTORY_PATHS, simulate_rod
 from percussim.solver.errors import Cancelled
 from percussim.solver.grid import tool_mass
 from percussim.solver.lumped import NO_FIELDS_WARNING, simulate_lumped
+from scipy.integrate import trapezoid
 
 
 def relative(value: float, reference: float) -> float:
@@ -56,31 +55,49 @@ def test_linear_contact_matches_the_closed_form():
 
 
 # The trapezoid rule on the sampled R·x1' errs by about P·x1'·τ/2 at each jump of the pulse.
-@pytest.mark.parametrize("force, quadrature_tolerance", [
-    ({"kind": "sine", "amplitude": 9e4, "omega": 800.0}, 1e-5),
-    ({"kind": "abs_sine", "amplitude": 9e4, "omega": 3000.0}, 1e-5),
-    ({"kind": "pulse", "amplitude": 2e5, "start": 1e-4, "duration": 1.5e-4}, 2e-3),
-])
+@pytest.mark.parametrize(
+    "force, quadrature_tolerance",
+    [
+        ({"kind": "sine", "amplitude": 9e4, "omega": 800.0}, 1e-5),
+        ({"kind": "abs_sine", "amplitude": 9e4, "omega": 3000.0}, 1e-5),
+        ({"kind": "pulse", "amplitude": 2e5, "start": 1e-4, "duration": 1.5e-4}, 2e-3),
+    ],
+)
 def test_energy_terms_close(force, quadrature_tolerance):
-    case = merge(BASE_CASE, {
-        "force": force,
-        "contact": {"damping": 5e3, "tension_stiffness": 3e8},
-        "medium": {"stiffness": 2e8, "damping": 2e4},
-        "numerics": {"duration": 3e-3},
-    })
+    case = merge(
+        BASE_CASE,
+        {
+            "force": force,
+            "contact": {"damping": 5e3, "tension_stiffness": 3e8},
+            "medium": {"stiffness": 2e8, "damping": 2e4},
+            "numerics": {"duration": 3e-3},
+        },
+    )
     result = simulate_lumped(parse_case(case))
     energy = result.summary["energy"]
     supplied = energy["initial"] + abs(energy["external_work"])
     # The case exercises every term and the switch of the contact law (re-contacts via c0).
     assert result.summary["contacts_total"] >= 2
-    for term in ("external_work", "dissipated_contact", "dissipated_medium", "contact_potential",
-                 "medium_potential", "tool_kinetic"):
+    for term in (
+        "external_work",
+        "dissipated_contact",
+        "dissipated_medium",
+        "contact_potential",
+        "medium_potential",
+        "tool_kinetic",
+    ):
         assert abs(energy[term]) > 1e-3 * supplied, term
     assert abs(energy["numerical"]) < 1e-6 * supplied
     # ... and at every sample, not only at the end.
     h = result.history
-    terms = ("striker_kinetic", "tool_kinetic", "contact_potential", "medium_potential",
-             "dissipated_contact", "dissipated_medium")
+    terms = (
+        "striker_kinetic",
+        "tool_kinetic",
+        "contact_potential",
+        "medium_potential",
+        "dissipated_contact",
+        "dissipated_medium",
+    )
     stored = sum(h[f"energy/{n}"] for n in terms)
     residual = energy["initial"] + h["energy/external_work"] - stored
     assert np.max(np.abs(residual)) < 1e-6 * supplied
@@ -91,15 +108,13 @@ def test_energy_terms_close(force, quadrature_tolerance):
 
 def test_pulse_works_only_while_on():
     start, duration, amplitude = 1e-4, 1.5e-4, 2e5
-    case = merge(BASE_CASE, {"force": {"kind": "pulse", "amplitude": amplitude, "start": start,
-                                       "duration": duration}})
+    case = merge(BASE_CASE, {"force": {"kind": "pulse", "amplitude": amplitude, "start": start, "duration": duration}})
     h = simulate_lumped(parse_case(case)).history
     t, work, x1 = h["time"], h["energy/external_work"], h["striker/displacement"]
     scale = amplitude * np.ptp(x1)
     on = (start <= t) & (t <= start + duration)
     assert np.all(np.abs(work[t < start]) < 1e-9 * scale)
-    np.testing.assert_allclose(work[on] - work[on][0], amplitude * (x1[on] - x1[on][0]),
-                               rtol=0, atol=1e-7 * scale)
+    np.testing.assert_allclose(work[on] - work[on][0], amplitude * (x1[on] - x1[on][0]), rtol=0, atol=1e-7 * scale)
     assert np.ptp(work[t > start + duration]) < 1e-9 * scale
 
 
@@ -119,8 +134,7 @@ def limit_errors(rod, lumped) -> dict[str, float]:
     return {
         "co_impact": relative(rs["co_impact_time"], ls["co_impact_time"]),
         "peak_force": relative(rs["peak_contact_force"]["value"], ls["peak_contact_force"]["value"]),
-        "displacement_in_contact": (np.max(np.abs(y - y_ref)[in_contact])
-                                    / np.max(np.abs(y_ref[in_contact]))),
+        "displacement_in_contact": (np.max(np.abs(y - y_ref)[in_contact]) / np.max(np.abs(y_ref[in_contact]))),
         "displacement": np.max(np.abs(y - y_ref)) / np.max(np.abs(y_ref)),
     }
 
@@ -132,8 +146,7 @@ def rigid_limit_errors(scheme: str, factors) -> dict[float, dict[str, float]]:
         case = merge(RIGID_LIMIT, {"numerics": {"scheme": scheme}})
         case["tool"]["youngs_modulus"] *= factor
         errors[factor] = limit_errors(simulate_rod(parse_case(case)), lumped)
-        print(f"{scheme}, E × {factor:g}: "
-              + ", ".join(f"{k} {v:.3e}" for k, v in errors[factor].items()))
+        print(f"{scheme}, E × {factor:g}: " + ", ".join(f"{k} {v:.3e}" for k, v in errors[factor].items()))
     return errors
 
 
@@ -164,8 +177,7 @@ def test_outputs_keep_the_rod_layout_and_say_what_is_missing():
     num, h = result.numerics, result.history
     assert set(h) == set(HISTORY_PATHS)
     np.testing.assert_array_equal(h["time"], np.arange(0, num.steps + 1, 3) * num.time_step)
-    np.testing.assert_array_equal(h["tool/struck_end_displacement"],
-                                  h["tool/working_end_displacement"])
+    np.testing.assert_array_equal(h["tool/struck_end_displacement"], h["tool/working_end_displacement"])
     assert not h["energy/tool_strain"].any()
     assert result.fields is None and NO_FIELDS_WARNING in result.summary["warnings"]
     plain = simulate_lumped(parse_case(BASE_CASE))
@@ -185,11 +197,14 @@ def test_outputs_keep_the_rod_layout_and_say_what_is_missing():
 def test_quasi_static_stress_is_the_stiff_rods_stress():
     """On a tapered tool the rigid model's stress at a probe in the taper matches the rod's as
     E grows (the rod's wave part shrinks with the transit time)."""
-    case = merge(RIGID_LIMIT, {
-        "tool": {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.014, 0.014, 0.004]}},
-        "medium": {"stiffness": 2e9, "damping": 1e3},
-        "outputs": {"probes": [0.9]},
-    })
+    case = merge(
+        RIGID_LIMIT,
+        {
+            "tool": {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.014, 0.014, 0.004]}},
+            "medium": {"stiffness": 2e9, "damping": 1e3},
+            "outputs": {"probes": [0.9]},
+        },
+    )
     lumped = simulate_lumped(parse_case(case))
     stiff = merge(case, {"numerics": {"scheme": "sigma"}})
     stiff["tool"]["youngs_modulus"] *= 1e4
@@ -204,8 +219,7 @@ def test_quasi_static_stress_is_the_stiff_rods_stress():
 
 def test_progress_rises_to_one_and_cancel_stops():
     # An abs_sine force breaks the run into many segments.
-    case = parse_case(merge(BASE_CASE, {"force": {"kind": "abs_sine", "amplitude": 9e4,
-                                                  "omega": 2e4}}))
+    case = parse_case(merge(BASE_CASE, {"force": {"kind": "abs_sine", "amplitude": 9e4, "omega": 2e4}}))
     seen = []
     simulate_lumped(case, progress=seen.append)
     assert len(seen) > 5 and seen == sorted(seen) and seen[-1] == 1.0

@@ -10,9 +10,8 @@ odd instants; one to several contacts.
 """
 
 import pytest
-
-from percussim.solver.case import parse_case
 from percussim.solver.accuracy import estimated_values
+from percussim.solver.case import parse_case
 from percussim.solver.matrix import converged_reference, draw_cases
 from percussim.solver.simulate import simulate
 
@@ -26,12 +25,12 @@ def solved_within(index: int, tol: float) -> None:
     case = parse_case(data)
     reference = converged_reference(case, target=tol / 20, max_cells=60_000)
     assert max(reference.uncertainty.values(), default=0.0) <= tol / 10, reference.uncertainty
-    summary = simulate(case.model_copy(update={"numerics": case.numerics.model_copy(
-        update={"tolerance": tol})})).summary
+    summary = simulate(
+        case.model_copy(update={"numerics": case.numerics.model_copy(update={"tolerance": tol})})
+    ).summary
     found = estimated_values(summary)
     estimated = set(summary["error_estimate"]) - {"worst"}
-    errors = {name: abs(found[name] / value - 1.0) for name, value in reference.values.items()
-              if name in estimated}
+    errors = {name: abs(found[name] / value - 1.0) for name, value in reference.values.items() if name in estimated}
     print(data["name"], errors, summary["error_estimate"], [r["cells"] for r in summary["runs"]])
     # whatever the reference has a meaningful relative error for, the summary estimates
     assert set(reference.values) <= estimated | set(summary["not_estimated"])

@@ -10,16 +10,23 @@ import math
 
 import numpy as np
 import pytest
-
 from closed_forms import Hopkinson as H
-from percussim.cli import main
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import explicit_numerics
-from percussim.solver.record import (even_sampling, parse_record, printed_step, read_record,
-                                     record_from_csv, record_to_csv)
+from percussim.solver.record import (
+    even_sampling,
+    parse_record,
+    printed_step,
+    read_record,
+    record_from_csv,
+    record_to_csv,
+)
 from percussim.solver.study import OFFSET, check_calibration, fitted_bounds, parse_calibration
+
+from percussim.cli import main
+
 
 def test_the_closed_form_pulse_is_the_kernels_on_a_fine_grid():
     """The record's maker against the solver on 4000 cells: within 0.5% of the plateau."""
@@ -39,9 +46,18 @@ def test_a_triggered_shpb_record_is_fitted_within_3_standard_errors_and_2_percen
     assert np.abs(record.instants - np.arange(len(record.values)) / H.RATE).max() < 1e-9
     assert not record.starts_at_rest()
     start = H.case(velocity=7.0, length=0.8, stiffness=2e9)
-    fit = calibrate({"case": start, "record": record.model_dump(exclude_none=True),
-                     "parameters": {"striker.velocity": [2.0, 10.0], "striker.length": [0.3, 1.0],
-                                    "contact.stiffness": [1e8, 1e10]}}, processes=1)
+    fit = calibrate(
+        {
+            "case": start,
+            "record": record.model_dump(exclude_none=True),
+            "parameters": {
+                "striker.velocity": [2.0, 10.0],
+                "striker.length": [0.3, 1.0],
+                "contact.stiffness": [1e8, 1e10],
+            },
+        },
+        processes=1,
+    )
     found = fit["parameters"]
     truth = {"striker.velocity": H.VELOCITY, "striker.length": H.STRIKER, OFFSET: offset}
     for name, value in truth.items():
@@ -75,18 +91,19 @@ def test_a_record_in_other_units_is_refused_naming_its_units(factor):
     record = record_from_csv(text)
     small = record.model_dump(exclude_none=True) | {"values": [v * factor for v in record.values]}
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": H.case(), "record": small,
-                                             "parameters": {"striker.velocity": [2.0, 10.0]}}))
+        check_calibration(
+            parse_calibration({"case": H.case(), "record": small, "parameters": {"striker.velocity": [2.0, 10.0]}})
+        )
     error = refused.value.errors[0]
     assert error.field == "record.values" and "SI units" in error.message and "(Pa)" in error.message
 
 
 # Evenly sampled records
 
+
 def test_a_start_and_a_rate_give_the_instants_and_survive_json_and_csv():
     values = [math.sin(k / 7.0) for k in range(50)]
-    record = parse_record({"quantity": "contact_force", "time_start": 2e-6, "sample_rate": 1e6,
-                           "values": values})
+    record = parse_record({"quantity": "contact_force", "time_start": 2e-6, "sample_rate": 1e6, "values": values})
     assert record.instants == pytest.approx(2e-6 + np.arange(50) * 1e-6)
     assert record.notes == []
     assert parse_record(record.model_dump(exclude_none=True)) == record
@@ -112,17 +129,23 @@ def test_csv_comments_and_command_line_flags_give_the_sampling(tmp_path):
     assert refused.value.errors[0].field == "record.sample_rate"
 
 
-@pytest.mark.parametrize("change, field, words", [
-    ({"sample_rate": 1e6}, "record.sample_rate", "cannot be given with time"),
-    ({"time_start": 0.0}, "record.time_start", "cannot be given with time"),
-    ({"time": None}, "record.time", "is required"),
-    ({"time": None, "time_start": 1e-6}, "record.sample_rate", "is required with time_start"),
-    ({"time": None, "sample_rate": 0.0}, "record.sample_rate", "must be > 0"),
-    ({"time": [-1e-3 + k * 1e-6 for k in range(50)]}, "record.time", "must reach past the impact"),
-])
+@pytest.mark.parametrize(
+    "change, field, words",
+    [
+        ({"sample_rate": 1e6}, "record.sample_rate", "cannot be given with time"),
+        ({"time_start": 0.0}, "record.time_start", "cannot be given with time"),
+        ({"time": None}, "record.time", "is required"),
+        ({"time": None, "time_start": 1e-6}, "record.sample_rate", "is required with time_start"),
+        ({"time": None, "sample_rate": 0.0}, "record.sample_rate", "must be > 0"),
+        ({"time": [-1e-3 + k * 1e-6 for k in range(50)]}, "record.time", "must reach past the impact"),
+    ],
+)
 def test_inconsistent_clocks_are_refused_naming_the_field(change, field, words):
-    base = {"quantity": "contact_force", "time": [k * 1e-6 for k in range(50)],
-            "values": [math.sin(k / 7.0) for k in range(50)]}
+    base = {
+        "quantity": "contact_force",
+        "time": [k * 1e-6 for k in range(50)],
+        "values": [math.sin(k / 7.0) for k in range(50)],
+    }
     data = {key: value for key, value in (base | change).items() if value is not None}
     with pytest.raises(CaseError) as refused:
         parse_record(data)
@@ -137,20 +160,24 @@ def test_a_rounded_even_sampling_is_rebuilt_within_2_ns(start, digits):
     time."""
     exact = start + np.arange(3000) / H.RATE
     rounded = [float(f"{t:.{digits}g}") for t in exact]
-    record = parse_record({"quantity": "contact_force", "time": rounded,
-                           "values": [math.sin(k / 50.0) for k in range(3000)]})
+    record = parse_record(
+        {"quantity": "contact_force", "time": rounded, "values": [math.sin(k / 50.0) for k in range(3000)]}
+    )
     assert np.abs(record.instants - exact).max() < 2e-9
     assert "repeats" in record.notes[0] and "(1.25e+07 Hz" in record.notes[0]
 
 
-@pytest.mark.parametrize("time, bad", [
-    # a repeat that is no rounding: one instant written twice in a record printed to 9 digits
-    ([k * 1e-6 for k in range(30)] + [29e-6] + [k * 1e-6 for k in range(31, 60)], 30),
-    # a step back
-    ([k * 1e-6 for k in range(30)] + [28.5e-6] + [k * 1e-6 for k in range(31, 60)], 30),
-    # rounded (five samples a printed time), but not evenly sampled: a gap of 25 samples
-    ([float(f"{1e-5 + k * 2e-7 + (5e-6 if k > 30 else 0.0):.2g}") for k in range(60)], 1),
-])
+@pytest.mark.parametrize(
+    "time, bad",
+    [
+        # a repeat that is no rounding: one instant written twice in a record printed to 9 digits
+        ([k * 1e-6 for k in range(30)] + [29e-6] + [k * 1e-6 for k in range(31, 60)], 30),
+        # a step back
+        ([k * 1e-6 for k in range(30)] + [28.5e-6] + [k * 1e-6 for k in range(31, 60)], 30),
+        # rounded (five samples a printed time), but not evenly sampled: a gap of 25 samples
+        ([float(f"{1e-5 + k * 2e-7 + (5e-6 if k > 30 else 0.0):.2g}") for k in range(60)], 1),
+    ],
+)
 def test_times_that_are_not_a_rounded_even_sampling_are_refused(time, bad):
     with pytest.raises(CaseError) as refused:
         parse_record({"quantity": "contact_force", "time": time, "values": [math.sin(k / 7.0) for k in range(60)]})
@@ -167,31 +194,53 @@ def test_the_printed_step_is_the_last_digits_unit():
 
 # Records triggered at arrival
 
+
 def test_a_record_at_rest_keeps_the_impact_as_its_time_zero_and_a_triggered_one_fits_its_offset():
     text, offset = H.triggered_record()
     triggered = record_from_csv(text)
-    bounds = fitted_bounds(parse_calibration({"case": H.case(), "record": triggered.model_dump(exclude_none=True),
-                                              "parameters": {"striker.velocity": [2.0, 10.0]}}))
+    bounds = fitted_bounds(
+        parse_calibration(
+            {
+                "case": H.case(),
+                "record": triggered.model_dump(exclude_none=True),
+                "parameters": {"striker.velocity": [2.0, 10.0]},
+            }
+        )
+    )
     low, high = bounds[OFFSET]
     assert low < H.GAUGE / H.C < offset < high < H.GAUGE / H.C + 40e-6
-    at_rest = parse_record({"quantity": "stress", "x": H.GAUGE, "time_start": 0.0, "sample_rate": H.RATE,
-                            "values": H.gauge_stress(np.arange(0.0, 4e-4, 1.0 / H.RATE)).tolist()})
+    at_rest = parse_record(
+        {
+            "quantity": "stress",
+            "x": H.GAUGE,
+            "time_start": 0.0,
+            "sample_rate": H.RATE,
+            "values": H.gauge_stress(np.arange(0.0, 4e-4, 1.0 / H.RATE)).tolist(),
+        }
+    )
     assert at_rest.starts_at_rest()
-    assert OFFSET not in fitted_bounds(parse_calibration({"case": H.case(), "record": at_rest.model_dump(exclude_none=True),
-                                                          "parameters": {"striker.velocity": [2.0, 10.0]}}))
+    assert OFFSET not in fitted_bounds(
+        parse_calibration(
+            {
+                "case": H.case(),
+                "record": at_rest.model_dump(exclude_none=True),
+                "parameters": {"striker.velocity": [2.0, 10.0]},
+            }
+        )
+    )
 
 
 def test_a_known_offset_is_used_and_cannot_be_fitted_too():
     text, offset = H.triggered_record()
     record = record_from_csv(text).model_dump(exclude_none=True) | {"time_offset": offset}
-    fit = calibrate({"case": H.case(velocity=7.0), "record": record,
-                     "parameters": {"striker.velocity": [2.0, 10.0]}}, processes=1)
+    fit = calibrate(
+        {"case": H.case(velocity=7.0), "record": record, "parameters": {"striker.velocity": [2.0, 10.0]}}, processes=1
+    )
     assert set(fit["parameters"]) == {"striker.velocity"}
     assert fit["parameters"]["striker.velocity"]["value"] == pytest.approx(H.VELOCITY, rel=0.01)
     assert fit["record"]["time_offset"] == offset
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": H.case(), "record": record,
-                                             "parameters": {OFFSET: [0.0, 3e-4]}}))
+        check_calibration(parse_calibration({"case": H.case(), "record": record, "parameters": {OFFSET: [0.0, 3e-4]}}))
     assert refused.value.errors[0].field == f"parameters[{OFFSET!r}]"
 
 
@@ -202,9 +251,20 @@ def test_the_command_line_reads_an_evenly_sampled_record_with_flags(tmp_path, ca
     record = record_from_csv(text)
     (tmp_path / "r.csv").write_text(f"stress@{H.GAUGE}\n" + "\n".join(f"{v!r}" for v in record.values) + "\n")
     (tmp_path / "case.json").write_text(json.dumps(H.case(velocity=7.0)))
-    code = main(["calibrate", str(tmp_path / "case.json"), "--record", str(tmp_path / "r.csv"),
-                 "--sample-rate", str(H.RATE), "--time-offset", repr(offset),
-                 "--fit", "striker.velocity=2:10"])
+    code = main(
+        [
+            "calibrate",
+            str(tmp_path / "case.json"),
+            "--record",
+            str(tmp_path / "r.csv"),
+            "--sample-rate",
+            str(H.RATE),
+            "--time-offset",
+            repr(offset),
+            "--fit",
+            "striker.velocity=2:10",
+        ]
+    )
     assert code == 0, capsys.readouterr().err
     shown = json.loads(capsys.readouterr().out)
     assert shown["parameters"]["striker.velocity"]["value"] == pytest.approx(H.VELOCITY, rel=0.01)

@@ -15,12 +15,11 @@ import math
 
 import numpy as np
 import pytest
-
-import percussim
+from closed_forms import MEDIUM_FINE as FINE
+from closed_forms import SOIL_RESISTANCE, lundberg, lundberg_optimum, rock_case, rock_penetration, smith_set, soil_case
 from percussim.solver.case import CaseError
 
-from closed_forms import (MEDIUM_FINE as FINE, SOIL_RESISTANCE, lundberg, lundberg_optimum, rock_case,
-                          rock_penetration, smith_set, soil_case)
+import percussim
 
 
 def test_lundbergs_optimum():

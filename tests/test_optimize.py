@@ -6,12 +6,12 @@ import json
 import math
 
 import pytest
-
 from closed_forms import AREA, lundberg_optimum, matched_tool_case, passed_share
-from percussim.cli import main
 from percussim.solver.case import CaseError
 from percussim.solver.optimize import optimize
 from percussim.solver.presets import preset_json
+
+from percussim.cli import main
 
 ROCK_K = 5e8
 
@@ -44,9 +44,14 @@ def lundberg_optimal_length(case: dict) -> float:
 @pytest.mark.slow
 def test_lundbergs_optimal_piston_length_is_found_within_1_percent():
     case = short_rock_drill()
-    answer = optimize({"case": case, "variables": {"striker.length": [0.1, MAX_PISTON]},
-                       "objective": {"maximize": "energy.transfer_efficiency"},
-                       "max_evaluations": 200})
+    answer = optimize(
+        {
+            "case": case,
+            "variables": {"striker.length": [0.1, MAX_PISTON]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": 200,
+        }
+    )
     expected = lundberg_optimal_length(case)
     found = answer["values"]["striker.length"]
     assert abs(found / expected - 1.0) <= 0.01, (found, expected)
@@ -65,8 +70,14 @@ def test_the_striker_tool_impedance_ratio_that_passes_the_most_energy_is_one():
     its first pulse the medium receives 4r/(1 + r)² of the striker's energy, r = Z1/Z2 (the
     transmission of a rod–rod impact), whose maximum is r = 1. Only the striker's area varies
     (the same material: r = A1/A2)."""
-    answer = optimize({"case": matched_tool_case(1.7), "variables": {"striker.area": [AREA / 4, 4 * AREA]},
-                       "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 200})
+    answer = optimize(
+        {
+            "case": matched_tool_case(1.7),
+            "variables": {"striker.area": [AREA / 4, 4 * AREA]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": 200,
+        }
+    )
     ratio = answer["values"]["striker.area"] / AREA
     assert ratio == pytest.approx(1.0, abs=0.01), answer["stopped"]
     assert answer["quantities"]["energy.transfer_efficiency"] == pytest.approx(1.0, abs=0.01)
@@ -82,41 +93,65 @@ def test_a_limit_is_never_broken_by_the_answer():
     """More energy into the rock from a faster, longer piston, up to an allowable stress: the
     optimum lies on the limit, and the answer, checked under the tolerance, keeps it."""
     allowable = 250e6
-    answer = optimize({"case": short_rock_drill(),
-                       "variables": {"striker.length": [0.1, MAX_PISTON], "striker.velocity": [5.0, 20.0]},
-                       "objective": {"maximize": "energy.to_medium"},
-                       "limits": {"max_compressive_stress": {"max": allowable}},
-                       "max_evaluations": 300})
+    answer = optimize(
+        {
+            "case": short_rock_drill(),
+            "variables": {"striker.length": [0.1, MAX_PISTON], "striker.velocity": [5.0, 20.0]},
+            "objective": {"maximize": "energy.to_medium"},
+            "limits": {"max_compressive_stress": {"max": allowable}},
+            "max_evaluations": 300,
+        }
+    )
     stress = answer["summary"]["max_compressive_stress"]["value"]
     assert stress <= allowable
     assert stress >= 0.95 * allowable  # the limit is what stopped it
     assert answer["checked"][-1]["feasible"]
-    assert all(e["quantities"]["max_compressive_stress"] <= allowable for e in answer["history"]
-               if e["feasible"])
+    assert all(e["quantities"]["max_compressive_stress"] <= allowable for e in answer["history"] if e["feasible"])
     assert any(not e["feasible"] for e in answer["history"])  # it did try beyond the limit
 
 
 def test_an_objective_or_limit_not_in_the_summary_is_refused():
     with pytest.raises(CaseError) as refused:
-        optimize({"case": short_rock_drill(), "variables": {"striker.velocity": [5.0, 20.0]},
-                  "objective": {"maximize": "energy.efficiency"},
-                  "limits": {"max_stress": {"max": 1e8}}, "max_evaluations": 10})
+        optimize(
+            {
+                "case": short_rock_drill(),
+                "variables": {"striker.velocity": [5.0, 20.0]},
+                "objective": {"maximize": "energy.efficiency"},
+                "limits": {"max_stress": {"max": 1e8}},
+                "max_evaluations": 10,
+            }
+        )
     fields = {e.field for e in refused.value.errors}
     assert fields == {"objective.maximize", "limits['max_stress']"}
 
 
 def test_the_request_is_validated_naming_fields():
     with pytest.raises(CaseError) as refused:
-        optimize({"case": short_rock_drill(), "variables": {"striker.velocity": [20.0, 5.0]},
-                  "objective": {"maximize": "energy.to_medium", "minimize": "peak_contact_force"}})
+        optimize(
+            {
+                "case": short_rock_drill(),
+                "variables": {"striker.velocity": [20.0, 5.0]},
+                "objective": {"maximize": "energy.to_medium", "minimize": "peak_contact_force"},
+            }
+        )
     assert {e.field for e in refused.value.errors} == {"objective.maximize"}
     with pytest.raises(CaseError) as refused:
-        optimize({"case": short_rock_drill(), "variables": {"striker.velocity": [20.0, 5.0]},
-                  "objective": {"maximize": "energy.to_medium"}})
+        optimize(
+            {
+                "case": short_rock_drill(),
+                "variables": {"striker.velocity": [20.0, 5.0]},
+                "objective": {"maximize": "energy.to_medium"},
+            }
+        )
     assert {e.field for e in refused.value.errors} == {"variables['striker.velocity']"}
     with pytest.raises(CaseError) as refused:
-        optimize({"case": short_rock_drill(), "variables": {"blows.count": [1, 5]},
-                  "objective": {"maximize": "energy.to_medium"}})
+        optimize(
+            {
+                "case": short_rock_drill(),
+                "variables": {"blows.count": [1, 5]},
+                "objective": {"maximize": "energy.to_medium"},
+            }
+        )
     assert "variables['blows.count']" in {e.field for e in refused.value.errors}
 
 
@@ -126,9 +161,22 @@ def test_the_budget_bounds_the_global_stage(tmp_path, capsys):
     area = case["tool"].pop("area")
     case["tool"]["profile"] = {"x": [0.0, 0.75, 1.5], "area": [area, area, area]}
     (tmp_path / "case.json").write_text(json.dumps(case))
-    code = main(["optimize", str(tmp_path / "case.json"), "--vary", f"tool.profile.area.1={area / 2}:{area * 2}",
-                 "--minimize", "max_compressive_stress", "--evaluations", "40",
-                 "--output", str(tmp_path / "out.json"), "--plot", str(tmp_path / "conv.svg")])
+    code = main(
+        [
+            "optimize",
+            str(tmp_path / "case.json"),
+            "--vary",
+            f"tool.profile.area.1={area / 2}:{area * 2}",
+            "--minimize",
+            "max_compressive_stress",
+            "--evaluations",
+            "40",
+            "--output",
+            str(tmp_path / "out.json"),
+            "--plot",
+            str(tmp_path / "conv.svg"),
+        ]
+    )
     assert code == 0
     shown = json.loads(capsys.readouterr().out)
     saved = json.loads((tmp_path / "out.json").read_text())

@@ -10,12 +10,11 @@ import json
 from pathlib import Path
 
 import pytest
-from playwright.sync_api import Page, expect
-
 from browser import HDF5_SIGNATURE, KEY, LONG, case_in_page, drawn, fill_json, shown, shown_job
+from closed_forms import drilling
 from conftest import merge, report
 from percussim.solver.presets import preset_json
-from closed_forms import drilling
+from playwright.sync_api import Page, expect
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -47,13 +46,21 @@ def test_a_preset_runs_to_its_summary_plots_and_hdf5(page, stack):
     def error(quantity: str) -> str:
         return f"±{shown(100 * estimate[quantity], 2)}%"
 
-    assert cells("co_impact_time")[:3] == [shown(summary["co_impact_time"] * 1e6), "µs",
-                                           error("co_impact_time")]
-    assert cells("peak_contact_force") == [shown(peak["value"] / 1e3), "kN", error("peak_contact_force"),
-                                           "", shown(peak["time"] * 1e6)]
-    assert cells("max_compressive_stress") == [shown(compressive["value"] / 1e6), "MPa",
-                                               error("max_compressive_stress"),
-                                               shown(compressive["x"] * 1e3), shown(compressive["time"] * 1e6)]
+    assert cells("co_impact_time")[:3] == [shown(summary["co_impact_time"] * 1e6), "µs", error("co_impact_time")]
+    assert cells("peak_contact_force") == [
+        shown(peak["value"] / 1e3),
+        "kN",
+        error("peak_contact_force"),
+        "",
+        shown(peak["time"] * 1e6),
+    ]
+    assert cells("max_compressive_stress") == [
+        shown(compressive["value"] / 1e6),
+        "MPa",
+        error("max_compressive_stress"),
+        shown(compressive["x"] * 1e3),
+        shown(compressive["time"] * 1e6),
+    ]
     assert cells("striker_rebound_velocity")[:2] == [shown(summary["striker_rebound_velocity"]), "m/s"]
     # the preset keeps the paper's own numerics, whose errors are over 1%: marked, and said
     over = [q for q, e in estimate.items() if q != "worst" and e > 0.01]
@@ -132,9 +139,13 @@ def test_a_run_of_blows_shows_its_table_penetration_and_plots(page, stack):
     summary = stack.client.get(f"/v1/jobs/{job_id}/summary").json()
     for row, blow in zip(rows.all(), summary["blows"]):
         assert [t.strip() for t in row.locator("th, td").all_inner_texts()][1:] == [
-            shown(blow["peak_contact_force"] / 1e3), shown(blow["max_compressive_stress"] / 1e6),
-            shown(blow["to_medium"]), shown(100 * blow["transfer_efficiency"]),
-            shown(blow["permanent_penetration"] * 1e3), shown(blow["set"] * 1e3)]
+            shown(blow["peak_contact_force"] / 1e3),
+            shown(blow["max_compressive_stress"] / 1e6),
+            shown(blow["to_medium"]),
+            shown(100 * blow["transfer_efficiency"]),
+            shown(blow["permanent_penetration"] * 1e3),
+            shown(blow["set"] * 1e3),
+        ]
     assert rows.nth(2).get_attribute("data-blow") == "3"
 
     def value(quantity: str) -> str:
@@ -184,8 +195,13 @@ def test_a_calibration_from_an_uploaded_record_shows_its_fit(page, stack, tmp_pa
     for name in names:
         cells = [t.strip() for t in page.locator(f"[data-parameter='{name}'] td").all_inner_texts()]
         p = fit["parameters"][name]
-        assert cells == [shown(p["value"]), shown(p["standard_error"]),
-                         shown(100 * p["standard_error"] / p["value"], 2), shown(p["low"]), shown(p["high"])]
+        assert cells == [
+            shown(p["value"]),
+            shown(p["standard_error"]),
+            shown(100 * p["standard_error"] / p["value"], 2),
+            shown(p["low"]),
+            shown(p["high"]),
+        ]
     correlation = page.locator("table.correlation tbody td").all_inner_texts()
     assert correlation == [shown(r, 3) for row in fit["correlation"] for r in row]
     expect(page.locator(".fit-figures")).to_contain_text(f"{fit['evaluations']} model runs")
@@ -221,17 +237,20 @@ def test_an_evenly_sampled_triggered_record_is_fitted_with_its_time_offset(page,
     start and rate, and shows the fitted time_offset with its standard error beside the
     striker's velocity."""
     from closed_forms import Hopkinson as H
-
     from percussim.solver.record import record_from_csv
 
     text, offset = H.triggered_record()
     record = record_from_csv(text)
-    (tmp_path / "shpb.csv").write_text(f"# gauge 1 of the incident bar\n# sample_rate = {H.RATE:g}\n"
-                                       f"stress@{H.GAUGE}\n" + "\n".join(f"{v:.6g}" for v in record.values) + "\n")
+    (tmp_path / "shpb.csv").write_text(
+        f"# gauge 1 of the incident bar\n# sample_rate = {H.RATE:g}\n"
+        f"stress@{H.GAUGE}\n" + "\n".join(f"{v:.6g}" for v in record.values) + "\n"
+    )
     fill_json(page, json.dumps(H.case(velocity=7.0), indent=2))
     page.click("#calibration-panel summary")
     page.set_input_files("#record-file", str(tmp_path / "shpb.csv"))
-    expect(page.locator("#record-info")).to_contain_text(f"{len(record.values)} samples of stress at x = 1.082 m at 12.50 MHz")
+    expect(page.locator("#record-info")).to_contain_text(
+        f"{len(record.values)} samples of stress at x = 1.082 m at 12.50 MHz"
+    )
     for row in page.locator("#fit-parameters tbody tr").all()[1:]:
         row.get_by_role("button", name="remove this row").click()
     for cell, text in zip(page.locator("#fit-parameters tbody tr input").all(), ("striker.velocity", "2", "10")):
@@ -329,7 +348,9 @@ def test_a_sweep_started_from_the_form_runs_sorts_and_plots(page, stack):
         api_row = by_job[tr.get_attribute("data-job")]
         cell = tr.locator("td[data-column=peak_contact_force]")
         assert cell.inner_text() == shown(api_row["peak_contact_force"] / 1e3)
-        assert tr.locator("td[data-column=transfer_efficiency]").inner_text() == shown(100 * api_row["transfer_efficiency"])
+        assert tr.locator("td[data-column=transfer_efficiency]").inner_text() == shown(
+            100 * api_row["transfer_efficiency"]
+        )
 
     # Sorted by the peak force, largest first: two clicks on its header.
     header = page.locator("#sweep-view th[data-column=peak_contact_force] button")
@@ -346,13 +367,14 @@ def test_a_sweep_started_from_the_form_runs_sorts_and_plots(page, stack):
     assert line["y"] == pytest.approx([peaks[v] for v in (4, 6, 8)], rel=1e-12)
     assert line["y"][0] < line["y"][1] < line["y"][2]
     page.select_option("#sweep-view .sweep-y", "co_impact_time")
-    page.wait_for_function("() => document.querySelector('[data-chart=sweep] .plot-area').data[0].y[0] !== %r"
-                           % line["y"][0])
+    first = line["y"][0]
+    page.wait_for_function(f"() => document.querySelector('[data-chart=sweep] .plot-area').data[0].y[0] !== {first!r}")
 
     # A mass of -1 kg is refused, in the API's words under its row; nothing is queued.
     before = stack.client.get("/v1/jobs").json()["total"]
-    refused = stack.client.post("/v1/sweeps", json={"case": preset_json("fig9"),
-                                                    "parameters": {"striker.mass": [10, -1]}})
+    refused = stack.client.post(
+        "/v1/sweeps", json={"case": preset_json("fig9"), "parameters": {"striker.mass": [10, -1]}}
+    )
     (problem,) = refused.json()["detail"]
     assert problem["field"] == "parameters['striker.mass'][1]"
     row.locator("input.path").fill("striker.mass")
@@ -366,7 +388,8 @@ def test_a_sweep_started_from_the_form_runs_sorts_and_plots(page, stack):
 def _unit_select(page: Page, field: str):
     """The unit select beside the form's input `field` (its id)."""
     return page.locator(f"#{field}").locator(
-        "xpath=ancestor::*[.//select[contains(@class, 'unit')]][1]//select[contains(@class, 'unit')]")
+        "xpath=ancestor::*[.//select[contains(@class, 'unit')]][1]//select[contains(@class, 'unit')]"
+    )
 
 
 def test_a_case_filled_in_the_form_runs_and_shows_the_apis_numbers(page, stack):
@@ -420,8 +443,10 @@ def test_results_arrive_without_moving_what_is_on_view(page, stack, capsys):
     report(capsys, f"layout shifts while the results came in: {shifts}")
     assert sum(s["value"] for s in shifts) < 0.001, shifts
     # The observer does see a shift: a line pushed in above the job moves everything under it.
-    page.evaluate("() => document.getElementById('job').prepend(Object.assign("
-                  "document.createElement('p'), {textContent: 'pushed', style: 'height: 80px'}))")
+    page.evaluate(
+        "() => document.getElementById('job').prepend(Object.assign("
+        "document.createElement('p'), {textContent: 'pushed', style: 'height: 80px'}))"
+    )
     page.wait_for_function("() => window.shifts.length > 0")
 
 
@@ -440,8 +465,11 @@ def test_the_page_works_from_the_keyboard(page, stack):
     before = area.evaluate("el => el.layout.xaxis.range.slice()")
     page.focus("figure[data-chart=force] [data-action=zoom-in]")
     page.keyboard.press("Enter")
-    page.wait_for_function("(w) => { const r = document.querySelector('figure[data-chart=force] .plot-area')"
-                           ".layout.xaxis.range; return r[1] - r[0] < 0.75 * w; }", arg=before[1] - before[0])
+    page.wait_for_function(
+        "(w) => { const r = document.querySelector('figure[data-chart=force] .plot-area')"
+        ".layout.xaxis.range; return r[1] - r[0] < 0.75 * w; }",
+        arg=before[1] - before[0],
+    )
     page.keyboard.press("Tab")
     assert page.evaluate("document.activeElement.dataset.action") == "zoom-out"
 

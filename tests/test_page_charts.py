@@ -11,11 +11,10 @@ import re
 from pathlib import Path
 
 import pytest
-from playwright.sync_api import Page, expect
-
 from browser import shown
 from conftest import merge
 from percussim.solver.presets import preset_json
+from playwright.sync_api import Page, expect
 
 pytestmark = pytest.mark.slow  # a live stack and a browser
 
@@ -38,8 +37,7 @@ def open_job(page: Page, job_id: str) -> None:
 
 
 def drawn(page: Page, chart: str) -> None:
-    page.wait_for_function(
-        f"() => (document.querySelector('[data-chart={chart}] .plot-area')?.data || []).length > 0")
+    page.wait_for_function(f"() => (document.querySelector('[data-chart={chart}] .plot-area')?.data || []).length > 0")
 
 
 def x_range(page: Page, chart: str) -> list[float]:
@@ -93,17 +91,22 @@ def test_a_jobs_charts_zoom_hover_slide_and_export(page, stack):
     page.mouse.move(box["x"] + box["width"] / 2, box["y"] + box["height"] / 2 + 30, steps=5)
     page.mouse.move(box["x"] + 2 * box["width"] / 3, box["y"] + box["height"] / 2 + 60, steps=5)
     page.mouse.up()
-    page.wait_for_function(f"() => document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[1]"
-                           f" - document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[0]"
-                           f" < {(whole[1] - whole[0]) / 2}")
+    page.wait_for_function(
+        f"() => document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[1]"
+        f" - document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[0]"
+        f" < {(whole[1] - whole[0]) / 2}"
+    )
     dragged = x_range(page, "force")
     assert whole[0] < dragged[0] < dragged[1] < whole[1]
     page.click("[data-chart=force] [data-action=zoom-in]")
-    page.wait_for_function(f"() => {{ const r = document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range;"
-                           f" return r[1] - r[0] < {0.6 * (dragged[1] - dragged[0])}; }}")
+    page.wait_for_function(
+        f"() => {{ const r = document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range;"
+        f" return r[1] - r[0] < {0.6 * (dragged[1] - dragged[0])}; }}"
+    )
     page.click("[data-chart=force] [data-action=reset]")
-    page.wait_for_function(f"() => document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[1]"
-                           f" >= {whole[1] - 1e-9}")
+    page.wait_for_function(
+        f"() => document.querySelector('[data-chart=force] .plot-area').layout.xaxis.range[1] >= {whole[1] - 1e-9}"
+    )
 
     # The slider redraws the stress along the tool at another frame's time.
     slider = page.locator("[data-chart=stress_along] input[type=range]")
@@ -143,8 +146,10 @@ def test_a_comparison_overlays_two_jobs_and_highlights_what_differs(page, stack)
     drawn(page, "compare-force")
     drawn(page, "compare-probes")
 
-    traces = page.evaluate("() => document.querySelector('[data-chart=compare-force] .plot-area').data"
-                           ".map((t) => [t.name, Math.max(...t.y)])")
+    traces = page.evaluate(
+        "() => document.querySelector('[data-chart=compare-force] .plot-area').data"
+        ".map((t) => [t.name, Math.max(...t.y)])"
+    )
     assert [name for name, _ in traces] == [f"fig9 · {slow[:6]}", f"fig9-fast · {fast[:6]}"]
     for (_, peak_kn), summary in zip(traces, summaries):
         assert peak_kn * 1e3 == pytest.approx(summary["peak_contact_force"]["value"], rel=PEAK)

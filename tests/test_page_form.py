@@ -8,14 +8,28 @@ import json
 from decimal import Decimal
 
 import pytest
-from playwright.sync_api import Page, expect
-
 from browser import KEY, case_in_page
+from playwright.sync_api import Page, expect
 
 pytestmark = pytest.mark.slow  # a live stack and a browser
 
-POWERS = {"m": 0, "mm": -3, "cm": -2, "µs": -6, "ms": -3, "kN": 3, "MPa": 6, "GPa": 9, "g/cm³": 3, "mm²": -6,
-          "cm²": -4, "kN/mm": 6, "%": -2, "t": 3, "g": -3}
+POWERS = {
+    "m": 0,
+    "mm": -3,
+    "cm": -2,
+    "µs": -6,
+    "ms": -3,
+    "kN": 3,
+    "MPa": 6,
+    "GPa": 9,
+    "g/cm³": 3,
+    "mm²": -6,
+    "cm²": -4,
+    "kN/mm": 6,
+    "%": -2,
+    "t": 3,
+    "g": -3,
+}
 
 
 def case_json(page: Page) -> dict:
@@ -31,16 +45,31 @@ def top(page: Page, selector: str) -> float:
     return page.evaluate("(s) => document.querySelector(s).getBoundingClientRect().top + scrollY", selector)
 
 
-@pytest.mark.parametrize("text, unit", [
-    ("3", "mm"), ("3.5", "mm"), ("7.85", "g/cm³"), ("2.1e5", "MPa"), ("0.83", "µs"), ("12.7", "mm"),
-    ("0.1", "mm"), ("1", "%"), ("-0.25", "kN"), (".5", "cm²"), ("1e-3", "mm²"), ("206", "GPa"), ("60", "kN/mm"),
-])
+@pytest.mark.parametrize(
+    "text, unit",
+    [
+        ("3", "mm"),
+        ("3.5", "mm"),
+        ("7.85", "g/cm³"),
+        ("2.1e5", "MPa"),
+        ("0.83", "µs"),
+        ("12.7", "mm"),
+        ("0.1", "mm"),
+        ("1", "%"),
+        ("-0.25", "kN"),
+        (".5", "cm²"),
+        ("1e-3", "mm²"),
+        ("206", "GPa"),
+        ("60", "kN/mm"),
+    ],
+)
 def test_a_unit_converts_exactly(page, text, unit):
     # The double nearest the decimal typed, as Python reads "3.5e-3": no 3.5 * 0.001 = 0.0035000000000000005.
     assert page.evaluate("([t, u]) => toSI(t, u)", [text, unit]) == float(Decimal(text).scaleb(POWERS[unit]))
     # ... and shown back in the unit as the same digits.
-    assert page.evaluate("([t, u]) => fromSI(toSI(t, u), u)", [text, unit]) == \
-        page.evaluate("([t]) => shiftDecimal(t, 0)", [text])
+    assert page.evaluate("([t, u]) => fromSI(toSI(t, u), u)", [text, unit]) == page.evaluate(
+        "([t]) => shiftDecimal(t, 0)", [text]
+    )
 
 
 def test_typed_values_go_into_the_json_in_si_and_a_unit_change_keeps_them(page):
@@ -75,7 +104,8 @@ def test_every_preset_comes_back_from_the_form_unchanged(page, stack):
         preset = case_in_page(page, name)
         # Every input read back as typed, then in another unit: the JSON is the preset's, to the bit.
         for unit_index in (0, -1):
-            page.evaluate("""(last) => {
+            page.evaluate(
+                """(last) => {
                 for (const select of document.querySelectorAll("#case-fields select.unit")) {
                   if (select.closest("[hidden]")) continue;
                   select.selectedIndex = last ? select.options.length - 1 : 0;
@@ -84,7 +114,9 @@ def test_every_preset_comes_back_from_the_form_unchanged(page, stack):
                 for (const input of document.querySelectorAll("#case-fields input[type=text], #case-fields textarea")) {
                   if (!input.closest("[hidden]")) input.dispatchEvent(new Event("input"));
                 }
-            }""", unit_index == -1)
+            }""",
+                unit_index == -1,
+            )
             assert case_json(page) == preset, (name, unit_index)
 
 
@@ -169,11 +201,11 @@ def test_the_profile_editor(page):
     table.get_by_role("combobox", name="unit of Ø d (stations)").select_option("mm")
     expect(cell(0, "area")).to_have_value("59.9996")  # from 2.8274e-3 m², to six digits
     cell(2, "area").fill("40")
-    assert case_json(page)["tool"]["profile"]["area"][2] == pytest.approx(3.141592653589793 * 0.04 ** 2 / 4, rel=1e-15)
+    assert case_json(page)["tool"]["profile"]["area"][2] == pytest.approx(3.141592653589793 * 0.04**2 / 4, rel=1e-15)
     # Uniform: the mean area (the same mass); back to a profile: that area at both ends.
     page.select_option("#f-tool-shape", "uniform")
     tool = case_json(page)["tool"]
-    mean = (2.8274e-3 * 0.25 + (2.8274e-3 + 3.141592653589793 * 0.04 ** 2 / 4) / 2 * 0.25) / 0.5
+    mean = (2.8274e-3 * 0.25 + (2.8274e-3 + 3.141592653589793 * 0.04**2 / 4) / 2 * 0.25) / 0.5
     assert "profile" not in tool and tool["area"] == pytest.approx(mean, rel=1e-5)
     page.select_option("#f-tool-shape", "profile")
     assert case_json(page)["tool"]["profile"] == {"x": [0, 0.5], "area": [tool["area"], tool["area"]]}
@@ -210,9 +242,11 @@ def test_the_services_messages_are_shown_next_to_their_fields(page, stack):
     del case["frobnicate"]
     page.fill("#case-json", json.dumps(case, indent=2))
     expect(page.locator("#f-tool-profile-line")).to_contain_text(
-        "x of station 3: the last station must equal tool.length = 0.5 m")
+        "x of station 3: the last station must equal tool.length = 0.5 m"
+    )
     expect(page.locator('[data-path="tool.profile"] input[data-row="3"][data-col="x"]')).to_have_attribute(
-        "aria-invalid", "true")
+        "aria-invalid", "true"
+    )
     expect(page.locator("#case-errors")).to_be_hidden()
 
 

@@ -14,22 +14,22 @@ import xml.etree.ElementTree as ET
 
 import h5py
 import numpy as np
-import pytest
-from fastapi.testclient import TestClient
-
 import percussim.solver.plots as plots
+import pytest
+from closed_forms import MEDIUM_FINE, drilling, soil_case
 from conftest import BASE_CASE, merge, succeeded_job
+from fastapi.testclient import TestClient
 from live_stack import ROOT
 from percussim.service.app import create_app
 from percussim.solver.case import parse_case
-from percussim.cli import main
 from percussim.solver.io import write_result
 from percussim.solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
 from percussim.worker.settings import Settings
 from percussim.worker.store import SUCCEEDED, JobStore
-from closed_forms import MEDIUM_FINE, drilling, soil_case
+
+from percussim.cli import main
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 # The result each plot is drawn from in the tests that draw every plot: the Fig. 9 preset's, but
@@ -58,8 +58,9 @@ def results(tmp_path_factory) -> dict[str, str]:
         "sparse": _result(folder, "sparse", {"outputs": {"fields": True, "field_stride": 400}}),
         "bare": _result(folder, "bare", {"outputs": None}),
         "free": _result(folder, "free", {"medium": None, "outputs": None}),
-        "lumped": _result(folder, "lumped", {"numerics": {"model": "lumped"},
-                                             "outputs": {"fields": True, "probes": []}}),
+        "lumped": _result(
+            folder, "lumped", {"numerics": {"model": "lumped"}, "outputs": {"fields": True, "probes": []}}
+        ),
         "blows": _write(folder, "blows", {**blows, "name": "blows"}),
         "soil": _write(folder, "soil", soil_case(MEDIUM_FINE)),
         "damped soil": _write(folder, "damped soil", soil_case(MEDIUM_FINE, damping_factor=0.5)),
@@ -102,8 +103,11 @@ def test_the_force_plot_is_the_contact_medium_and_external_force_in_kN(results):
     ax = figure(results["full"], "force").axes[0]
     with h5py.File(results["full"]) as f:
         ms = f["time"][()] * 1e3  # a 4-ms run is drawn in ms
-        for label, path in (("contact force", "contact/force"), ("medium force", "medium/force"),
-                            ("external force on the striker", "external/force")):
+        for label, path in (
+            ("contact force", "contact/force"),
+            ("medium force", "medium/force"),
+            ("external force on the striker", "external/force"),
+        ):
             np.testing.assert_array_equal(_line(ax, label).get_xdata(), ms)
             np.testing.assert_array_equal(_line(ax, label).get_ydata(), f[path][()] / 1e3)
         contacts = json.loads(f["summary"][()])["contacts"]
@@ -115,9 +119,11 @@ def test_the_force_plot_is_the_contact_medium_and_external_force_in_kN(results):
 def test_the_displacements_are_the_striker_and_both_tool_ends_in_mm(results):
     ax = figure(results["full"], "displacements").axes[0]
     with h5py.File(results["full"]) as f:
-        for label, path in (("striker", "striker/displacement"),
-                            ("struck end of the tool", "tool/struck_end_displacement"),
-                            ("working end of the tool", "tool/working_end_displacement")):
+        for label, path in (
+            ("striker", "striker/displacement"),
+            ("struck end of the tool", "tool/struck_end_displacement"),
+            ("working end of the tool", "tool/working_end_displacement"),
+        ):
             np.testing.assert_array_equal(_line(ax, label).get_ydata(), f[path][()] * 1e3)
 
 
@@ -146,8 +152,9 @@ def test_stress_along_the_tool_by_default_spans_the_first_contact_after_its_star
     ax = figure(results["full"], "stress_along").axes[0]
     with h5py.File(results["full"]) as f:
         first = json.loads(f["summary"][()])["contacts"][0]
-    times = [float(line.get_label().split()[2]) * 1e-6 for line in ax.get_lines()
-             if line.get_label().startswith("t = ")]
+    times = [
+        float(line.get_label().split()[2]) * 1e-6 for line in ax.get_lines() if line.get_label().startswith("t = ")
+    ]
     assert len(times) == plots.DEFAULT_TIMES and times == sorted(times)
     assert first["start"] < times[0] and times[-1] == pytest.approx(first["end"], abs=7e-6)
 
@@ -193,14 +200,22 @@ def test_the_energy_budget_stacks_every_term_up_to_the_input(results):
     ax = figure(results["full"], "energy").axes[0]
     with h5py.File(results["full"]) as f:
         case = json.loads(f.attrs["case"])
-        supplied = (0.5 * case["striker"]["mass"] * case["striker"]["velocity"] ** 2
-                    + _strided(f["energy/external_work"], plots.MAX_FILL_POINTS))
+        supplied = 0.5 * case["striker"]["mass"] * case["striker"]["velocity"] ** 2 + _strided(
+            f["energy/external_work"], plots.MAX_FILL_POINTS
+        )
         end = f["time"][-1] * 1e3
     np.testing.assert_allclose(_line(ax, "input: initial + external work").get_ydata(), supplied)
     stacked = [c for c in ax.collections if c.get_label()]
     assert [c.get_label() for c in stacked] == [
-        "striker kinetic", "tool kinetic", "tool strain", "contact potential", "medium potential",
-        "dissipated in the contact", "dissipated in the medium", "lost by the scheme (numerical)"]
+        "striker kinetic",
+        "tool kinetic",
+        "tool strain",
+        "contact potential",
+        "medium potential",
+        "dissipated in the contact",
+        "dissipated in the medium",
+        "lost by the scheme (numerical)",
+    ]
     top = stacked[-1].get_paths()[0].vertices[:, 1].max()
     assert top == pytest.approx(supplied.max(), rel=1e-9)
     assert ax.get_xlim() == (0, end)
@@ -214,8 +229,7 @@ def test_the_energy_budget_of_an_elastic_striker_on_soil_has_their_terms(results
     with h5py.File(results["soil"]) as f:
         striker = json.loads(f.attrs["case"])["striker"]
     piston = 0.5 * striker["density"] * striker["area"] * striker["length"] * striker["velocity"] ** 2
-    np.testing.assert_allclose(_line(ax, "input: initial + external work").get_ydata(), piston,
-                               rtol=1e-12)
+    np.testing.assert_allclose(_line(ax, "input: initial + external work").get_ydata(), piston, rtol=1e-12)
     labels = [c.get_label() for c in ax.collections if c.get_label()]
     assert {"striker strain", "medium plastic (permanent penetration)"} <= set(labels)
     with h5py.File(results["soil"]) as f:
@@ -259,8 +273,7 @@ def test_the_force_penetration_loop_encloses_the_energy_to_the_medium(results, n
         np.testing.assert_array_equal(loop.get_xdata(), f["medium/penetration"][()] * 1e3)
         np.testing.assert_array_equal(loop.get_ydata(), f["medium/force"][()] / 1e3)
         summary = json.loads(f["summary"][()])
-    assert _shoelace(loop.get_xdata(), loop.get_ydata()) == pytest.approx(
-        summary["energy"]["to_medium"], rel=1e-2)
+    assert _shoelace(loop.get_xdata(), loop.get_ydata()) == pytest.approx(summary["energy"]["to_medium"], rel=1e-2)
     permanent = summary["medium_penetration"]["permanent"] * 1e3
     [marker] = [line for line in ax.get_lines() if line.get_label().startswith("permanent penetration")]
     assert list(marker.get_xdata()) == [permanent] and list(marker.get_ydata()) == [0.0]
@@ -274,8 +287,9 @@ def test_the_force_penetration_of_a_linear_medium_is_against_the_working_end(res
     ax = figure(results["full"], "force_penetration").axes[0]
     with h5py.File(results["full"]) as f:
         assert "medium/penetration" not in f
-        np.testing.assert_array_equal(_line(ax, "medium force").get_xdata(),
-                                      f["tool/working_end_displacement"][()] * 1e3)
+        np.testing.assert_array_equal(
+            _line(ax, "medium force").get_xdata(), f["tool/working_end_displacement"][()] * 1e3
+        )
     assert _line(ax, "permanent penetration 0 mm").get_xdata() == [0.0]
 
 
@@ -303,25 +317,24 @@ def test_the_blows_plot_has_a_point_a_blow_equal_to_the_summarys_table(results):
 
 def test_a_result_without_fields_or_probes_says_what_to_change(results, tmp_path):
     with h5py.File(results["bare"]) as f:
-        assert problem(f, "spacetime") == ("this result has no stress fields: "
-                                           "run the case with outputs.fields = true")
+        assert problem(f, "spacetime") == ("this result has no stress fields: run the case with outputs.fields = true")
         assert problem(f, "stress_along") == problem(f, "spacetime")
         assert "run the case with outputs.probes" in problem(f, "probes")
         assert problem(f, "force") is None and problem(f, "energy") is None
     with h5py.File(results["lumped"]) as f:
-        assert "numerics.model = \"rod\"" in problem(f, "spacetime")
+        assert 'numerics.model = "rod"' in problem(f, "spacetime")
     with pytest.raises(NotAvailable, match="outputs.fields = true"):
         figure(results["bare"], "spacetime")
     written, skipped = write_plots(results["bare"], tmp_path, formats=["png"])
     assert sorted(skipped) == ["blows", "probes", "spacetime", "stress_along"]
-    assert sorted(p.name for p in written) == ["displacements.png", "energy.png", "force.png",
-                                               "force_penetration.png"]
+    assert sorted(p.name for p in written) == ["displacements.png", "energy.png", "force.png", "force_penetration.png"]
 
 
 def test_a_plot_that_does_not_apply_says_why(results):
     with h5py.File(results["bare"]) as f:
-        assert problem(f, "blows") == ("this case has no blows table: run it blow after blow with "
-                                       "blows.count, e.g. \"blows\": {\"count\": 5}")
+        assert problem(f, "blows") == (
+            'this case has no blows table: run it blow after blow with blows.count, e.g. "blows": {"count": 5}'
+        )
     with h5py.File(results["free"]) as f:
         assert problem(f, "force_penetration").startswith("this case has no medium at the working end")
         assert problem(f, "energy") is None and problem(f, "force") is None
@@ -347,28 +360,44 @@ def test_cli_writes_the_plots_next_to_the_result_and_says_what_it_skipped(result
     assert main(["plot", str(bare)]) == 0
     out, err = capsys.readouterr()
     folder = tmp_path / "run-plots"
-    names = {f"{n}.{fmt}" for n in ("force", "displacements", "energy", "force_penetration")
-             for fmt in ("png", "svg")}
+    names = {f"{n}.{fmt}" for n in ("force", "displacements", "energy", "force_penetration") for fmt in ("png", "svg")}
     assert {p.name for p in folder.iterdir()} == names
     assert set(out.split()) == {str(folder / n) for n in names}
-    assert ("skipped spacetime: this result has no stress fields: "
-            "run the case with outputs.fields = true") in err
+    assert ("skipped spacetime: this result has no stress fields: run the case with outputs.fields = true") in err
     assert "skipped probes" in err
 
 
 def test_cli_plots_chosen_plots_formats_and_times(results, tmp_path, capsys):
-    assert main(["plot", results["full"], "--out", str(tmp_path / "p"), "--only", "stress_along",
-                 "probes", "--format", "png", "--times", "1e-4,2e-4"]) == 0
+    assert (
+        main(
+            [
+                "plot",
+                results["full"],
+                "--out",
+                str(tmp_path / "p"),
+                "--only",
+                "stress_along",
+                "probes",
+                "--format",
+                "png",
+                "--times",
+                "1e-4,2e-4",
+            ]
+        )
+        == 0
+    )
     assert sorted(p.name for p in (tmp_path / "p").iterdir()) == ["probes.png", "stress_along.png"]
     assert capsys.readouterr().err == ""
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda p: None, "no such result file"),
-    (lambda p: p.write_text("not HDF5"), "is not a percussim result"),
-])
-def test_cli_refuses_a_missing_file_or_one_that_is_not_a_result_with_status_2(tmp_path, capsys, make,
-                                                                              message):
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda p: None, "no such result file"),
+        (lambda p: p.write_text("not HDF5"), "is not a percussim result"),
+    ],
+)
+def test_cli_refuses_a_missing_file_or_one_that_is_not_a_result_with_status_2(tmp_path, capsys, make, message):
     make(tmp_path / "r.h5")
     assert main(["plot", str(tmp_path / "r.h5")]) == 2
     assert message in capsys.readouterr().err
@@ -389,9 +418,13 @@ def test_http_lists_the_plots_with_their_links_and_reasons(results, api_store):
     assert answer.status_code == 200
     listed = {p["name"]: p for p in answer.json()["plots"]}
     assert list(listed) == list(PLOTS)
-    assert listed["force"] == {"name": "force", "title": "Contact force", "available": True, "reason": None,
-                               "links": {"png": f"/v1/jobs/{job_id}/plots/force.png",
-                                         "svg": f"/v1/jobs/{job_id}/plots/force.svg"}}
+    assert listed["force"] == {
+        "name": "force",
+        "title": "Contact force",
+        "available": True,
+        "reason": None,
+        "links": {"png": f"/v1/jobs/{job_id}/plots/force.png", "svg": f"/v1/jobs/{job_id}/plots/force.svg"},
+    }
     assert listed["spacetime"]["available"] is False
     assert "outputs.fields = true" in listed["spacetime"]["reason"]
 
@@ -434,12 +467,16 @@ def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_mak
     assert unknown.status_code == 404
     unknown = client.get(f"/v1/jobs/{job_id}/plots/forces.png")
     assert unknown.status_code == 404
-    assert unknown.json()["detail"] == ("no plot named 'forces'; the plots are: force, displacements, "
-                                        "probes, stress_along, spacetime, energy, force_penetration, blows")
+    assert unknown.json()["detail"] == (
+        "no plot named 'forces'; the plots are: force, displacements, "
+        "probes, stress_along, spacetime, energy, force_penetration, blows"
+    )
     missing = client.get(f"/v1/jobs/{job_id}/plots/probes.svg")
     assert missing.status_code == 404
-    assert f"job {job_id} has no probes plot: this result has no probes: run the case with outputs.probes" \
+    assert (
+        f"job {job_id} has no probes plot: this result has no probes: run the case with outputs.probes"
         in missing.json()["detail"]
+    )
     assert not jobs.plot_path(job_id, "probes", "svg").exists()
     assert client.get(f"/v1/jobs/{job_id}/plots/force.pdf").status_code == 422
 
@@ -455,14 +492,19 @@ def test_http_draws_stress_along_the_tool_at_chosen_times_and_names_bad_ones(res
     assert chosen.content != client.get(f"{url}.png").content  # the default times are others
     assert jobs.plot_path(job_id, "stress_along", "png").exists()  # the default plot is
     assert client.get(f"{url}.svg", params={"times": "1e-4"}).headers["content-type"] == "image/svg+xml"
-    for times, message in (("abc", "expected times in s"), ("1e-4,nan", "must be finite"),
-                           ("1", "outside the run's fields"), (",".join(["1e-4"] * 13), "more than the 12")):
+    for times, message in (
+        ("abc", "expected times in s"),
+        ("1e-4,nan", "must be finite"),
+        ("1", "outside the run's fields"),
+        (",".join(["1e-4"] * 13), "more than the 12"),
+    ):
         bad = client.get(f"{url}.png", params={"times": times})
         assert bad.status_code == 422 and bad.json()["detail"][0]["field"] == "query.times", bad.text
         assert message in bad.json()["detail"][0]["message"], (times, bad.text)
     other = client.get(f"/v1/jobs/{job_id}/plots/force.png", params={"times": "1e-4"})
     assert other.status_code == 422 and other.json()["detail"] == [
-        {"field": "query.times", "message": "only the stress_along plot takes times"}]
+        {"field": "query.times", "message": "only the stress_along plot takes times"}
+    ]
 
 
 def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(results, tmp_path, clean_environment):
@@ -483,13 +525,27 @@ def test_http_answers_409_until_the_job_has_succeeded_and_404_for_another_key(re
 
 def test_the_plot_example_runs_a_preset_and_draws_every_plot(tmp_path):
     """examples/plot_preset.py, which draws the README's pictures."""
-    done = subprocess.run([sys.executable, "examples/plot_preset.py", "--preset", "fig9",
-                           "--result", str(tmp_path / "fig9.h5"), "--out", str(tmp_path / "plots")],
-                          cwd=ROOT, capture_output=True, text=True, timeout=120)
+    done = subprocess.run(
+        [
+            sys.executable,
+            "examples/plot_preset.py",
+            "--preset",
+            "fig9",
+            "--result",
+            str(tmp_path / "fig9.h5"),
+            "--out",
+            str(tmp_path / "plots"),
+        ],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert done.returncode == 0, done.stderr
     drawn = sorted(p.stem for p in (tmp_path / "plots").glob("*.png"))
     # every plot but the blows table, which the one blow of a preset has not
     assert drawn == sorted(set(PLOTS) - {"blows"})
     assert [line for line in done.stdout.splitlines() if "skipped" in line] == [
-        "skipped blows: " + plots.problems(tmp_path / "fig9.h5")["blows"]]
+        "skipped blows: " + plots.problems(tmp_path / "fig9.h5")["blows"]
+    ]
     assert all(p.read_bytes().startswith(b"\x89PNG\r\n\x1a\n") for p in (tmp_path / "plots").glob("*.png"))

@@ -10,7 +10,6 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from percussim.solver.case import CaseError, load_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import wave_speed
@@ -192,7 +191,6 @@ def test_the_pile_sets_as_smiths_soil_says():
     penetration, energy = s["medium_penetration"], s["energy"]
     assert penetration["permanent"] > soil.quake  # the toe went through its quake and set
     assert penetration["max"] - penetration["permanent"] == pytest.approx(soil.quake, rel=1e-3)
-    assert energy["medium_plastic"] == pytest.approx(soil.ultimate_resistance * penetration["permanent"],
-                                                     rel=1e-3)
+    assert energy["medium_plastic"] == pytest.approx(soil.ultimate_resistance * penetration["permanent"], rel=1e-3)
     assert energy["dissipated_medium"] > 0  # the toe's damping J worked
     assert abs(energy["numerical"]) < 5e-3 * energy["initial"]

@@ -6,10 +6,9 @@ with a JSONDecodeError and the job was lost)."""
 import json
 import os
 
+import percussim.worker.queue_files as queue_files
 import pytest
 from kombu import Connection
-
-import percussim.worker.queue_files as queue_files
 from percussim.worker.app import make_app
 from percussim.worker.settings import Settings
 
@@ -17,8 +16,11 @@ from percussim.worker.settings import Settings
 @pytest.fixture
 def connection(tmp_path):
     folder = str(tmp_path)
-    with Connection("filesystem://", transport="percussim.worker.queue_files:Transport", transport_options={
-            "data_folder_in": folder, "data_folder_out": folder, "control_folder": folder}) as c:
+    with Connection(
+        "filesystem://",
+        transport="percussim.worker.queue_files:Transport",
+        transport_options={"data_folder_in": folder, "data_folder_out": folder, "control_folder": folder},
+    ) as c:
         yield c
 
 
@@ -28,8 +30,12 @@ def test_a_message_is_renamed_into_the_queue_only_once_written(connection, tmp_p
 
     def watched(source, target):
         # At the rename the queue holds no message yet, and the one to come is whole.
-        seen.append(([n for n in os.listdir(tmp_path) if n.endswith(".jobs.msg")],
-                     json.loads(open(source, "rb").read())["body"]))
+        seen.append(
+            (
+                [n for n in os.listdir(tmp_path) if n.endswith(".jobs.msg")],
+                json.loads(open(source, "rb").read())["body"],
+            )
+        )
         replace(source, target)
 
     monkeypatch.setattr(os, "replace", watched)  # as worker.store.write_atomic calls it

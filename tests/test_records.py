@@ -8,21 +8,19 @@ import json
 import threading
 import time
 from collections import Counter
-from datetime import datetime, timedelta, timezone
+from datetime import UTC, datetime, timedelta
 
 import pytest
-from fastapi.testclient import TestClient
-from sqlalchemy import text
-
 from conftest import BASE_CASE, merge, report
+from fastapi.testclient import TestClient
 from percussim.service.app import create_app
 from percussim.service.retention import delete_expired
 from percussim.solver.simulate import simulate
 from percussim.worker.database import _open, database
 from percussim.worker.metrics import job_observations
 from percussim.worker.settings import Settings
-from percussim.worker.store import (CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDED, JobStore, SweepStore,
-                                    UnknownJob)
+from percussim.worker.store import CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDED, JobStore, SweepStore, UnknownJob
+from sqlalchemy import text
 
 SUMMARY = json.dumps({"peak_contact_force": {"value": 1.0}})
 
@@ -46,9 +44,13 @@ def test_a_job_goes_queued_running_finished_and_then_never_changes(records):
     assert jobs.finish(job_id, SUCCEEDED, progress=1.0, result_bytes=123)
     done = jobs.get(job_id)
     assert done["status"] == SUCCEEDED and done["finished"] >= done["started"] >= done["created"]
-    for change in (lambda: jobs.start(job_id, "w3@x"), lambda: jobs.set_progress(job_id, 0.1),
-                   lambda: jobs.finish(job_id, FAILED, error="late"), lambda: jobs.requeue(job_id, "w2@x"),
-                   lambda: jobs.request_cancel(job_id)):
+    for change in (
+        lambda: jobs.start(job_id, "w3@x"),
+        lambda: jobs.set_progress(job_id, 0.1),
+        lambda: jobs.finish(job_id, FAILED, error="late"),
+        lambda: jobs.requeue(job_id, "w2@x"),
+        lambda: jobs.request_cancel(job_id),
+    ):
         assert not change()
     assert jobs.get(job_id) == done, "a finished job's record never changes"
 
@@ -121,11 +123,16 @@ def test_the_listings_queries_use_an_index():
     settings = Settings(results_dir=Path(tempfile.mkdtemp()))
     with database(settings).connect() as connection:
         for where in ("", "WHERE status = 'queued'", "WHERE name = 'x'", "WHERE owner = 'k'"):
-            plan = " ".join(row[-1] for row in connection.execute(text(
-                f"EXPLAIN QUERY PLAN SELECT * FROM jobs {where} ORDER BY created DESC, id DESC LIMIT 20")))
+            plan = " ".join(
+                row[-1]
+                for row in connection.execute(
+                    text(f"EXPLAIN QUERY PLAN SELECT * FROM jobs {where} ORDER BY created DESC, id DESC LIMIT 20")
+                )
+            )
             assert "USING INDEX" in plan and "TEMP B-TREE" not in plan, (where, plan)
-        plan = " ".join(row[-1] for row in connection.execute(text(
-            "EXPLAIN QUERY PLAN SELECT * FROM jobs WHERE sweep = 'x'")))
+        plan = " ".join(
+            row[-1] for row in connection.execute(text("EXPLAIN QUERY PLAN SELECT * FROM jobs WHERE sweep = 'x'"))
+        )
         assert "USING INDEX ix_jobs_sweep" in plan, plan
 
 
@@ -250,8 +257,11 @@ def test_200_racing_cancels_and_finishes_never_both_win(records, capsys):
             assert answers == {"worker": SUCCEEDED, "delete": 204}, answers
             assert after.status_code == 404 and not jobs.folder(job_id).exists()
         outcomes[(answers["delete"], answers["worker"])] += 1
-    report(capsys, f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: 200 cancel/finish races: "
-                   + ", ".join(f"DELETE {d} with the worker's {w}: {n}" for (d, w), n in sorted(outcomes.items())))
+    report(
+        capsys,
+        f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: 200 cancel/finish races: "
+        + ", ".join(f"DELETE {d} with the worker's {w}: {n}" for (d, w), n in sorted(outcomes.items())),
+    )
     assert sum(outcomes.values()) == 200
     assert outcomes[(202, CANCELLED)] >= 10 and outcomes[(204, SUCCEEDED)] >= 10, "both orders were raced"
 
@@ -289,34 +299,57 @@ def test_1000_concurrent_progress_writes_stop_at_the_finish(records, capsys):
     assert not (jobs.folder(job_id) / "summary.json").exists()
     assert jobs.get(job_id) == frozen, "no progress write changed the finished record"
     total = sum(accepted.values()) + sum(refused.values())
-    report(capsys, f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: {total} concurrent progress writes: "
-                   f"{sum(accepted.values())} while running, {sum(refused.values())} refused once finished; "
-                   f"final status {frozen['status']}, no summary")
+    report(
+        capsys,
+        f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: {total} concurrent progress writes: "
+        f"{sum(accepted.values())} while running, {sum(refused.values())} refused once finished; "
+        f"final status {frozen['status']}, no summary",
+    )
     assert total == 1000
 
 
 def test_a_store_that_kept_its_records_in_folders_is_imported_once(tmp_path):
     """The folder layout before the database: jobs/<id>/job.json (and `cancel`), sweeps/<id>.json."""
     root = tmp_path / "results"
-    made = datetime(2026, 1, 2, 3, 4, 5, tzinfo=timezone.utc)
+    made = datetime(2026, 1, 2, 3, 4, 5, tzinfo=UTC)
     old = {}
     for k, status in enumerate((SUCCEEDED, QUEUED, RUNNING, CANCELLED)):
         job_id = f"{'ABCD'[k] * 21}{k}"
         folder = root / "jobs" / job_id
         folder.mkdir(parents=True)
         (folder / "case.json").write_text(json.dumps(BASE_CASE))
-        old[job_id] = {"id": job_id, "name": "test", "kind": "run", "status": status, "progress": 0.0,
-                       "created": (made + timedelta(minutes=k)).isoformat(), "started": None,
-                       "finished": None, "error": None, "attempts": 0, "worker": None, "owner": None}
+        old[job_id] = {
+            "id": job_id,
+            "name": "test",
+            "kind": "run",
+            "status": status,
+            "progress": 0.0,
+            "created": (made + timedelta(minutes=k)).isoformat(),
+            "started": None,
+            "finished": None,
+            "error": None,
+            "attempts": 0,
+            "worker": None,
+            "owner": None,
+        }
         (folder / "job.json").write_text(json.dumps(old[job_id]))
     ids = list(old)
     (root / "jobs" / ids[2] / "cancel").write_text("")
     summary = simulate(BASE_CASE).summary
     (root / "jobs" / ids[0] / "summary.json").write_text(json.dumps(summary))
     (root / "sweeps").mkdir()
-    (root / "sweeps" / f"{'S' * 22}.json").write_text(json.dumps({
-        "id": "S" * 22, "name": "old sweep", "created": made.isoformat(), "parameters": ["striker.velocity"],
-        "variants": [{"values": {"striker.velocity": 3.0}, "job": ids[3]}], "owner": None}))
+    (root / "sweeps" / f"{'S' * 22}.json").write_text(
+        json.dumps(
+            {
+                "id": "S" * 22,
+                "name": "old sweep",
+                "created": made.isoformat(),
+                "parameters": ["striker.velocity"],
+                "variants": [{"values": {"striker.velocity": 3.0}, "job": ids[3]}],
+                "owner": None,
+            }
+        )
+    )
 
     settings = Settings(results_dir=root)
     client = TestClient(create_app(settings))

@@ -5,9 +5,8 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pytest
-
 import percussim.solver.grid as grid_module
+import pytest
 from conftest import BASE_CASE, merge
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
@@ -34,8 +33,7 @@ def reference_errors(request):
     return table
 
 
-@pytest.mark.parametrize("scheme, low, high", [("paper", 0.9, 1.1), ("sigma", 1.7, 2.4),
-                                               ("explicit", 1.7, 2.4)])
+@pytest.mark.parametrize("scheme, low, high", [("paper", 0.9, 1.1), ("sigma", 1.7, 2.4), ("explicit", 1.7, 2.4)])
 @pytest.mark.parametrize("quantity", [0, 1], ids=["co_impact_time", "peak_contact_force"])
 def test_observed_order_against_the_closed_form(reference_errors, scheme, low, high, quantity):
     errors = reference_errors[scheme][:, quantity]
@@ -54,8 +52,15 @@ def test_maximum_stress_converges_at_second_order_where_a_reflected_front_meets_
 
     ref = LinearImpact(zeta=zeta, m1=m1)
     cells = (50, 100, 200, 400, 800)
-    errors = [true_errors(simulate_rod(parse_case(merge(ref.case(n, courant=1.0 - 1e-9), {
-        "numerics": {"scheme": "explicit"}}))).summary, ref.truth())["max_compressive_stress"] for n in cells]
+    errors = [
+        true_errors(
+            simulate_rod(
+                parse_case(merge(ref.case(n, courant=1.0 - 1e-9), {"numerics": {"scheme": "explicit"}}))
+            ).summary,
+            ref.truth(),
+        )["max_compressive_stress"]
+        for n in cells
+    ]
     order = observed_order(cells, errors)
     print(f"ζ = {zeta}: max stress errors {errors}, order {order:.2f}")
     assert 1.7 < order < 2.4
@@ -72,8 +77,14 @@ def test_second_order_schemes_settle_on_a_tapered_hertz_contact(scheme):
         tau = 0.5 * (0.5 / cells) / math.sqrt(2.1e11 / 7800.0)
         case = merge(TAPERED, {"numerics": {"scheme": scheme, "cells": cells, "time_step": tau}})
         s = simulate_rod(parse_case(case)).summary
-        values.append((s["co_impact_time"], s["peak_contact_force"]["value"],
-                       s["max_compressive_stress"]["value"], s["max_tensile_stress"]["value"]))
+        values.append(
+            (
+                s["co_impact_time"],
+                s["peak_contact_force"]["value"],
+                s["max_compressive_stress"]["value"],
+                s["max_tensile_stress"]["value"],
+            )
+        )
     values = np.array(values)
     change = np.abs(np.diff(values, axis=0)) / values[-1]
     print(scheme, change)
@@ -81,16 +92,19 @@ def test_second_order_schemes_settle_on_a_tapered_hertz_contact(scheme):
     assert np.all(change[-1, 2:] < 1e-3)
 
 
-@pytest.mark.parametrize("scheme, courant", [("sigma", 0.3), ("sigma", 8.0), ("explicit", 0.99),
-                                             ("explicit", 0.4)])
+@pytest.mark.parametrize("scheme, courant", [("sigma", 0.3), ("sigma", 8.0), ("explicit", 0.99), ("explicit", 0.4)])
 def test_second_order_schemes_conserve_the_discrete_energy(scheme, courant):
     """Undamped, unforced, tapered, with a tension spring c0: nothing is lost or created. (The
     state one step before impact has the overlap −W1·τ; the link c0 does not act before impact.)"""
     tau = courant * (0.5 / 60) / math.sqrt(2.1e11 / 7800.0)
-    case = merge(TAPERED, {
-        "contact": {"damping": 0.0, "tension_stiffness": 1e9}, "medium": {"stiffness": 2e8, "damping": 0.0},
-        "numerics": {"scheme": scheme, "cells": 60, "duration": 2e-3, "time_step": tau},
-    })
+    case = merge(
+        TAPERED,
+        {
+            "contact": {"damping": 0.0, "tension_stiffness": 1e9},
+            "medium": {"stiffness": 2e8, "damping": 0.0},
+            "numerics": {"scheme": scheme, "cells": 60, "duration": 2e-3, "time_step": tau},
+        },
+    )
     energy = simulate_rod(parse_case(case)).summary["energy"]
     assert abs(energy["numerical"]) < 1e-10 * energy["initial"], energy
     assert energy["max_excess_fraction"] < 1e-10
@@ -102,10 +116,14 @@ def test_ends_that_integrate_their_own_equations_lose_energy_only_at_second_orde
     integrals, and what it finds unaccounted for is the scheme's error, falling as h²."""
     residual = []
     for cells in (60, 120, 240):
-        case = merge(TAPERED, {
-            "contact": {"damping": 0.0, "tension_stiffness": 1e9}, "medium": {"stiffness": 2e8, "damping": 0.0},
-            "numerics": {"scheme": "explicit", "cells": cells, "duration": 2e-3},
-        })
+        case = merge(
+            TAPERED,
+            {
+                "contact": {"damping": 0.0, "tension_stiffness": 1e9},
+                "medium": {"stiffness": 2e8, "damping": 0.0},
+                "numerics": {"scheme": "explicit", "cells": cells, "duration": 2e-3},
+            },
+        )
         result = simulate_rod(parse_case(case))
         assert result.numerics.ends == "impedance"
         residual.append(abs(result.summary["energy"]["numerical"]) / result.summary["energy"]["initial"])
@@ -149,11 +167,14 @@ def test_end_masses_make_the_paper_scheme_keep_the_whole_tool_mass(linear_impact
 
 @pytest.mark.parametrize("scheme", ["paper", "sigma"])
 def test_uniform_fast_path_matches_the_general_operator(monkeypatch, scheme):
-    case = parse_case(merge(BASE_CASE, {"numerics": {"scheme": scheme},
-                                        "outputs": {"probes": [0.3], "fields": True}}))
+    case = parse_case(merge(BASE_CASE, {"numerics": {"scheme": scheme}, "outputs": {"probes": [0.3], "fields": True}}))
     fast = simulate_rod(case)
     monkeypatch.setattr(grid_module.Grid, "uniform", property(lambda self: False))
     general = simulate_rod(case)
-    np.testing.assert_allclose(general.fields.displacement, fast.fields.displacement,
-                               rtol=1e-12, atol=1e-12 * np.abs(fast.fields.displacement).max())
+    np.testing.assert_allclose(
+        general.fields.displacement,
+        fast.fields.displacement,
+        rtol=1e-12,
+        atol=1e-12 * np.abs(fast.fields.displacement).max(),
+    )
     assert general.summary["co_impact_time"] == pytest.approx(fast.summary["co_impact_time"], rel=1e-12)

@@ -6,9 +6,8 @@ from __future__ import annotations
 import os
 
 import pytest
-from fastapi.testclient import TestClient
-
 from conftest import BASE_CASE, merge
+from fastapi.testclient import TestClient
 from percussim.service.app import create_app
 from percussim.solver.presets import preset_json
 from percussim.worker.settings import Settings
@@ -19,16 +18,19 @@ pytestmark = pytest.mark.usefixtures("clean_environment")
 ALICE, BOB = "alice-key-0123456789", "bob-key-9876543210"
 
 
-
-
 @pytest.fixture
 def keyed(tmp_path) -> TestClient:
     return TestClient(create_app(Settings(results_dir=tmp_path, api_keys=f"{ALICE}, {BOB}")))
 
 
 def test_without_a_known_key_every_v1_call_is_401(keyed):
-    for method, path in (("post", "/v1/jobs"), ("get", "/v1/jobs"), ("get", "/v1/presets"),
-                         ("post", "/v1/sweeps"), ("get", "/v1/jobs/AAAAAAAAAAAAAAAAAAAAAA")):
+    for method, path in (
+        ("post", "/v1/jobs"),
+        ("get", "/v1/jobs"),
+        ("get", "/v1/presets"),
+        ("post", "/v1/sweeps"),
+        ("get", "/v1/jobs/AAAAAAAAAAAAAAAAAAAAAA"),
+    ):
         for headers in ({}, {"X-API-Key": "guess"}):
             answer = getattr(keyed, method)(path, headers=headers, **({"json": BASE_CASE} if method == "post" else {}))
             assert answer.status_code == 401, (method, path, headers)
@@ -41,11 +43,16 @@ def test_without_a_known_key_every_v1_call_is_401(keyed):
 def test_a_key_sees_only_its_own_jobs_and_sweeps(keyed, tmp_path):
     alice, bob = {"X-API-Key": ALICE}, {"X-API-Key": BOB}
     job = keyed.post("/v1/jobs", json=BASE_CASE, headers=alice).json()
-    sweep = keyed.post("/v1/sweeps", headers=alice, json={
-        "case": preset_json("fig5"), "parameters": {"striker.velocity": [3.0, 5.0]}}).json()
+    sweep = keyed.post(
+        "/v1/sweeps", headers=alice, json={"case": preset_json("fig5"), "parameters": {"striker.velocity": [3.0, 5.0]}}
+    ).json()
     assert keyed.get(f"/v1/jobs/{job['id']}", headers=alice).status_code == 200
-    for path in (f"/v1/jobs/{job['id']}", f"/v1/jobs/{job['id']}/summary", f"/v1/jobs/{job['id']}/result.h5",
-                 f"/v1/sweeps/{sweep['id']}"):
+    for path in (
+        f"/v1/jobs/{job['id']}",
+        f"/v1/jobs/{job['id']}/summary",
+        f"/v1/jobs/{job['id']}/result.h5",
+        f"/v1/sweeps/{sweep['id']}",
+    ):
         assert keyed.get(path, headers=bob).status_code == 404, path  # as if it did not exist
     assert keyed.delete(f"/v1/jobs/{job['id']}", headers=bob).status_code == 404
     assert keyed.delete(f"/v1/sweeps/{sweep['id']}", headers=bob).status_code == 404
@@ -64,11 +71,19 @@ def test_without_keys_configured_the_api_is_open(tmp_path, keys):
     assert client.post("/v1/jobs", json=BASE_CASE).status_code == 202
 
 
-@pytest.mark.parametrize("path", [
-    "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", "/v1/jobs/../../etc/passwd", "/v1/jobs/%2e%2e/summary",
-    "/v1/jobs/..%2Fjobs/result.h5", "/v1/presets/..%2F..%2Fpyproject", "/v1/presets/%2Fetc%2Fpasswd",
-    "/v1/sweeps/..%2F..%2Fjobs", "/v1/jobs/" + "A" * 21 + "%00",
-])
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd",
+        "/v1/jobs/../../etc/passwd",
+        "/v1/jobs/%2e%2e/summary",
+        "/v1/jobs/..%2Fjobs/result.h5",
+        "/v1/presets/..%2F..%2Fpyproject",
+        "/v1/presets/%2Fetc%2Fpasswd",
+        "/v1/sweeps/..%2F..%2Fjobs",
+        "/v1/jobs/" + "A" * 21 + "%00",
+    ],
+)
 def test_no_path_is_built_from_user_input(tmp_path, path):
     client = TestClient(create_app(Settings(results_dir=tmp_path)))
     (tmp_path / "secret.json").write_text('{"secret": 1}')
@@ -85,8 +100,11 @@ def test_a_downloaded_file_name_is_made_from_safe_characters(tmp_path):
 
 
 def test_cors_answers_only_the_configured_origins(tmp_path):
-    preflight = {"Origin": "https://design.example", "Access-Control-Request-Method": "POST",
-                 "Access-Control-Request-Headers": "content-type,x-api-key"}
+    preflight = {
+        "Origin": "https://design.example",
+        "Access-Control-Request-Method": "POST",
+        "Access-Control-Request-Headers": "content-type,x-api-key",
+    }
     closed = TestClient(create_app(Settings(results_dir=tmp_path)))
     assert "access-control-allow-origin" not in closed.options("/v1/jobs", headers=preflight).headers
     open_ = TestClient(create_app(Settings(results_dir=tmp_path, cors_origins="https://design.example")))
@@ -115,11 +133,19 @@ def test_keys_logs_and_paths_on_the_live_stack(tmp_path):
         assert s.client.get(f"/v1/jobs/{job['id']}/result.h5").status_code == 200
         # A case over a configured limit is refused up front, naming it.
         over = s.client.post("/v1/jobs", json=merge(preset_json("fig3"), {"numerics": {"cells": 200}}))
-        assert over.status_code == 422 and {
-            "field": "numerics.cells",
-            "message": "200 cells exceed the limit of 150 (PERCUSSIM_MAX_CELLS raises it)"} in over.json()["detail"]
-        for path in ("/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd", "/v1/jobs/%2E%2E%2Fapi.log/summary",
-                     "/v1/presets/..%2F..%2Fpyproject"):
+        assert (
+            over.status_code == 422
+            and {
+                "field": "numerics.cells",
+                "message": "200 cells exceed the limit of 150 (PERCUSSIM_MAX_CELLS raises it)",
+            }
+            in over.json()["detail"]
+        )
+        for path in (
+            "/v1/jobs/..%2F..%2F..%2Fetc%2Fpasswd",
+            "/v1/jobs/%2E%2E%2Fapi.log/summary",
+            "/v1/presets/..%2F..%2Fpyproject",
+        ):
             answer = s.client.get(path)
             assert answer.status_code == 404 and "root:" not in answer.text, path
         logs = "".join(p.log.read_text(errors="replace") for p in s.processes)

@@ -11,12 +11,11 @@ import math
 
 import h5py
 import numpy as np
-import pytest
-from fastapi.testclient import TestClient
-
 import percussim.solver.series as series_module
+import pytest
 from closed_forms import drilling
 from conftest import BASE_CASE, merge, succeeded_job
+from fastapi.testclient import TestClient
 from percussim.solver.case import parse_case
 from percussim.solver.io import write_result
 from percussim.solver.plots import NotAvailable
@@ -41,8 +40,7 @@ def results(tmp_path_factory) -> dict[str, str]:
         "full": _write(folder, "full", merge(fig9, {"outputs": {"fields": True, "field_stride": 20}})),
         "bare": _write(folder, "bare", merge(fig9, {"outputs": None})),
         "free": _write(folder, "free", merge(fig9, {"medium": None, "outputs": None})),
-        "blows": _write(folder, "blows", {**drilling(3, {"scheme": "explicit", "cells": 100}),
-                                          "name": "blows"}),
+        "blows": _write(folder, "blows", {**drilling(3, {"scheme": "explicit", "cells": 100}), "name": "blows"}),
     }
 
 
@@ -77,8 +75,11 @@ def test_decimated_forces_keep_every_peak_and_both_ends_exactly(results, points)
     assert data["x"] == {"label": "time t", "unit": "s"} and data["y"] == {"label": "force", "unit": "N"}
     curves = _curves(data)
     assert list(curves) == ["contact_force", "medium_force", "external_force"]
-    for key, dataset in (("contact_force", "contact/force"), ("medium_force", "medium/force"),
-                         ("external_force", "external/force")):
+    for key, dataset in (
+        ("contact_force", "contact/force"),
+        ("medium_force", "medium/force"),
+        ("external_force", "external/force"),
+    ):
         full, curve = _read(path, dataset), curves[key]
         assert len(curve["x"]) <= points + 2
         assert curve["y"].max() == full.max() and curve["y"].min() == full.min()
@@ -110,8 +111,7 @@ def test_points_0_is_every_sample_up_to_the_cap(results, monkeypatch):
     curve = _curves(data)["working_end"]
     np.testing.assert_array_equal(curve["x"], time)
     np.testing.assert_array_equal(curve["y"], full)
-    assert [c["label"] for c in data["series"]] == ["striker", "struck end of the tool",
-                                                    "working end of the tool"]
+    assert [c["label"] for c in data["series"]] == ["striker", "struck end of the tool", "working end of the tool"]
     monkeypatch.setattr(series_module, "MAX_POINTS", 1000)
     capped = series(path, "displacements", points=0)
     assert capped["decimated"] is True
@@ -125,8 +125,11 @@ def test_the_probe_stresses_are_a_curve_a_probe_named_by_its_x(results):
     data = series(path, "probes")
     assert data["y"] == {"label": "stress σ", "unit": "Pa"}
     assert [(c["key"], c["label"]) for c in data["series"]] == [
-        ("probe_0", "x = 0.01 m"), ("probe_1", "x = 0.12 m"), ("probe_2", "x = 0.235 m"),
-        ("probe_3", "x = 0.485 m")]
+        ("probe_0", "x = 0.01 m"),
+        ("probe_1", "x = 0.12 m"),
+        ("probe_2", "x = 0.235 m"),
+        ("probe_3", "x = 0.485 m"),
+    ]
     for k, curve in enumerate(data["series"]):
         assert curve["y"].min() == stress[:, k].min() and curve["y"].max() == stress[:, k].max()
         _samples_of(time, curve, stress[:, k])
@@ -169,7 +172,9 @@ def test_the_energy_terms_share_one_stride_and_add_up_to_the_input(results, name
     np.testing.assert_allclose(curves["input"]["y"], supplied, rtol=1e-13)
     total = sum(curves[key]["y"] for key in stored) + curves["numerical"]["y"]
     np.testing.assert_allclose(total, curves["input"]["y"], rtol=1e-12, atol=1e-12 * supplied.max())
-    assert curves["numerical"]["y"][-1] == pytest.approx(_summary(path)["energy"]["numerical"], abs=1e-6 * supplied.max())
+    assert curves["numerical"]["y"][-1] == pytest.approx(
+        _summary(path)["energy"]["numerical"], abs=1e-6 * supplied.max()
+    )
 
 
 def test_the_stress_field_is_read_with_strides_keeping_the_first_and_last(results):
@@ -201,8 +206,10 @@ def test_the_json_has_six_significant_digits_and_is_smaller(results):
     for curve, sent in zip(data["series"], loaded["series"]):
         np.testing.assert_allclose(sent["y"], curve["y"], rtol=5e-6, atol=0)
         assert sent["y"] == [float(f"{v:.6g}") for v in curve["y"]]
-    plain = json.dumps({**data, "series": [{**c, "x": c["x"].tolist(), "y": c["y"].tolist()}
-                                           for c in data["series"]]}, separators=(",", ":"))
+    plain = json.dumps(
+        {**data, "series": [{**c, "x": c["x"].tolist(), "y": c["y"].tolist()} for c in data["series"]]},
+        separators=(",", ":"),
+    )
     assert len(text) < 0.65 * len(plain)
     assert json.loads(dumps({"v": np.array([1.0, np.nan, -np.inf])})) == {"v": [1.0, None, None]}
 
@@ -216,8 +223,7 @@ def test_the_csv_is_every_sample_to_the_last_bit(results, monkeypatch):
     path = results["full"]
     assert len(list(csv_chunks(path, "force"))) == 1 + 3  # the header, then the rows
     header, *rows = _csv(path, "force")
-    assert header == ["time t (s)", "contact force (N)", "medium force (N)",
-                      "external force on the striker (N)"]
+    assert header == ["time t (s)", "contact force (N)", "medium force (N)", "external force on the striker (N)"]
     table = np.array(rows, dtype=float)
     assert table.shape == (12801, 4)
     for k, dataset in enumerate(("time", "contact/force", "medium/force", "external/force")):
@@ -256,6 +262,7 @@ def test_what_a_result_lacks_is_refused_with_the_plots_reasons(results):
 
 # --- over HTTP -------------------------------------------------------------------------------------
 
+
 def _job(client: TestClient, case: dict = BASE_CASE) -> str:
     answer = client.post("/v1/jobs", json=case)
     assert answer.status_code == 202, answer.text
@@ -273,9 +280,13 @@ def test_http_lists_the_series_with_their_links_and_reasons(results, api_store):
     assert answer.status_code == 200
     listed = {s["name"]: s for s in answer.json()["series"]}
     assert list(listed) == list(SERIES)
-    assert listed["force"] == {"name": "force", "title": "Contact force", "available": True, "reason": None,
-                               "links": {"json": f"/v1/jobs/{job_id}/series/force",
-                                         "csv": f"/v1/jobs/{job_id}/series/force.csv"}}
+    assert listed["force"] == {
+        "name": "force",
+        "title": "Contact force",
+        "available": True,
+        "reason": None,
+        "links": {"json": f"/v1/jobs/{job_id}/series/force", "csv": f"/v1/jobs/{job_id}/series/force.csv"},
+    }
     assert listed["fields"]["available"] is False and "outputs.fields = true" in listed["fields"]["reason"]
 
 
@@ -304,25 +315,29 @@ def test_http_refuses_an_unknown_or_unavailable_series_and_bad_counts(results, a
     for suffix in ("", ".csv"):
         unknown = client.get(f"/v1/jobs/{job_id}/series/forces{suffix}")
         assert unknown.status_code == 404
-        assert unknown.json()["detail"] == ("no series named 'forces'; the series are: force, displacements, "
-                                            "probes, energy, force_penetration, fields")
+        assert unknown.json()["detail"] == (
+            "no series named 'forces'; the series are: force, displacements, probes, energy, force_penetration, fields"
+        )
         missing = client.get(f"/v1/jobs/{job_id}/series/probes{suffix}")
         assert missing.status_code == 404
-        assert missing.json()["detail"].startswith(f"job {job_id} has no probes series: this result has "
-                                                   "no probes: run the case with outputs.probes")
+        assert missing.json()["detail"].startswith(
+            f"job {job_id} has no probes series: this result has no probes: run the case with outputs.probes"
+        )
     for params, field, message in (
-            ({"points": -1}, "query.points", "greater than or equal to 0"),
-            ({"points": 10**7 + 1}, "query.points", "less than or equal to 10000000"),
-            ({"points": "many"}, "query.points", "valid integer"),
-            ({"times": 3}, "query.times", "the force series takes points, not times")):
+        ({"points": -1}, "query.points", "greater than or equal to 0"),
+        ({"points": 10**7 + 1}, "query.points", "less than or equal to 10000000"),
+        ({"points": "many"}, "query.points", "valid integer"),
+        ({"times": 3}, "query.times", "the force series takes points, not times"),
+    ):
         bad = client.get(f"/v1/jobs/{job_id}/series/force", params=params)
         assert bad.status_code == 422, bad.text
         [error] = bad.json()["detail"]
         assert error["field"] == field and message in error["message"]
     with_fields = _succeeded(client, jobs, results["full"])
     bad = client.get(f"/v1/jobs/{with_fields}/series/fields", params={"points": 3})
-    assert bad.json()["detail"] == [{"field": "query.points",
-                                     "message": "the fields series takes times and stations, not points"}]
+    assert bad.json()["detail"] == [
+        {"field": "query.points", "message": "the fields series takes times and stations, not points"}
+    ]
 
 
 def test_http_answers_409_until_the_job_has_succeeded(api_store):

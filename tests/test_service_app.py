@@ -10,9 +10,8 @@ import json
 import time
 
 import pytest
-from fastapi.testclient import TestClient
-
 from conftest import BASE_CASE, merge
+from fastapi.testclient import TestClient
 from percussim.service.app import create_app
 from percussim.service.main import MAX_ATTEMPTS, queue_again, restore_queue
 from percussim.service.queue import JobQueue
@@ -24,8 +23,6 @@ from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 
 # Only what a test sets: nothing from the caller's shell.
 pytestmark = pytest.mark.usefixtures("clean_environment")
-
-
 
 
 def _client(tmp_path, **settings) -> TestClient:
@@ -46,32 +43,38 @@ def _submit(client: TestClient, case: dict = BASE_CASE) -> dict:
 PROFILE = {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.01, 0.01, -1.0]}}
 
 
-@pytest.mark.parametrize("changes, field, message", [
-    ({"contact": {"exponent": 0.9}}, "contact.exponent", "must be ≤ 0.5"),
-    ({"tool": PROFILE}, "tool.profile.area[2]", "must be > 0.0"),
-    ({"striker": None}, "striker", "is required"),
-    ({"colour": "red"}, "colour", "is not a known field"),
-    ({"force": {"kind": "pulse", "amplitude": 1e3}}, "force.duration", "is required"),
-    ({"force": {"kind": "square", "amplitude": 1e3}}, "force",
-     "kind must be one of 'sine', 'abs_sine', 'pulse'"),
-    ({"numerics": {"cells": 10.5}}, "numerics.cells", "must be a whole number"),
-    # a boolean or a numeric string is not read as a number ("mass": true was 1 kg)
-    ({"striker": {"mass": True}}, "striker.mass", "must be a number, not true"),
-    ({"striker": {"mass": "2"}}, "striker.mass", 'must be a number, not the string "2"'),
-    ({"numerics": {"scheme": "explicit", "cells": False}}, "numerics.cells", "must be a whole number, not false"),
-    ({"outputs": {"probes": [0.1, "0.2"]}}, "outputs.probes[1]", 'must be a number, not the string "0.2"'),
-    ({"outputs": {"fields": 1}}, "outputs.fields", "must be true or false"),
-    ({"outputs": {"probes": [0.1, 2.0]}}, "outputs.probes[1]",
-     "must lie on the tool, 0 ≤ x ≤ tool.length = 1.2 m"),
-    ({"numerics": {"scheme": "implicit"}}, "numerics.scheme",
-     "Input should be 'paper', 'sigma' or 'explicit'"),
-    ({"numerics": {"tolerance": 1e-3}}, "numerics.tolerance",
-     "cannot be combined with numerics.time_step: under a tolerance the solver chooses the grid; "
-     "give one or the other"),
-    ({"numerics": {"scheme": "explicit", "time_step": 1e-5}}, "numerics.time_step",
-     "the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = 1e-05 s on 100 cells gives "
-     "4.324: set numerics.time_step ≤ 2.313e-06 s, use fewer cells, or numerics.scheme = 'sigma'"),
-])
+@pytest.mark.parametrize(
+    "changes, field, message",
+    [
+        ({"contact": {"exponent": 0.9}}, "contact.exponent", "must be ≤ 0.5"),
+        ({"tool": PROFILE}, "tool.profile.area[2]", "must be > 0.0"),
+        ({"striker": None}, "striker", "is required"),
+        ({"colour": "red"}, "colour", "is not a known field"),
+        ({"force": {"kind": "pulse", "amplitude": 1e3}}, "force.duration", "is required"),
+        ({"force": {"kind": "square", "amplitude": 1e3}}, "force", "kind must be one of 'sine', 'abs_sine', 'pulse'"),
+        ({"numerics": {"cells": 10.5}}, "numerics.cells", "must be a whole number"),
+        # a boolean or a numeric string is not read as a number ("mass": true was 1 kg)
+        ({"striker": {"mass": True}}, "striker.mass", "must be a number, not true"),
+        ({"striker": {"mass": "2"}}, "striker.mass", 'must be a number, not the string "2"'),
+        ({"numerics": {"scheme": "explicit", "cells": False}}, "numerics.cells", "must be a whole number, not false"),
+        ({"outputs": {"probes": [0.1, "0.2"]}}, "outputs.probes[1]", 'must be a number, not the string "0.2"'),
+        ({"outputs": {"fields": 1}}, "outputs.fields", "must be true or false"),
+        ({"outputs": {"probes": [0.1, 2.0]}}, "outputs.probes[1]", "must lie on the tool, 0 ≤ x ≤ tool.length = 1.2 m"),
+        ({"numerics": {"scheme": "implicit"}}, "numerics.scheme", "Input should be 'paper', 'sigma' or 'explicit'"),
+        (
+            {"numerics": {"tolerance": 1e-3}},
+            "numerics.tolerance",
+            "cannot be combined with numerics.time_step: under a tolerance the solver chooses the grid; "
+            "give one or the other",
+        ),
+        (
+            {"numerics": {"scheme": "explicit", "time_step": 1e-5}},
+            "numerics.time_step",
+            "the explicit scheme needs a Courant number a·τ/h ≤ 1, and τ = 1e-05 s on 100 cells gives "
+            "4.324: set numerics.time_step ≤ 2.313e-06 s, use fewer cells, or numerics.scheme = 'sigma'",
+        ),
+    ],
+)
 def test_an_invalid_case_gets_422_naming_the_field(client, changes, field, message):
     answer = client.post("/v1/jobs", json=merge(BASE_CASE, changes))
     assert answer.status_code == 422
@@ -79,18 +82,20 @@ def test_an_invalid_case_gets_422_naming_the_field(client, changes, field, messa
 
 
 def test_every_invalid_field_is_named_at_once(client):
-    answer = client.post("/v1/jobs", json=merge(BASE_CASE, {"striker": {"mass": 0},
-                                                            "contact": {"exponent": -1}}))
+    answer = client.post("/v1/jobs", json=merge(BASE_CASE, {"striker": {"mass": 0}, "contact": {"exponent": -1}}))
     assert answer.status_code == 422
     assert {e["field"] for e in answer.json()["detail"]} == {"striker.mass", "contact.exponent"}
 
 
-@pytest.mark.parametrize("content, headers, message", [
-    ("{not json", {"content-type": "application/json"}, "is not valid JSON"),
-    ("[1, 2]", {"content-type": "application/json"}, "must be a JSON object"),
-    (json.dumps(BASE_CASE), {"content-type": "text/plain"}, "sent as application/json"),
-    ("", {"content-type": "application/json"}, "must be a JSON object"),
-])
+@pytest.mark.parametrize(
+    "content, headers, message",
+    [
+        ("{not json", {"content-type": "application/json"}, "is not valid JSON"),
+        ("[1, 2]", {"content-type": "application/json"}, "must be a JSON object"),
+        (json.dumps(BASE_CASE), {"content-type": "text/plain"}, "sent as application/json"),
+        ("", {"content-type": "application/json"}, "must be a JSON object"),
+    ],
+)
 def test_a_body_that_is_not_a_json_object_is_named_body(client, content, headers, message):
     answer = client.post("/v1/jobs", content=content, headers=headers)
     assert answer.status_code == 422
@@ -114,9 +119,12 @@ def test_a_submitted_job_is_queued_with_its_links_and_published(client, tmp_path
     job = answer.json()
     assert job["status"] == "queued" and job["progress"] == 0.0 and job["name"] == "test"
     assert job["started"] is None and job["finished"] is None and job["error"] is None
-    assert job["links"] == {"self": f"/v1/jobs/{job['id']}", "summary": f"/v1/jobs/{job['id']}/summary",
-                            "result": f"/v1/jobs/{job['id']}/result.h5",
-                            "plots": f"/v1/jobs/{job['id']}/plots"}
+    assert job["links"] == {
+        "self": f"/v1/jobs/{job['id']}",
+        "summary": f"/v1/jobs/{job['id']}/summary",
+        "result": f"/v1/jobs/{job['id']}/result.h5",
+        "plots": f"/v1/jobs/{job['id']}/plots",
+    }
     assert answer.headers["location"] == job["links"]["self"]
     assert client.get(job["links"]["self"]).json() == job
     stored = JobStore(Settings(results_dir=tmp_path)).case(job["id"])
@@ -163,8 +171,9 @@ def test_delete_cancels_a_queued_job_then_removes_it_once_finished(client, tmp_p
     assert answer.json()["status"] == "cancelled" and answer.json()["finished"] is not None
     assert client.get(f"/v1/jobs/{job['id']}").json()["status"] == "cancelled"
     store = JobStore(Settings(results_dir=tmp_path))
-    assert store.cancel_requested(job["id"]) and not store.start(job["id"], "w1@x"), \
+    assert store.cancel_requested(job["id"]) and not store.start(job["id"], "w1@x"), (
         "a worker taking it later must skip it"
+    )
     refused = client.post(f"/v1/jobs/{job['id']}/cancel")
     assert refused.status_code == 409 and "cancelled" in refused.json()["detail"]
     assert (tmp_path / "jobs" / job["id"] / "case.json").is_file(), "a cancel removes nothing"
@@ -189,8 +198,7 @@ def test_delete_of_a_running_job_asks_the_worker_to_stop(client, tmp_path):
 
 
 @pytest.mark.parametrize("job_id", ["AAAAAAAAAAAAAAAAAAAAAA", "short", "A" * 23, "a.b"])
-@pytest.mark.parametrize("method, suffix", [("GET", ""), ("GET", "/summary"), ("GET", "/result.h5"),
-                                            ("DELETE", "")])
+@pytest.mark.parametrize("method, suffix", [("GET", ""), ("GET", "/summary"), ("GET", "/result.h5"), ("DELETE", "")])
 def test_an_unknown_or_malformed_id_is_404(client, job_id, method, suffix):
     answer = client.request(method, f"/v1/jobs/{job_id}{suffix}")
     assert answer.status_code == 404
@@ -205,8 +213,9 @@ def test_the_job_list_is_paginated_newest_first(client):
     assert [j["id"] for j in client.get("/v1/jobs").json()["jobs"]] == ids[::-1]
 
 
-@pytest.mark.parametrize("params, field", [({"limit": 0}, "query.limit"), ({"limit": 501}, "query.limit"),
-                                           ({"offset": -1}, "query.offset")])
+@pytest.mark.parametrize(
+    "params, field", [({"limit": 0}, "query.limit"), ({"limit": 501}, "query.limit"), ({"offset": -1}, "query.offset")]
+)
 def test_the_job_list_refuses_a_bad_page(client, params, field):
     answer = client.get("/v1/jobs", params=params)
     assert answer.status_code == 422
@@ -282,8 +291,10 @@ def test_an_unreachable_broker_is_503_and_the_job_is_marked_failed(tmp_path, cap
     assert ready.status_code == 503 and "unreachable" in ready.json()["reason"]
 
 
-SWEEP = {"case": preset_json("fig5"),
-         "parameters": {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}}
+SWEEP = {
+    "case": preset_json("fig5"),
+    "parameters": {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]},
+}
 
 
 def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
@@ -293,17 +304,30 @@ def test_a_sweep_queues_one_job_a_variant_and_shows_its_table(client, tmp_path):
     assert answer.headers["location"] == f"/v1/sweeps/{sweep['id']}"
     assert sweep["total"] == 6 and sweep["counts"] == {"queued": 6} and not sweep["finished"]
     assert [r["values"] for r in sweep["rows"]][:2] == [
-        {"striker.velocity": 3.0, "contact.stiffness": 4e11}, {"striker.velocity": 3.0, "contact.stiffness": 8e11}]
+        {"striker.velocity": 3.0, "contact.stiffness": 4e11},
+        {"striker.velocity": 3.0, "contact.stiffness": 8e11},
+    ]
     jobs = JobStore(Settings(results_dir=tmp_path))
     assert jobs.case(sweep["rows"][5]["job"])["striker"]["velocity"] == 7.0
     assert len(list((tmp_path / "broker" / "queue").iterdir())) == 6, "one message a variant"
     # A variant that succeeded fills its row from its summary.
     first = sweep["rows"][0]["job"]
-    jobs.write_summary(first, json.dumps({
-        "co_impact_time": 2e-4, "peak_contact_force": {"value": 4e5}, "max_compressive_stress": {"value": 5e7},
-        "max_tensile_stress": {"value": 1e7}, "striker_rebound_velocity": -0.4,
-        "energy": {"to_medium": 1.7, "transfer_efficiency": 0.2}, "contacts_total": 5,
-        "error_estimate": {"peak_contact_force": 3e-3, "worst": 4e-3}, "warnings": []}))
+    jobs.write_summary(
+        first,
+        json.dumps(
+            {
+                "co_impact_time": 2e-4,
+                "peak_contact_force": {"value": 4e5},
+                "max_compressive_stress": {"value": 5e7},
+                "max_tensile_stress": {"value": 1e7},
+                "striker_rebound_velocity": -0.4,
+                "energy": {"to_medium": 1.7, "transfer_efficiency": 0.2},
+                "contacts_total": 5,
+                "error_estimate": {"peak_contact_force": 3e-3, "worst": 4e-3},
+                "warnings": [],
+            }
+        ),
+    )
     assert jobs.start(first, "w1@x") and jobs.finish(first, SUCCEEDED, progress=1.0)
     row = client.get(f"/v1/sweeps/{sweep['id']}").json()["rows"][0]
     assert row["status"] == "succeeded" and row["peak_contact_force"] == 4e5 and row["contacts"] == 5
@@ -329,12 +353,18 @@ def test_a_sweep_with_a_bad_variant_is_refused_naming_the_parameter_and_queues_n
     assert client.get("/v1/jobs").json()["total"] == 0
 
 
-@pytest.mark.parametrize("body, field, message", [
-    ({"case": merge(BASE_CASE, {"striker": {"mass": -1}}), "parameters": {"striker.velocity": [1.0]}},
-     "case.striker.mass", "must be > 0"),
-    ({"case": BASE_CASE}, "parameters", "is required"),
-    ({"case": BASE_CASE, "parameters": {}}, "parameters", "at least 1"),
-])
+@pytest.mark.parametrize(
+    "body, field, message",
+    [
+        (
+            {"case": merge(BASE_CASE, {"striker": {"mass": -1}}), "parameters": {"striker.velocity": [1.0]}},
+            "case.striker.mass",
+            "must be > 0",
+        ),
+        ({"case": BASE_CASE}, "parameters", "is required"),
+        ({"case": BASE_CASE, "parameters": {}}, "parameters", "at least 1"),
+    ],
+)
 def test_a_malformed_sweep_names_the_field(client, body, field, message):
     answer = client.post("/v1/sweeps", json=body)
     assert answer.status_code == 422
@@ -371,10 +401,11 @@ def test_an_oversized_body_is_refused_with_413_naming_the_limit(tmp_path):
     big = merge(BASE_CASE, {"description": "x" * 5000})
     answer = client.post("/v1/jobs", json=big)
     assert answer.status_code == 413
-    assert answer.json()["detail"] == [{"field": "body", "message":
-                                        "is larger than the limit of 4096 bytes (PERCUSSIM_MAX_BODY_BYTES)"}]
+    assert answer.json()["detail"] == [
+        {"field": "body", "message": "is larger than the limit of 4096 bytes (PERCUSSIM_MAX_BODY_BYTES)"}
+    ]
     # Sent in chunks without a Content-Length, the bytes are counted as they come.
-    chunks = (json.dumps(big)[k:k + 1000].encode() for k in range(0, len(json.dumps(big)), 1000))
+    chunks = (json.dumps(big)[k : k + 1000].encode() for k in range(0, len(json.dumps(big)), 1000))
     answer = client.post("/v1/jobs", content=chunks, headers={"content-type": "application/json"})
     assert answer.status_code == 413
     assert client.get("/v1/jobs").json()["total"] == 0
@@ -397,8 +428,11 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
     assert queue_again(settings, "w1@x", "exit status -9") == [lost]
     assert jobs.get(lost)["status"] == "queued" and jobs.get(lost)["progress"] == 0.0
     failed = jobs.get(doomed)
-    assert failed["status"] == FAILED and f"died {MAX_ATTEMPTS} times" in failed["error"] \
+    assert (
+        failed["status"] == FAILED
+        and f"died {MAX_ATTEMPTS} times" in failed["error"]
         and "the last time: exit status -9" in failed["error"]
+    )
     assert jobs.get(elsewhere)["status"] == "running"
     assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
 

@@ -3,7 +3,6 @@ contacts that must not chatter, and boundary forces recorded as the scheme appli
 
 import numpy as np
 import pytest
-
 from conftest import merge
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.characteristics import solve
@@ -52,9 +51,13 @@ def test_a_stiff_contact_gives_one_contact_and_the_physical_force(zeta):
     Venant's Z·W1 at the start, the striker braked by the bar."""
     base = LinearImpact(zeta=0.3, m1=20.0, length=1.0, area=0.01)
     k = (2.0 * zeta * base.impedance) ** 2 / base.m1
-    case = merge(base.case(10), {"contact": {"stiffness": k},
-                                 "numerics": {"cells": None, "time_step": None,
-                                              "duration": 1.5 * 2.0 * base.length / base.a}})
+    case = merge(
+        base.case(10),
+        {
+            "contact": {"stiffness": k},
+            "numerics": {"cells": None, "time_step": None, "duration": 1.5 * 2.0 * base.length / base.a},
+        },
+    )
     summary = simulate(parse_case(case)).summary
     reference = solve(parse_case(case), 3200)
     assert summary["contacts_total"] == reference.contacts == 1
@@ -66,8 +69,7 @@ def test_a_stiff_contact_gives_one_contact_and_the_physical_force(zeta):
 def test_a_fixed_grid_a_stiff_contact_would_chatter_on_is_refused_naming_it(scheme, courant):
     base = LinearImpact(zeta=0.3, m1=20.0, length=1.0, area=0.01)
     k = (2.0 * 30.0 * base.impedance) ** 2 / base.m1
-    case = merge(base.case(100, courant=courant), {"contact": {"stiffness": k},
-                                                   "numerics": {"scheme": scheme}})
+    case = merge(base.case(100, courant=courant), {"contact": {"stiffness": k}, "numerics": {"scheme": scheme}})
     with pytest.raises(CaseError) as error:
         simulate(parse_case(case))
     [found] = error.value.errors
@@ -83,8 +85,7 @@ def test_recorded_forces_carry_no_ripple_the_rod_never_feels():
     case["numerics"] = {"duration": case["numerics"]["duration"]}
     result = simulate(parse_case(case))
     reference = solve(parse_case(case), 1600, history_points=4000)
-    found = recorded_force(result.history, result.summary["peak_contact_force"]["value"],
-                           reference.history)
+    found = recorded_force(result.history, result.summary["peak_contact_force"]["value"], reference.history)
     assert found.deviation <= 0.01
     # a period-2τ ripple shows as alternating second differences of the samples
     assert found.second_difference <= 0.05 and found.alternating < 0.5

@@ -16,12 +16,25 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
-
-import percussim
+from closed_forms import (
+    AREA,
+    PISTON,
+    SPEED,
+    STEEL,
+    STEPPED_DURATION,
+    T,
+    V,
+    Z,
+    first_force,
+    passed_share,
+    piston_case,
+    reflection,
+    stepped_piston_case,
+)
+from closed_forms import PISTON_FINE as FINE
 from percussim.solver.case import CaseError
 
-from closed_forms import (AREA, PISTON, SPEED, STEEL, PISTON_FINE as FINE, STEPPED_DURATION, T, V, Z,
-                          first_force, passed_share, piston_case, reflection, stepped_piston_case)
+import percussim
 
 
 def force_at(result, fraction: float) -> float:
@@ -60,7 +73,8 @@ def test_a_lower_impedance_piston_passes_4r_over_1_plus_r_squared(accuracy):
     assert passed == pytest.approx(passed_share(r), rel=1e-2)
     # it leaves at the velocity its momentum says: v − impulse/m, the impulse F·T
     assert summary["striker_rebound_velocity"] == pytest.approx(
-        V - first_force(r) * T / (STEEL["density"] * r * AREA * PISTON), rel=1e-2)
+        V - first_force(r) * T / (STEEL["density"] * r * AREA * PISTON), rel=1e-2
+    )
     assert summary["co_impact_time"] == pytest.approx(T, rel=1e-2)
 
 
@@ -68,8 +82,7 @@ def test_a_higher_impedance_piston_gives_the_stepped_pulse(accuracy):
     r = 2.0
     result = percussim.simulate(piston_case(r, {**accuracy, "duration": STEPPED_DURATION}))
     for step in range(3):
-        assert force_at(result, step + 0.5) == pytest.approx(first_force(r) * reflection(r)**step,
-                                                             rel=1e-2)
+        assert force_at(result, step + 0.5) == pytest.approx(first_force(r) * reflection(r) ** step, rel=1e-2)
     assert abs(result.summary["energy"]["numerical"]) < 5e-3 * result.summary["energy"]["initial"]
 
 
@@ -116,7 +129,8 @@ def test_a_profiled_piston_on_a_whole_and_a_fractional_number_of_cells_agree():
     for quantity in ("peak_contact_force", "max_compressive_stress"):
         assert fractional[quantity]["value"] == pytest.approx(whole[quantity]["value"], rel=2e-3)
     assert fractional["energy"]["tool_kinetic"] + fractional["energy"]["tool_strain"] == pytest.approx(
-        whole["energy"]["tool_kinetic"] + whole["energy"]["tool_strain"], rel=2e-3)
+        whole["energy"]["tool_kinetic"] + whole["energy"]["tool_strain"], rel=2e-3
+    )
     assert abs(fractional["energy"]["numerical"]) < 5e-3 * fractional["energy"]["initial"]
 
 
@@ -133,8 +147,7 @@ def test_a_grid_too_coarse_for_the_piston_is_refused_naming_the_cells():
     assert "at least 10 cells" in str(refused.value)
 
 
-@pytest.mark.parametrize("numerics", [{"cells": 200}, {"scheme": "sigma", "cells": 200},
-                                      {"model": "lumped"}])
+@pytest.mark.parametrize("numerics", [{"cells": 200}, {"scheme": "sigma", "cells": 200}, {"model": "lumped"}])
 def test_other_schemes_refuse_an_elastic_striker_naming_the_field(numerics):
     with pytest.raises(CaseError, match="striker.length: .*explicit scheme at Courant number 1"):
         percussim.simulate(piston_case(1.0, numerics))

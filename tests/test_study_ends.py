@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
@@ -32,9 +31,13 @@ VELOCITY = 8.0
 
 
 def case(striker_length: float, medium: str = "none", anvil: bool = False, **numerics) -> dict:
-    tree = {"name": "ends", "striker": {"velocity": VELOCITY, "length": striker_length, **STEEL},
-            "tool": {"length": TOOL, **STEEL}, "contact": {"stiffness": 2e9, "exponent": 0.0},
-            "numerics": {"duration": 1.2e-3, **numerics}}
+    tree = {
+        "name": "ends",
+        "striker": {"velocity": VELOCITY, "length": striker_length, **STEEL},
+        "tool": {"length": TOOL, **STEEL},
+        "contact": {"stiffness": 2e9, "exponent": 0.0},
+        "numerics": {"duration": 1.2e-3, **numerics},
+    }
     if MEDIA[medium] is not None:
         tree["medium"] = MEDIA[medium]
     if anvil:
@@ -55,8 +58,14 @@ def record(truth: dict) -> dict:
 # (striker length, medium, anvil): a piston under a third of the tool, one longer than the tool
 # (on a medium, which keeps the tool pressed long enough for the whole pulse to matter), an
 # anvil, and each medium kind.
-SCENES = [(0.3, "none", False), (1.5, "linear", False), (0.3, "none", True),
-          (0.3, "linear", False), (0.3, "bilinear", False), (0.3, "smith", False)]
+SCENES = [
+    (0.3, "none", False),
+    (1.5, "linear", False),
+    (0.3, "none", True),
+    (0.3, "linear", False),
+    (0.3, "bilinear", False),
+    (0.3, "smith", False),
+]
 # duration only; a fixed grid (set aside: a study chooses its own); a tolerance
 NUMERICS = [{}, {"cells": 200}, {"cells": 200, "scheme": "explicit"}, {"tolerance": 0.01}]
 
@@ -73,8 +82,14 @@ def bounds(length: float) -> dict:
 
 @pytest.mark.parametrize("length, medium, anvil", SCENES)
 def test_an_elastic_striker_is_calibrated_whatever_the_scene(length, medium, anvil):
-    fit = calibrate({"case": starting(length, medium, anvil, {}), "record": record(case(length, medium, anvil)),
-                     "parameters": bounds(length)}, processes=1)
+    fit = calibrate(
+        {
+            "case": starting(length, medium, anvil, {}),
+            "record": record(case(length, medium, anvil)),
+            "parameters": bounds(length),
+        },
+        processes=1,
+    )
     found = fit["parameters"]
     assert abs(found["striker.velocity"]["value"] / VELOCITY - 1.0) < 0.01, found
     assert abs(found["striker.velocity"]["value"] - VELOCITY) <= 3.0 * found["striker.velocity"]["standard_error"]
@@ -89,8 +104,9 @@ def test_an_elastic_striker_is_calibrated_whatever_the_scene(length, medium, anv
 def test_the_checks_before_a_fit_take_the_case_whatever_its_numerics(numerics):
     """The units check runs on a coarse grid of its own; the case's numerics neither decide it nor
     are named in a refusal."""
-    request = parse_calibration({"case": starting(0.3, "none", False, numerics),
-                                 "record": record(case(0.3)), "parameters": bounds(0.3)})
+    request = parse_calibration(
+        {"case": starting(0.3, "none", False, numerics), "record": record(case(0.3)), "parameters": bounds(0.3)}
+    )
     space = check_calibration(request)
     assert space.paths == ("striker.velocity", "striker.length")
 
@@ -99,8 +115,9 @@ def test_the_units_check_refuses_an_elastic_strikers_record_naming_its_units():
     measured = record(case(0.3))
     measured["values"] = [v / 1000.0 for v in measured["values"]]  # kPa given as Pa
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": starting(0.3, "none", False, {}), "record": measured,
-                                             "parameters": bounds(0.3)}))
+        check_calibration(
+            parse_calibration({"case": starting(0.3, "none", False, {}), "record": measured, "parameters": bounds(0.3)})
+        )
     assert refused.value.errors[0].field == "record.values"
     assert "SI units" in refused.value.errors[0].message
 
@@ -109,9 +126,16 @@ def test_a_study_over_its_limits_names_what_the_user_can_change():
     from percussim.solver.limits import Limits
 
     with pytest.raises(CaseError) as refused:
-        check_calibration(parse_calibration({"case": starting(0.3, "none", False, {"cells": 200}),
-                                             "record": record(case(0.3)), "parameters": bounds(0.3)}),
-                          Limits(max_node_steps=100.0))
+        check_calibration(
+            parse_calibration(
+                {
+                    "case": starting(0.3, "none", False, {"cells": 200}),
+                    "record": record(case(0.3)),
+                    "parameters": bounds(0.3),
+                }
+            ),
+            Limits(max_node_steps=100.0),
+        )
     error = refused.value.errors[0]
     assert error.field == "record.time"
     assert "PERCUSSIM_MAX_NODE_STEPS" in error.message and "shorten the record" in error.message
@@ -124,9 +148,9 @@ def test_the_fewest_cells_give_an_elastic_striker_two_steps_at_every_corner():
     for length in (0.05, 0.3, 0.61, 1.5, 7.0):
         one = parse_case(case(length))
         cells = fewest_cells(one)
-        tau = lambda n: TOOL / n / np.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
-        assert striker_cells(one.striker, tau(cells)) >= 2
-        assert cells == 2 or striker_cells(one.striker, tau(cells - 1)) < 2
+        speed = np.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
+        assert striker_cells(one.striker, TOOL / cells / speed) >= 2
+        assert cells == 2 or striker_cells(one.striker, TOOL / (cells - 1) / speed) < 2
     space = Space.of({"striker.length": [0.1, 0.4]}, "parameters")
     assert space.fewest_cells(parse_case(case(0.3))) == fewest_cells(parse_case(case(0.1)))
 
@@ -136,10 +160,15 @@ def test_an_elastic_striker_is_optimised_whatever_the_scene(length, medium, anvi
     """Every run within the bounds succeeds, on a grid the shortest striker takes, and the design
     checked under the tolerance is within its bounds."""
     low, high = 0.5 * length, 1.2 * length
-    answer = optimize({"case": starting(length, medium, anvil, {"cells": 200}),
-                       "variables": {"striker.length": [low, high]},
-                       "objective": {"maximize": "energy.transfer_efficiency"}, "max_evaluations": 40},
-                      processes=1)
+    answer = optimize(
+        {
+            "case": starting(length, medium, anvil, {"cells": 200}),
+            "variables": {"striker.length": [low, high]},
+            "objective": {"maximize": "energy.transfer_efficiency"},
+            "max_evaluations": 40,
+        },
+        processes=1,
+    )
     assert [run for run in answer["history"] if "error" in run] == []
     assert answer["grid"]["cells"] >= fewest_cells(parse_case(case(low, medium, anvil)))
     assert low <= answer["values"]["striker.length"] <= high

@@ -8,15 +8,15 @@ import csv
 import json
 
 import pytest
-
 from conftest import merge
 from percussim.solver.case import CaseError
-from percussim.cli import main
 from percussim.solver.limits import Limits
 from percussim.solver.presets import preset_json
 from percussim.solver.reference import LundbergRock
 from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import Sweep, table_row, variants
+
+from percussim.cli import main
 
 FIG5 = preset_json("fig5")
 ROCK, PILE = preset_json("rock_drill"), preset_json("pile")
@@ -26,22 +26,30 @@ GRID = {"striker.velocity": [3.0, 5.0, 7.0], "contact.stiffness": [4e11, 8e11]}
 def test_every_combination_is_a_variant_in_order():
     found = variants(Sweep(case=FIG5, parameters=GRID))
     assert [values for values, _ in found] == [
-        {"striker.velocity": v, "contact.stiffness": k} for v in GRID["striker.velocity"]
-        for k in GRID["contact.stiffness"]]
+        {"striker.velocity": v, "contact.stiffness": k}
+        for v in GRID["striker.velocity"]
+        for k in GRID["contact.stiffness"]
+    ]
     values, case = found[3]
     assert case.striker.velocity == values["striker.velocity"] == 5.0
     assert case.contact.stiffness == values["contact.stiffness"] == 8e11
 
 
-@pytest.mark.parametrize("base, path, values", [
-    (ROCK, "striker.length", [0.2, 0.4]),
-    (ROCK, "medium.unloading_stiffness", [1e9, 2e10]),
-    (PILE, "medium.quake", [1e-3, 5e-3]),
-    (PILE, "medium.damping_factor", [0.16, 0.49]),
-    (PILE, "blows.count", [1, 3]),  # the preset has no blows: the field is made
-    (merge(PILE, {"anvil": {"mass": 500.0, "contact": {"stiffness": 5e9, "exponent": 0.0}}}),
-     "anvil.mass", [200.0, 800.0]),
-])
+@pytest.mark.parametrize(
+    "base, path, values",
+    [
+        (ROCK, "striker.length", [0.2, 0.4]),
+        (ROCK, "medium.unloading_stiffness", [1e9, 2e10]),
+        (PILE, "medium.quake", [1e-3, 5e-3]),
+        (PILE, "medium.damping_factor", [0.16, 0.49]),
+        (PILE, "blows.count", [1, 3]),  # the preset has no blows: the field is made
+        (
+            merge(PILE, {"anvil": {"mass": 500.0, "contact": {"stiffness": 5e9, "exponent": 0.0}}}),
+            "anvil.mass",
+            [200.0, 800.0],
+        ),
+    ],
+)
 def test_the_piston_the_media_and_blows_can_be_swept(base, path, values):
     found = variants(Sweep(case=base, parameters={path: values}))
     for value, (values_of, case) in zip(values, found):
@@ -51,21 +59,37 @@ def test_the_piston_the_media_and_blows_can_be_swept(base, path, values):
         assert node == values_of[path] == value
 
 
-@pytest.mark.parametrize("base, parameters, field, message", [
-    (FIG5, {"striker.velocity": [3.0, "fast"]}, "parameters['striker.velocity'][1]", "striker.velocity: must be a number"),
-    (FIG5, {"tool.area": [0.01, -1.0]}, "parameters['tool.area'][1]", "tool.area: must be > 0"),
-    (FIG5, {"striker.speed": [3.0]}, "parameters['striker.speed'][0]", "striker.speed: is not a known field"),
-    (FIG5, {"striker.mass.value": [3.0]}, "parameters['striker.mass.value'][0]", "cannot be set"),
-    (FIG5, {"striker.velocity": []}, "parameters['striker.velocity']", "give at least one value"),
-    (FIG5, {"numerics.cells": [10, 200_000]}, "parameters['numerics.cells'][1]", "exceed the limit of 100000"),
-    (ROCK, {"medium.unloading_stiffness": [1e9, 1e8]}, "parameters['medium.unloading_stiffness'][1]",
-     "medium.unloading_stiffness: must be ≥ medium.stiffness"),
-    (ROCK, {"medium.quake": [1e-3]}, "parameters['medium.quake'][0]", "is not a field of a bilinear medium"),
-    (PILE, {"blows.count": [2, 0]}, "parameters['blows.count'][1]", "blows.count: must be ≥ 1"),
-    # The only parameter is the culprit even when the field it breaks is another.
-    (PILE, {"striker.length": [0.3]}, "parameters['striker.length'][0]",
-     "striker.mass: cannot be given with striker.length"),
-])
+@pytest.mark.parametrize(
+    "base, parameters, field, message",
+    [
+        (
+            FIG5,
+            {"striker.velocity": [3.0, "fast"]},
+            "parameters['striker.velocity'][1]",
+            "striker.velocity: must be a number",
+        ),
+        (FIG5, {"tool.area": [0.01, -1.0]}, "parameters['tool.area'][1]", "tool.area: must be > 0"),
+        (FIG5, {"striker.speed": [3.0]}, "parameters['striker.speed'][0]", "striker.speed: is not a known field"),
+        (FIG5, {"striker.mass.value": [3.0]}, "parameters['striker.mass.value'][0]", "cannot be set"),
+        (FIG5, {"striker.velocity": []}, "parameters['striker.velocity']", "give at least one value"),
+        (FIG5, {"numerics.cells": [10, 200_000]}, "parameters['numerics.cells'][1]", "exceed the limit of 100000"),
+        (
+            ROCK,
+            {"medium.unloading_stiffness": [1e9, 1e8]},
+            "parameters['medium.unloading_stiffness'][1]",
+            "medium.unloading_stiffness: must be ≥ medium.stiffness",
+        ),
+        (ROCK, {"medium.quake": [1e-3]}, "parameters['medium.quake'][0]", "is not a field of a bilinear medium"),
+        (PILE, {"blows.count": [2, 0]}, "parameters['blows.count'][1]", "blows.count: must be ≥ 1"),
+        # The only parameter is the culprit even when the field it breaks is another.
+        (
+            PILE,
+            {"striker.length": [0.3]},
+            "parameters['striker.length'][0]",
+            "striker.mass: cannot be given with striker.length",
+        ),
+    ],
+)
 def test_a_bad_variant_is_refused_naming_the_parameter_value(base, parameters, field, message):
     with pytest.raises(CaseError) as error:
         variants(Sweep(case=base, parameters=parameters))
@@ -75,8 +99,10 @@ def test_a_bad_variant_is_refused_naming_the_parameter_value(base, parameters, f
 
 def test_too_many_variants_are_refused_before_any_is_built():
     with pytest.raises(CaseError) as error:
-        variants(Sweep(case=FIG5, parameters={"striker.velocity": list(range(1, 101)),
-                                              "striker.mass": list(range(1, 101))}), max_variants=1000)
+        variants(
+            Sweep(case=FIG5, parameters={"striker.velocity": list(range(1, 101)), "striker.mass": list(range(1, 101))}),
+            max_variants=1000,
+        )
     [e] = error.value.errors
     assert e.field == "parameters" and "10000 variants (100 × 100) exceed the limit of 1000" in e.message
 
@@ -110,7 +136,7 @@ def test_the_piston_length_takes_the_efficiency_through_lundbergs_optimum():
     efficiency = [row["transfer_efficiency"] for row in rows]
     best = efficiency.index(max(efficiency))
     assert 0 < best < len(rows) - 1
-    assert efficiency[:best + 1] == sorted(efficiency[:best + 1])
+    assert efficiency[: best + 1] == sorted(efficiency[: best + 1])
     assert efficiency[best:] == sorted(efficiency[best:], reverse=True)
 
 
@@ -118,8 +144,7 @@ def test_a_heavier_helmet_lowers_the_pile_heads_stress():
     """The pile's ram on a helmet (an anvil) of 200 and 2000 kg: a sweep solves both, and the
     heavier one, slower to pass the blow on, stresses the pile less."""
     helmet = merge(PILE, {"anvil": {"mass": 200.0, "contact": {"stiffness": 2e10, "exponent": 0.0}}})
-    light, heavy = run_sweep({"case": helmet, "parameters": {"anvil.mass": [200.0, 2000.0]}},
-                             processes=1)
+    light, heavy = run_sweep({"case": helmet, "parameters": {"anvil.mass": [200.0, 2000.0]}}, processes=1)
     assert "error" not in light and "error" not in heavy
     assert heavy["max_compressive_stress"] < 0.95 * light["max_compressive_stress"]
 
@@ -130,7 +155,8 @@ def test_blow_after_blow_the_pile_goes_down_by_each_blows_set():
     for before, after in zip(rows, rows[1:]):
         # n blows are the n − 1 blows before and one more (each run on its own grids: within 2%)
         assert after["permanent_penetration"] - before["permanent_penetration"] == pytest.approx(
-            after["last_blow_set"], rel=2e-2)
+            after["last_blow_set"], rel=2e-2
+        )
         assert after["energy_to_medium"] > before["energy_to_medium"]
 
 
@@ -155,8 +181,20 @@ def test_the_cli_prints_and_writes_the_table(tmp_path, capsys):
     case = tmp_path / "fig5.json"
     case.write_text(json.dumps(FIG5))
     out = tmp_path / "table.csv"
-    code = main(["sweep", str(case), "--vary", "striker.velocity=3,5", "--vary", "contact.stiffness=8e11",
-                 "--processes", "2", "--csv", str(out)])
+    code = main(
+        [
+            "sweep",
+            str(case),
+            "--vary",
+            "striker.velocity=3,5",
+            "--vary",
+            "contact.stiffness=8e11",
+            "--processes",
+            "2",
+            "--csv",
+            str(out),
+        ]
+    )
     assert code == 0
     printed = capsys.readouterr()
     assert printed.out.splitlines()[0].startswith("striker.velocity\tcontact.stiffness\tco_impact_time")

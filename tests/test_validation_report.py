@@ -9,7 +9,6 @@ import importlib.util
 import re
 
 import pytest
-
 from live_stack import ROOT
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
@@ -28,7 +27,7 @@ def _rows(text: str, header: str) -> list[list[str]]:
     rows = []
     for i, line in enumerate(lines):
         if line.startswith(header):
-            for row in lines[i + 2:]:
+            for row in lines[i + 2 :]:
                 if not row.startswith("|"):
                     break
                 rows.append([cell.strip() for cell in row.strip("|").split("|")])
@@ -38,16 +37,17 @@ def _rows(text: str, header: str) -> list[list[str]]:
 def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     figures = {}
     text = _validation_module().report(figures)
-    assert set(figures) == {"reference", "wave", "rigid_limit", "piston", "lundberg", "smith_loop",
-                            "blows", "anvil"}
+    assert set(figures) == {"reference", "wave", "rigid_limit", "piston", "lundberg", "smith_loop", "blows", "anvil"}
     for name, fig in figures.items():
         fig.savefig(tmp_path / f"{name}.png")
         assert (tmp_path / f"{name}.png").read_bytes().startswith(b"\x89PNG")
         assert all(ax.lines for ax in fig.axes if not ax.images), name  # every panel has curves
         assert f"(validation/{name}.png)" in text
     # The observed orders of each scheme against the closed form: 1 for the paper's, 2 for the others.
-    orders = {m[0]: (float(m[1]), float(m[2])) for m in
-              re.findall(r"^\| (paper|sigma|explicit) \| \S+ \| ([\d.]+) \| \S+ \| ([\d.]+) \|$", text, re.M)}
+    orders = {
+        m[0]: (float(m[1]), float(m[2]))
+        for m in re.findall(r"^\| (paper|sigma|explicit) \| \S+ \| ([\d.]+) \| \S+ \| ([\d.]+) \|$", text, re.M)
+    }
     assert set(orders) == {"paper", "sigma", "explicit"}
     assert all(0.9 < o < 1.1 for o in orders["paper"])
     assert all(1.7 < o < 2.4 for s in ("sigma", "explicit") for o in orders[s])
@@ -57,10 +57,21 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     # The models beyond the paper: every closed form within what its test holds it to, at fine
     # numerics and at the tolerance, and every run's energy residual within 0.5%.
     checks = _rows(text, "| case | quantity | closed form |")
-    assert {row[0] for row in checks} >= {"r = 0.5", "r = 1", "r = 2", "x = 0.3", "x = 0.6", "x = 1.2564",
-                                          "x = 2", "x = 3", "J = 0", "J = 0.5",
-                                          "1-mg anvil, against none", "striker 2 kg on anvil 1 kg",
-                                          "striker 1 kg on anvil 3 kg"}
+    assert {row[0] for row in checks} >= {
+        "r = 0.5",
+        "r = 1",
+        "r = 2",
+        "x = 0.3",
+        "x = 0.6",
+        "x = 1.2564",
+        "x = 2",
+        "x = 3",
+        "J = 0",
+        "J = 0.5",
+        "1-mg anvil, against none",
+        "striker 2 kg on anvil 1 kg",
+        "striker 1 kg on anvil 3 kg",
+    }
     for case, quantity, _, _, fine, _, tolerance, held in checks:
         if held != "—":
             assert abs(float(fine)) <= float(held) and abs(float(tolerance)) <= float(held), (case, quantity)

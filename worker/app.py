@@ -20,16 +20,19 @@ HEARTBEAT_SECONDS = 5.0
 
 def make_app(s: Settings) -> Celery:
     app = Celery("percussim", include=["percussim.worker.tasks"])
-    app.conf.update(broker_config(s), **{
-        "task_acks_late": True,
-        "task_reject_on_worker_lost": True,
-        "worker_prefetch_multiplier": 1,
-        "task_time_limit": s.job_time_limit + 60,  # the hard stop behind the job's own limit
-        "task_ignore_result": True,  # status and results live in the results store
-        "broker_connection_retry_on_startup": True,
-        # The filesystem transport cannot broadcast.
-        "worker_enable_remote_control": not s.embedded,
-    })
+    app.conf.update(
+        broker_config(s),
+        **{
+            "task_acks_late": True,
+            "task_reject_on_worker_lost": True,
+            "worker_prefetch_multiplier": 1,
+            "task_time_limit": s.job_time_limit + 60,  # the hard stop behind the job's own limit
+            "task_ignore_result": True,  # status and results live in the results store
+            "broker_connection_retry_on_startup": True,
+            # The filesystem transport cannot broadcast.
+            "worker_enable_remote_control": not s.embedded,
+        },
+    )
     if s.embedded:
         queue_folder(s).mkdir(parents=True, exist_ok=True)
     return app

@@ -29,10 +29,13 @@ def broker_config(settings: Settings) -> dict:
             "broker_url": "filesystem://",
             "broker_transport": "percussim.worker.queue_files:Transport",
             # The control folder defaults to ./control: keep everything under the results folder.
-            "broker_transport_options": {"data_folder_in": folder, "data_folder_out": folder,
-                                         "control_folder": str(settings.broker_folder / "control"),
-                                         "store_processed": False,
-                                         "polling_interval": 0.05},  # default 1 s: a second of latency
+            "broker_transport_options": {
+                "data_folder_in": folder,
+                "data_folder_out": folder,
+                "control_folder": str(settings.broker_folder / "control"),
+                "store_processed": False,
+                "polling_interval": 0.05,
+            },  # default 1 s: a second of latency
         }
     return {
         "broker_url": settings.broker_url,

@@ -11,13 +11,28 @@ from __future__ import annotations
 
 import fcntl
 import os
+from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
-from typing import Iterator
 
-from sqlalchemy import (JSON, BigInteger, Boolean, Column, DateTime, Float, Index, Integer,
-                        MetaData, String, Table, Text, create_engine, event, text)
+from sqlalchemy import (
+    JSON,
+    BigInteger,
+    Boolean,
+    Column,
+    DateTime,
+    Float,
+    Index,
+    Integer,
+    MetaData,
+    String,
+    Table,
+    Text,
+    create_engine,
+    event,
+    text,
+)
 from sqlalchemy.engine import Connection, Engine
 
 from .settings import Settings
@@ -29,7 +44,8 @@ MIGRATION_LOCK = 0x70657263  # PostgreSQL advisory lock key of the schema's migr
 metadata = MetaData()
 
 jobs = Table(
-    "jobs", metadata,
+    "jobs",
+    metadata,
     Column("id", String(32), primary_key=True),
     Column("owner", String(64)),  # the API key's id; null without keys
     Column("name", Text),
@@ -53,7 +69,8 @@ jobs = Table(
 )
 
 sweeps = Table(
-    "sweeps", metadata,
+    "sweeps",
+    metadata,
     Column("id", String(32), primary_key=True),
     Column("owner", String(64)),
     Column("name", Text),
@@ -66,7 +83,8 @@ sweeps = Table(
 # Cumulative counters for the metrics (a histogram's buckets, sums and counts), kept here so that
 # every worker on every machine adds to the same ones.
 counters = Table(
-    "counters", metadata,
+    "counters",
+    metadata,
     Column("name", String(64), primary_key=True),
     Column("key", String(32), primary_key=True),
     Column("value", Float, nullable=False),

@@ -18,8 +18,8 @@ import json
 import os
 import shutil
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 from percussim.solver.evaluate import Batch, LocalEvaluator, evaluate_batch, split
 

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import bisect
 import math
-from typing import Callable
+from collections.abc import Callable
 
 from sqlalchemy import select
-from sqlalchemy.engine import Connection
 from sqlalchemy.dialects import postgresql, sqlite
+from sqlalchemy.engine import Connection
 
 from .database import counters, database
 from .settings import Settings
@@ -47,8 +47,9 @@ def observe(connection: Connection, name: str, value: float) -> None:
     insert = (postgresql if connection.dialect.name == "postgresql" else sqlite).insert
     for key, amount in ((bucket, 1.0), ("sum", value), ("count", 1.0)):
         statement = insert(counters).values(name=name, key=key, value=amount)
-        connection.execute(statement.on_conflict_do_update(
-            index_elements=["name", "key"], set_={"value": counters.c.value + amount}))
+        connection.execute(
+            statement.on_conflict_do_update(index_elements=["name", "key"], set_={"value": counters.c.value + amount})
+        )
 
 
 class Counters:
@@ -60,8 +61,9 @@ class Counters:
     def histogram(self, name: str) -> tuple[list[tuple[str, float]], float]:
         """([(upper bound, cumulative count)] ending with +Inf, sum)."""
         with translated(), database(self.settings).connect() as connection:
-            values = dict(connection.execute(select(counters.c.key, counters.c.value)
-                                             .where(counters.c.name == name)).all())
+            values = dict(
+                connection.execute(select(counters.c.key, counters.c.value).where(counters.c.name == name)).all()
+            )
         total, buckets = 0.0, []
         for bound in (*HISTOGRAMS[name], math.inf):
             key = "+Inf" if bound == math.inf else str(bound)

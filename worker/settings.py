@@ -13,10 +13,9 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any
 
+from percussim.solver.limits import Limits
 from pydantic import BeforeValidator, Field, ValidationError, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
-
-from percussim.solver.limits import Limits
 
 PREFIX = "PERCUSSIM_"
 
@@ -48,16 +47,24 @@ class Settings(BaseSettings):
 
     broker_url: str | None = Field(default=None, description="e.g. redis://redis:6379/0; none: embedded")
     database_url: str | None = Field(
-        default=None, description="the job records, e.g. postgresql+psycopg://user:password@db/percussim; "
-                                  "none: an SQLite file in the results folder")
+        default=None,
+        description="the job records, e.g. postgresql+psycopg://user:password@db/percussim; "
+        "none: an SQLite file in the results folder",
+    )
     results_dir: Path = Field(default=Path("percussim-data"), description="the shared results store")
     result_ttl: float | None = Field(
-        default=None, gt=0, description="seconds after which a finished job (or a finished sweep) and its "
-                                        "files are deleted; none: kept until deleted")
+        default=None,
+        gt=0,
+        description="seconds after which a finished job (or a finished sweep) and its "
+        "files are deleted; none: kept until deleted",
+    )
     job_time_limit: float = Field(default=900.0, gt=0, description="seconds a job may run")
     redelivery_seconds: float | None = Field(
-        default=None, gt=0, description="seconds after which a job whose worker died is delivered "
-                                        "again (Redis); default job_time_limit + 120, never less")
+        default=None,
+        gt=0,
+        description="seconds after which a job whose worker died is delivered "
+        "again (Redis); default job_time_limit + 120, never less",
+    )
     max_cells: Whole = Limits.max_cells
     max_steps: Whole = Limits.max_steps
     max_node_steps: float = Limits.max_node_steps
@@ -68,11 +75,13 @@ class Settings(BaseSettings):
     cors_origins: str | None = Field(default=None, description="comma-separated origins browsers may call from")
 
     @model_validator(mode="after")
-    def _redelivery_after_the_time_limit(self) -> "Settings":
+    def _redelivery_after_the_time_limit(self) -> Settings:
         # Sooner, a job still running would be delivered to a second worker.
         if self.redelivery_seconds is not None and self.redelivery_seconds <= self.job_time_limit:
-            raise ValueError(f"PERCUSSIM_REDELIVERY_SECONDS ({self.redelivery_seconds:g}) must exceed "
-                             f"PERCUSSIM_JOB_TIME_LIMIT ({self.job_time_limit:g})")
+            raise ValueError(
+                f"PERCUSSIM_REDELIVERY_SECONDS ({self.redelivery_seconds:g}) must exceed "
+                f"PERCUSSIM_JOB_TIME_LIMIT ({self.job_time_limit:g})"
+            )
         return self
 
     @property
@@ -94,8 +103,12 @@ class Settings(BaseSettings):
         return _items(self.cors_origins)
 
     def limits(self) -> Limits:
-        return Limits(max_cells=self.max_cells, max_steps=self.max_steps,
-                      max_node_steps=self.max_node_steps, max_output_values=self.max_output_values)
+        return Limits(
+            max_cells=self.max_cells,
+            max_steps=self.max_steps,
+            max_node_steps=self.max_node_steps,
+            max_output_values=self.max_output_values,
+        )
 
 
 def _items(text: str | None) -> list[str]:

@@ -31,16 +31,18 @@ import re
 import secrets
 import shutil
 import tempfile
+from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
-from datetime import datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
-from typing import Callable, Iterable, Iterator
 
 from sqlalchemy import and_, delete, func, insert, or_, select, tuple_, update
 from sqlalchemy.engine import Connection
 from sqlalchemy.exc import DBAPIError, InterfaceError, OperationalError
 
-from .database import database, jobs as JOBS, sweeps as SWEEPS
+from .database import database
+from .database import jobs as JOBS
+from .database import sweeps as SWEEPS
 from .settings import Settings
 
 QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded", "failed", "cancelled"
@@ -69,7 +71,7 @@ class StoreUnavailable(Exception):
 
 
 def now() -> datetime:
-    return datetime.now(timezone.utc)
+    return datetime.now(UTC)
 
 
 def new_id() -> str:
@@ -125,7 +127,7 @@ class JobStore:
         """A connection to the records (a transaction committed at the end, to `write`)."""
         with translated():
             engine = database(self.settings)
-            with (engine.begin() if write else engine.connect()) as connection:
+            with engine.begin() if write else engine.connect() as connection:
                 yield connection
 
     def _mine(self, condition):
@@ -144,13 +146,30 @@ class JobStore:
             write_atomic(folder / "case.json", json.dumps(case).encode())
             if request is not None:
                 write_atomic(folder / "request.json", json.dumps(request).encode())
-        return {"id": job_id, "owner": self.owner, "name": case.get("name"), "kind": kind,
-                "status": QUEUED, "progress": 0.0, "created": now(), "started": None, "finished": None,
-                "error": None, "attempts": 0, "worker": None, "sweep": sweep, "cancel_requested": False,
-                "result_bytes": None}
+        return {
+            "id": job_id,
+            "owner": self.owner,
+            "name": case.get("name"),
+            "kind": kind,
+            "status": QUEUED,
+            "progress": 0.0,
+            "created": now(),
+            "started": None,
+            "finished": None,
+            "error": None,
+            "attempts": 0,
+            "worker": None,
+            "sweep": sweep,
+            "cancel_requested": False,
+            "result_bytes": None,
+        }
 
-    def _create(self, new: list[tuple[str, dict, str, dict | None]], sweep: str | None = None,
-                more: Callable[[Connection], None] | None = None) -> list[dict]:
+    def _create(
+        self,
+        new: list[tuple[str, dict, str, dict | None]],
+        sweep: str | None = None,
+        more: Callable[[Connection], None] | None = None,
+    ) -> list[dict]:
         """New queued jobs, each (id, case, kind, request): their folders written, then their
         records (and whatever `more(connection)` adds) in one transaction. If anything fails,
         none of their folders is left."""
@@ -182,13 +201,11 @@ class JobStore:
             raise UnknownJob(job_id)
         return _record(row._mapping)
 
-    def _change(self, job_id: str, condition, then: Callable[[Connection], None] | None = None,
-                **values) -> bool:
+    def _change(self, job_id: str, condition, then: Callable[[Connection], None] | None = None, **values) -> bool:
         """Set `values` on the job if `condition` holds for it, in one statement: True if it did;
         then `then(connection)` in the same transaction, if it did."""
         with self._connection(write=True) as connection:
-            done = connection.execute(update(JOBS).where(JOBS.c.id == job_id, condition)
-                                      .values(**values)).rowcount == 1
+            done = connection.execute(update(JOBS).where(JOBS.c.id == job_id, condition).values(**values)).rowcount == 1
             if done and then is not None:
                 then(connection)
             return done
@@ -197,17 +214,25 @@ class JobStore:
         """Queued (or running on a worker that died) → running on `worker`, unless cancelled:
         the record then, or None if it was not started."""
         with self._connection(write=True) as connection:
-            row = connection.execute(update(JOBS).where(
-                JOBS.c.id == job_id, JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested)
-                .values(status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker,
-                        progress=0.0).returning(*JOBS.c)).first()
+            row = connection.execute(
+                update(JOBS)
+                .where(JOBS.c.id == job_id, JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested)
+                .values(status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker, progress=0.0)
+                .returning(*JOBS.c)
+            ).first()
         return None if row is None else _record(row._mapping)
 
     def set_progress(self, job_id: str, fraction: float) -> bool:
         return self._change(job_id, JOBS.c.status == RUNNING, progress=fraction)
 
-    def finish(self, job_id: str, status: str, error: str | None = None,
-               then: Callable[[Connection], None] | None = None, **values) -> bool:
+    def finish(
+        self,
+        job_id: str,
+        status: str,
+        error: str | None = None,
+        then: Callable[[Connection], None] | None = None,
+        **values,
+    ) -> bool:
         """An unfinished job → `status` (with `error`): True if this call finished it, and then
         `then(connection)` in the same transaction. Success needs a running job with no cancel
         asked; a failure or a cancel, any unfinished job."""
@@ -217,8 +242,14 @@ class JobStore:
             condition = JOBS.c.status.in_((QUEUED, RUNNING))
         return self._change(job_id, condition, then, status=status, error=error, finished=now(), **values)
 
-    def complete(self, job_id: str, status: str, error: str | None = None,
-                 then: Callable[[Connection], None] | None = None, **values) -> str:
+    def complete(
+        self,
+        job_id: str,
+        status: str,
+        error: str | None = None,
+        then: Callable[[Connection], None] | None = None,
+        **values,
+    ) -> str:
         """A worker's end of a job: `finish` it as `status` (and `then`); a success that lost to a
         cancel asked meanwhile removes what it wrote and ends cancelled. Returns the job's final
         status."""
@@ -233,17 +264,18 @@ class JobStore:
 
     def requeue(self, job_id: str, worker: str) -> bool:
         """Running on `worker`, which died → queued again."""
-        return self._change(job_id, and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker),
-                            status=QUEUED, progress=0.0)
+        return self._change(
+            job_id, and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker), status=QUEUED, progress=0.0
+        )
 
     def request_cancel(self, job_id: str) -> dict | None:
         """Cancel the job if it has not finished: a queued one at once, a running one by its
         worker, which is asked to (`cancel_requested`). Returns the record as it then is, or
         None if the job had already finished."""
         self.get(job_id)  # known, and this owner's
-        if (self._change(job_id, JOBS.c.status == QUEUED, status=CANCELLED, finished=now(),
-                         cancel_requested=True)
-                or self._change(job_id, JOBS.c.status == RUNNING, cancel_requested=True)):
+        if self._change(
+            job_id, JOBS.c.status == QUEUED, status=CANCELLED, finished=now(), cancel_requested=True
+        ) or self._change(job_id, JOBS.c.status == RUNNING, cancel_requested=True):
             return self.get(job_id)
         return None
 
@@ -255,8 +287,12 @@ class JobStore:
         """Remove a finished job, its record and its folder: True if this call removed it."""
         self.folder(job_id)
         with self._connection(write=True) as connection:
-            gone = connection.execute(delete(JOBS).where(
-                self._mine(and_(JOBS.c.id == job_id, JOBS.c.status.in_(FINISHED))))).rowcount == 1
+            gone = (
+                connection.execute(
+                    delete(JOBS).where(self._mine(and_(JOBS.c.id == job_id, JOBS.c.status.in_(FINISHED))))
+                ).rowcount
+                == 1
+            )
         if gone:
             self._remove_folders([job_id])
         return gone
@@ -310,21 +346,35 @@ class JobStore:
         """Bytes in the job's folder."""
         return sum(f.stat().st_size for f in self.folder(job_id).rglob("*") if f.is_file())
 
-    def list(self, offset: int = 0, limit: int = 50, status: str | None = None, name: str | None = None,
-             sweep: str | None = None, before: tuple[datetime, str] | None = None) -> tuple[int, list[dict]]:
+    def list(
+        self,
+        offset: int = 0,
+        limit: int = 50,
+        status: str | None = None,
+        name: str | None = None,
+        sweep: str | None = None,
+        before: tuple[datetime, str] | None = None,
+    ) -> tuple[int, list[dict]]:
         """(how many match, a page of them newest first): `offset` into them, or those created
         `before` (created, id) — the last of the page before, which does not grow with the
         number of jobs as an offset does."""
-        conditions = [column == value for column, value in (
-            (JOBS.c.owner, self.owner), (JOBS.c.status, status), (JOBS.c.name, name),
-            (JOBS.c.sweep, sweep)) if value is not None]
-        page = conditions if before is None else [
-            *conditions, tuple_(JOBS.c.created, JOBS.c.id) < tuple_(*before)]
+        conditions = [
+            column == value
+            for column, value in (
+                (JOBS.c.owner, self.owner),
+                (JOBS.c.status, status),
+                (JOBS.c.name, name),
+                (JOBS.c.sweep, sweep),
+            )
+            if value is not None
+        ]
+        page = conditions if before is None else [*conditions, tuple_(JOBS.c.created, JOBS.c.id) < tuple_(*before)]
         with self._connection() as connection:
             # No condition at all when none is asked: SQLite then counts the table at once.
             total = connection.scalar(select(func.count()).select_from(JOBS).where(*conditions))
-            rows = connection.execute(select(JOBS).where(*page).order_by(
-                JOBS.c.created.desc(), JOBS.c.id.desc()).offset(offset).limit(limit))
+            rows = connection.execute(
+                select(JOBS).where(*page).order_by(JOBS.c.created.desc(), JOBS.c.id.desc()).offset(offset).limit(limit)
+            )
             return total, [_record(row._mapping) for row in rows]
 
     def ids(self, status: str, worker: str | None = None) -> list[str]:
@@ -333,8 +383,9 @@ class JobStore:
         if worker is not None:
             condition = and_(condition, JOBS.c.worker == worker)
         with self._connection() as connection:
-            return list(connection.scalars(select(JOBS.c.id).where(self._mine(condition))
-                                           .order_by(JOBS.c.created, JOBS.c.id)))
+            return list(
+                connection.scalars(select(JOBS.c.id).where(self._mine(condition)).order_by(JOBS.c.created, JOBS.c.id))
+            )
 
     def counts(self) -> dict[str, int]:
         """How many jobs of each status."""
@@ -344,9 +395,14 @@ class JobStore:
     def expired(self, finished_before: datetime, limit: int) -> list[str]:
         """Up to `limit` finished jobs, not of a sweep, finished before then, oldest first."""
         with self._connection() as connection:
-            return list(connection.scalars(select(JOBS.c.id).where(
-                JOBS.c.status.in_(FINISHED), JOBS.c.sweep.is_(None), JOBS.c.finished < finished_before)
-                .order_by(JOBS.c.finished).limit(limit)))
+            return list(
+                connection.scalars(
+                    select(JOBS.c.id)
+                    .where(JOBS.c.status.in_(FINISHED), JOBS.c.sweep.is_(None), JOBS.c.finished < finished_before)
+                    .order_by(JOBS.c.finished)
+                    .limit(limit)
+                )
+            )
 
     def result_bytes(self) -> int:
         with self._connection() as connection:
@@ -357,7 +413,7 @@ def _utc(value: datetime | None) -> str | None:
     """A time as ISO 8601 in UTC (SQLite gives it back without its zone)."""
     if value is None:
         return None
-    return (value if value.tzinfo else value.replace(tzinfo=timezone.utc)).isoformat()
+    return (value if value.tzinfo else value.replace(tzinfo=UTC)).isoformat()
 
 
 def _record(row) -> dict:
@@ -387,11 +443,19 @@ class SweepStore:
         """A new sweep of `variants` (each (values, case JSON)), each a new queued job, all
         recorded in one transaction; returns the sweep's record."""
         sweep_id, job_ids = new_id(), [new_id() for _ in variants]
-        record = {"id": sweep_id, "owner": self.jobs.owner, "name": name, "created": now(),
-                  "parameters": parameters,
-                  "variants": [{"values": values, "job": job_id} for (values, _), job_id in zip(variants, job_ids)]}
-        self.jobs._create([(job_id, case, RUN, None) for job_id, (_, case) in zip(job_ids, variants)], sweep_id,
-                          lambda connection: connection.execute(insert(SWEEPS), [record]))
+        record = {
+            "id": sweep_id,
+            "owner": self.jobs.owner,
+            "name": name,
+            "created": now(),
+            "parameters": parameters,
+            "variants": [{"values": values, "job": job_id} for (values, _), job_id in zip(variants, job_ids)],
+        }
+        self.jobs._create(
+            [(job_id, case, RUN, None) for job_id, (_, case) in zip(job_ids, variants)],
+            sweep_id,
+            lambda connection: connection.execute(insert(SWEEPS), [record]),
+        )
         return _sweep_record(record)
 
     def get(self, sweep_id: str) -> dict:
@@ -409,8 +473,7 @@ class SweepStore:
         with self.jobs._connection(write=True) as connection:
             # One statement per table, each conditional on the sweep having finished.
             unfinished = select(JOBS.c.id).where(JOBS.c.sweep == sweep_id, JOBS.c.status.notin_(FINISHED))
-            gone = connection.execute(delete(SWEEPS).where(
-                SWEEPS.c.id == sweep_id, ~unfinished.exists())).rowcount == 1
+            gone = connection.execute(delete(SWEEPS).where(SWEEPS.c.id == sweep_id, ~unfinished.exists())).rowcount == 1
             if gone:
                 ids = list(connection.scalars(delete(JOBS).where(JOBS.c.sweep == sweep_id).returning(JOBS.c.id)))
         if gone:
@@ -419,12 +482,18 @@ class SweepStore:
 
     def expired(self, finished_before: datetime, limit: int) -> list[str]:
         """Up to `limit` sweeps whose jobs all finished before then."""
-        later = select(JOBS.c.id).where(JOBS.c.sweep == SWEEPS.c.id, or_(
-            JOBS.c.status.notin_(FINISHED), JOBS.c.finished >= finished_before))
+        later = select(JOBS.c.id).where(
+            JOBS.c.sweep == SWEEPS.c.id, or_(JOBS.c.status.notin_(FINISHED), JOBS.c.finished >= finished_before)
+        )
         with self.jobs._connection() as connection:
-            return list(connection.scalars(select(SWEEPS.c.id).where(~later.exists(),
-                                                                      SWEEPS.c.created < finished_before)
-                                           .order_by(SWEEPS.c.created).limit(limit)))
+            return list(
+                connection.scalars(
+                    select(SWEEPS.c.id)
+                    .where(~later.exists(), SWEEPS.c.created < finished_before)
+                    .order_by(SWEEPS.c.created)
+                    .limit(limit)
+                )
+            )
 
 
 def _sweep_record(row) -> dict:
@@ -442,11 +511,12 @@ class WorkerRegistry:
 
     def beat(self, name: str) -> None:
         safe = re.sub(r"[^A-Za-z0-9_.@-]", "_", name)
-        write_atomic(self.folder / f"{safe}.json",
-                     json.dumps({"name": name, "time": datetime.now(timezone.utc).timestamp()}).encode())
+        write_atomic(
+            self.folder / f"{safe}.json", json.dumps({"name": name, "time": datetime.now(UTC).timestamp()}).encode()
+        )
 
     def alive(self, within: float) -> list[str]:
-        limit = datetime.now(timezone.utc).timestamp() - within
+        limit = datetime.now(UTC).timestamp() - within
         names = []
         for path in self.folder.glob("*.json"):
             try:

@@ -11,10 +11,10 @@ from __future__ import annotations
 import os
 import socket
 import time
-from typing import Callable, TypeVar
+from collections.abc import Callable
+from typing import TypeVar
 
 from celery.exceptions import Reject
-
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.errors import Cancelled, NumericalFailure
@@ -28,8 +28,18 @@ from .broker import EVALUATE_PART, RUN_JOB
 from .fanout import QueueEvaluator, take_part
 from .metrics import job_observations
 from .settings import settings
-from .store import (CALIBRATION, CANCELLED, FAILED, OPTIMIZATION, RUN, SUCCEEDED, JobStore,
-                    StoreUnavailable, UnknownJob, WorkerRegistry)
+from .store import (
+    CALIBRATION,
+    CANCELLED,
+    FAILED,
+    OPTIMIZATION,
+    RUN,
+    SUCCEEDED,
+    JobStore,
+    StoreUnavailable,
+    UnknownJob,
+    WorkerRegistry,
+)
 
 T = TypeVar("T")
 
@@ -99,8 +109,13 @@ def run_job(job_id: str) -> str:
     except Cancelled:
         return _end(store, job_id, CANCELLED)
     except TimeLimitExceeded:
-        return _end(store, job_id, FAILED, f"the job ran past its time limit of {s.job_time_limit:g} s "
-                                           "(PERCUSSIM_JOB_TIME_LIMIT): use a coarser grid or a shorter duration")
+        return _end(
+            store,
+            job_id,
+            FAILED,
+            f"the job ran past its time limit of {s.job_time_limit:g} s "
+            "(PERCUSSIM_JOB_TIME_LIMIT): use a coarser grid or a shorter duration",
+        )
     except CaseError as error:
         return _end(store, job_id, FAILED, "the solver refused the case: " + str(error))
     except NumericalFailure as error:
@@ -108,10 +123,17 @@ def run_job(job_id: str) -> str:
     except OSError as error:  # the disk is full, a file size limit is reached
         store.remove_results(job_id)
         remove_partial(store.result_path(job_id))
-        return _end(store, job_id, FAILED, f"its results could not be written: {_reason(error)}; "
-                                           "nothing of them was kept")
-    return _end(store, job_id, SUCCEEDED, progress=1.0, result_bytes=store.size(job_id),
-                then=job_observations(time.monotonic() - start, solver_seconds, node_steps))
+        return _end(
+            store, job_id, FAILED, f"its results could not be written: {_reason(error)}; nothing of them was kept"
+        )
+    return _end(
+        store,
+        job_id,
+        SUCCEEDED,
+        progress=1.0,
+        result_bytes=store.size(job_id),
+        then=job_observations(time.monotonic() - start, solver_seconds, node_steps),
+    )
 
 
 def _reason(error: OSError) -> str:
@@ -124,32 +146,43 @@ def _end(store: JobStore, job_id: str, status: str, error: str | None = None, **
     return _stored(lambda: store.complete(job_id, status, error, **values))
 
 
-def _run(store: JobStore, job_id: str, progress: Callable[[float], None],
-         cancelled: Callable[[], bool]) -> tuple[float, float]:
+def _run(
+    store: JobStore, job_id: str, progress: Callable[[float], None], cancelled: Callable[[], bool]
+) -> tuple[float, float]:
     """A run: the solver on the job's case, its result streamed to the job's folder. Returns the
     solver's seconds and node-steps."""
     # A run streams its result to a temporary file renamed when complete; one whose worker died
     # left its temporary file behind.
     remove_partial(store.result_path(job_id))
     start = time.monotonic()
-    result = simulate(parse_case(store.case(job_id)), progress=progress, cancelled=cancelled,
-                      limits=settings().limits(), result_path=store.result_path(job_id))
+    result = simulate(
+        parse_case(store.case(job_id)),
+        progress=progress,
+        cancelled=cancelled,
+        limits=settings().limits(),
+        result_path=store.result_path(job_id),
+    )
     seconds = time.monotonic() - start
     store.write_summary(job_id, result.summary_json)
     return seconds, sum((run["cells"] + 1) * run["steps"] for run in result.summary["runs"])
 
 
-def _study(store: JobStore, job_id: str, progress: Callable[[float], None],
-           cancelled: Callable[[], bool]) -> tuple[float, float]:
+def _study(
+    store: JobStore, job_id: str, progress: Callable[[float], None], cancelled: Callable[[], bool]
+) -> tuple[float, float]:
     """A calibration or an optimisation: its batches spread over the live workers."""
     s = settings()
     solve, plot = STUDIES[_stored(lambda: store.get(job_id))["kind"]]
     workers = len(WorkerRegistry(s.results_dir).alive(within=ALIVE_WITHIN)) or 1
-    evaluator = QueueEvaluator(store.batches(job_id), lambda batch, index: evaluate_part.apply_async(
-        args=[job_id, batch, index], ignore_result=True), workers)
+    evaluator = QueueEvaluator(
+        store.batches(job_id),
+        lambda batch, index: evaluate_part.apply_async(args=[job_id, batch, index], ignore_result=True),
+        workers,
+    )
     try:
-        answer = solve(store.request(job_id), evaluator=evaluator, progress=progress,
-                       cancelled=cancelled, limits=s.limits())
+        answer = solve(
+            store.request(job_id), evaluator=evaluator, progress=progress, cancelled=cancelled, limits=s.limits()
+        )
     finally:
         evaluator.close()
     answer["runs_spread"] = evaluator.runs
@@ -169,5 +202,3 @@ def evaluate_part(job_id: str, batch: int, index: int) -> bool:
     except UnknownJob:
         return False
     return take_part(folder / str(int(batch)), int(index))
-
-

@@ -45,10 +45,7 @@ def _preset_file(name: str) -> Path:
     # Only names matching _NAME are listed, so this also refuses "../x", "fig3.json", "FIG3".
     if name not in files:
         known = ", ".join(files) or "none"
-        raise KeyError(
-            f"unknown preset {name!r} (a name is lowercase letters, digits and '_'); "
-            f"known presets: {known}"
-        )
+        raise KeyError(f"unknown preset {name!r} (a name is lowercase letters, digits and '_'); known presets: {known}")
     return files[name]
 
 
