@@ -27,6 +27,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, redis_server, wait_for  # noqa: E402
+
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.presets import preset_json  # noqa: E402
 

@@ -51,6 +51,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
 
 import closed_forms as CF  # noqa: E402
+
 from percussim.solver.calibrate import calibrate  # noqa: E402
 from percussim.solver.case import parse_case  # noqa: E402
 from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402

@@ -78,6 +78,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from scipy.integrate import solve_ivp
+from scipy.linalg import solve_banded
+from scipy.optimize import brentq
+
 from percussim.solver import kernel as K
 from percussim.solver.case import Case, load_case, parse_case
 from percussim.solver.controller import (
@@ -93,9 +97,6 @@ from percussim.solver.controller import (
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
 from percussim.solver.layout import HISTORY_COLUMNS
 from percussim.solver.summary import MAX_CONTACTS
-from scipy.integrate import solve_ivp
-from scipy.linalg import solve_banded
-from scipy.optimize import brentq
 
 ROOT = Path(__file__).resolve().parents[1]
 C_SOURCE = ROOT / "bench" / "kernel_c" / "step.c"

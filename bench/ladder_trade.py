@@ -21,6 +21,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "bench"))
 
 import matrix as bench_matrix  # noqa: E402
+
 from percussim.solver import accuracy, adaptive, grid  # noqa: E402
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.matrix import draw_cases  # noqa: E402

@@ -47,11 +47,12 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, postgres_server  # noqa: E402
-from percussim.worker.database import database  # noqa: E402
-from percussim.worker.database import jobs as JOBS
-from percussim.worker.settings import Settings  # noqa: E402
-from percussim.worker.store import JobStore, new_id, now  # noqa: E402
 from sqlalchemy import and_, func, insert, select, text, true  # noqa: E402
+
+from percussim.common.database import database  # noqa: E402
+from percussim.common.database import jobs as JOBS
+from percussim.common.settings import Settings  # noqa: E402
+from percussim.common.store import JobStore, new_id, now  # noqa: E402
 
 DATABASES = ("sqlite", "postgresql")
 SIZES = (1000, 10_000, 100_000)

@@ -32,6 +32,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from live_stack import Stack, postgres_server, redis_server  # noqa: E402
+
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.presets import load_preset, preset_json  # noqa: E402
 from percussim.solver.simulate import simulate  # noqa: E402

@@ -12,6 +12,7 @@ divided by ε². The largest ratio found is what `solver/adaptive.py`'s LUMPED_E
 from __future__ import annotations
 
 import numpy as np
+
 from percussim.solver.accuracy import estimated_values, not_estimated
 from percussim.solver.adaptive import LUMPED_ERROR, explicit_numerics, rigidity
 from percussim.solver.case import parse_case

@@ -23,6 +23,7 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
 
 from conftest import merge  # noqa: E402
+
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.presets import preset_json  # noqa: E402
 from percussim.solver.series import csv_chunks, dumps, series  # noqa: E402

@@ -25,6 +25,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from conftest import merge  # noqa: E402
 from live_stack import Stack, redis_server, wait_for  # noqa: E402
+
 from percussim.solver.controller import warm_up  # noqa: E402
 from percussim.solver.presets import preset_json  # noqa: E402
 from percussim.solver.simulate import run_sweep  # noqa: E402

@@ -35,6 +35,7 @@ from typing import NamedTuple
 
 import numpy as np
 from matplotlib.figure import Figure
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import explicit_numerics

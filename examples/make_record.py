@@ -24,6 +24,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.presets import preset_json

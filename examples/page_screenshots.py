@@ -21,8 +21,9 @@ import time
 from pathlib import Path
 
 import httpx
-from percussim.solver.presets import preset_json
 from playwright.sync_api import Page, expect, sync_playwright
+
+from percussim.solver.presets import preset_json
 
 WIDTHS = {"1280": {"width": 1280, "height": 900}, "390": {"width": 390, "height": 844}}
 CHROMIUM = "/usr/bin/chromium"

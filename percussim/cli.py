@@ -78,7 +78,7 @@ def _print_summary(summary: dict, path: str | None) -> int:
 
 def _limits():
     """The size limits of local runs: the service's settings (`PERCUSSIM_MAX_*`) read here too."""
-    from percussim.worker.settings import load
+    from percussim.common.settings import load
 
     return load().limits()
 
@@ -669,7 +669,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return args.handler(args)
     except ValueError as error:
-        from percussim.worker.settings import SettingsError
+        from percussim.common.settings import SettingsError
 
         if not isinstance(error, SettingsError):
             raise

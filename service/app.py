@@ -9,9 +9,10 @@ from __future__ import annotations
 from fastapi import Depends, FastAPI
 from fastapi.middleware.cors import CORSMiddleware
 from fastapi.responses import JSONResponse
-from percussim.worker.settings import Settings
-from percussim.worker.settings import settings as env_settings
-from percussim.worker.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
+
+from percussim.common.settings import Settings
+from percussim.common.settings import settings as env_settings
+from percussim.common.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
 
 from . import errors, page, presets, retention
 from .auth import authenticate

@@ -11,7 +11,8 @@ import hmac
 from typing import Annotated
 
 from fastapi import Header, HTTPException, Request
-from percussim.worker.settings import Settings
+
+from percussim.common.settings import Settings
 
 
 def key_id(key: str) -> str:

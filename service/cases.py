@@ -12,10 +12,11 @@ from typing import Annotated, Any
 
 from fastapi import APIRouter, Body
 from fastapi.exceptions import RequestValidationError
+from pydantic import BaseModel, ValidationError
+
+from percussim.common.settings import Settings
 from percussim.solver.case import Case, CaseError, FieldError
 from percussim.solver.limits import check_case
-from percussim.worker.settings import Settings
-from pydantic import BaseModel, ValidationError
 
 from .errors import FieldErrors, request_errors
 

@@ -13,10 +13,11 @@ from fastapi import FastAPI, Request
 from fastapi.exception_handlers import http_exception_handler
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from percussim.solver.case import CaseError, FieldError, describe, field_path
-from percussim.worker.store import StoreFull, StoreUnavailable, UnknownJob, UnknownSweep
 from pydantic import BaseModel
 from starlette.exceptions import HTTPException
+
+from percussim.common.store import StoreFull, StoreUnavailable, UnknownJob, UnknownSweep
+from percussim.solver.case import CaseError, FieldError, describe, field_path
 
 RETRY_AFTER_SECONDS = 10  # what a client is told to wait when the broker or the database is down
 

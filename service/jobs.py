@@ -15,14 +15,15 @@ from urllib.parse import urlencode
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
 from fastapi.responses import FileResponse, StreamingResponse
+from pydantic import BaseModel, ConfigDict, Field
+
+from percussim.common.settings import Settings
+from percussim.common.store import CANCELLED, FAILED, SUCCEEDED, JobStore, UnknownJob
 from percussim.solver import series
 from percussim.solver.case import Case, CaseError, FieldError
 from percussim.solver.limits import check_case
 from percussim.solver.plots import FORMATS, PLOTS, NotAvailable, parse_times, problems, render
 from percussim.solver.summary import Summary
-from percussim.worker.settings import Settings
-from percussim.worker.store import CANCELLED, FAILED, SUCCEEDED, JobStore, UnknownJob
-from pydantic import BaseModel, ConfigDict, Field
 
 from .errors import RETRY_AFTER_SECONDS, FieldErrors, Problem
 from .queue import JobQueue

@@ -18,8 +18,9 @@ import threading
 import time
 
 import uvicorn
-from percussim.worker.settings import Settings, settings
-from percussim.worker.store import FAILED, QUEUED, RUNNING, JobStore
+
+from percussim.common.settings import Settings, settings
+from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
 
 from .queue import JobQueue
 

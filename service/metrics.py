@@ -1,6 +1,6 @@
 """`GET /metrics` in Prometheus' text format (prometheus-client): jobs by status, the broker's queue
 depth, histograms of a job's time and of the solver's time per node-step (counted by the workers
-in the database, `worker.metrics`), and the results' disk use. Read at each scrape, so every API
+in the database, `common.metrics`), and the results' disk use. Read at each scrape, so every API
 replica answers the same."""
 
 from __future__ import annotations
@@ -10,12 +10,13 @@ import shutil
 
 from fastapi import APIRouter
 from fastapi.responses import Response
-from percussim.worker.metrics import Counters
-from percussim.worker.settings import Settings
-from percussim.worker.store import STATUSES, JobStore
 from prometheus_client import CONTENT_TYPE_LATEST, CollectorRegistry, generate_latest
 from prometheus_client.core import GaugeMetricFamily, HistogramMetricFamily
 from prometheus_client.registry import Collector
+
+from percussim.common.metrics import Counters
+from percussim.common.settings import Settings
+from percussim.common.store import STATUSES, JobStore
 
 from .queue import BROKER_ERRORS, JobQueue
 

@@ -6,8 +6,9 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, HTTPException
-from percussim.solver.presets import preset_json, preset_names
 from pydantic import BaseModel
+
+from percussim.solver.presets import preset_json, preset_names
 
 from .errors import Problem
 

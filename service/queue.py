@@ -3,7 +3,7 @@
 The API only publishes; it never imports the worker's Celery app, whose module configures itself
 from the environment when imported. Publishing with an app made from the service's own settings
 keeps `create_app(Settings(...))` on the broker those settings name (tests use a temporary
-folder); `worker.broker` gives both sides the same broker configuration.
+folder); `common.broker` gives both sides the same broker configuration.
 """
 
 from __future__ import annotations
@@ -15,9 +15,10 @@ import redis.exceptions
 from celery import Celery, group
 from kombu.exceptions import OperationalError
 from kombu.utils.url import maybe_sanitize_url
-from percussim.worker.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
-from percussim.worker.settings import Settings
-from percussim.worker.store import FAILED, JobStore
+
+from percussim.common.broker import CONNECT_TIMEOUT, RUN_JOB, broker_config, queue_folder
+from percussim.common.settings import Settings
+from percussim.common.store import FAILED, JobStore
 
 # What publishing raises when the broker cannot be reached (kombu wraps most of them).
 BROKER_ERRORS = (OperationalError, redis.exceptions.ConnectionError, redis.exceptions.TimeoutError, OSError)

@@ -9,8 +9,8 @@ import threading
 from contextlib import asynccontextmanager
 from datetime import timedelta
 
-from percussim.worker.settings import Settings
-from percussim.worker.store import JobStore, StoreFull, StoreUnavailable, SweepStore, now
+from percussim.common.settings import Settings
+from percussim.common.store import JobStore, StoreFull, StoreUnavailable, SweepStore, now
 
 BATCH = 200  # jobs or sweeps deleted per query
 log = logging.getLogger("percussim.retention")

@@ -11,13 +11,14 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, Body, Request, Response
 from fastapi.responses import FileResponse
+from pydantic import BaseModel, ConfigDict
+
+from percussim.common.settings import Settings
+from percussim.common.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
 from percussim.solver.limits import check_case
 from percussim.solver.plots import FORMATS
 from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization, study_case
-from percussim.worker.settings import Settings
-from percussim.worker.store import CALIBRATION, OPTIMIZATION, SUCCEEDED, JobStore, UnknownJob
-from pydantic import BaseModel, ConfigDict
 
 from .errors import FieldErrors, Problem
 from .jobs import cancel_or_delete, queue_jobs, succeeded

@@ -8,11 +8,12 @@ from collections import Counter
 from typing import Annotated, Any
 
 from fastapi import APIRouter, Body, HTTPException, Query, Request, Response
+from pydantic import BaseModel
+
+from percussim.common.settings import Settings
+from percussim.common.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
 from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.sweep import COLUMNS, Sweep, table_row, variants
-from percussim.worker.settings import Settings
-from percussim.worker.store import FAILED, FINISHED, SUCCEEDED, JobStore, SweepStore
-from pydantic import BaseModel
 
 from .errors import FieldErrors, Problem
 from .jobs import queue_jobs

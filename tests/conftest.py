@@ -7,6 +7,7 @@ import os
 import shutil
 
 import pytest
+
 from percussim.solver.presets import preset_json
 from percussim.solver.reference import LinearImpact
 
@@ -56,9 +57,10 @@ def clean_environment(monkeypatch):
 def api_store(tmp_path, clean_environment):
     """The API in-process on a fresh results folder, and that folder's job store."""
     from fastapi.testclient import TestClient
+
+    from percussim.common.settings import Settings
+    from percussim.common.store import JobStore
     from percussim.service.app import create_app
-    from percussim.worker.settings import Settings
-    from percussim.worker.store import JobStore
 
     settings = Settings(results_dir=tmp_path)
     return TestClient(create_app(settings)), JobStore(settings)
@@ -68,7 +70,8 @@ def succeeded_job(client, jobs, result: str, case: dict | None = None) -> str:
     """A job submitted through the API, then given the result file `result` as a worker would
     have written it."""
     import h5py
-    from percussim.worker.store import SUCCEEDED
+
+    from percussim.common.store import SUCCEEDED
 
     answer = client.post("/v1/jobs", json=case or BASE_CASE)
     assert answer.status_code == 202, answer.text
@@ -114,7 +117,7 @@ def postgres():
 def records(request, tmp_path):
     """Settings on each database the service runs on: the embedded SQLite file in the results
     folder, and a new database on a real PostgreSQL server."""
-    from percussim.worker.settings import Settings
+    from percussim.common.settings import Settings
 
     url = request.getfixturevalue("postgres").database() if request.param == "postgresql" else None
     return Settings(results_dir=tmp_path / "results", database_url=url)

@@ -9,6 +9,7 @@ import sys
 
 import pytest
 from conftest import duration_only, merge
+
 from percussim.solver.accuracy import ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order, quantity_error
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.limits import Limits

@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 import pytest
+
+from percussim.cli import main
 from percussim.solver.calibrate import calibrate, record_noise
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
@@ -17,8 +19,6 @@ from percussim.solver.evaluate import Space
 from percussim.solver.presets import preset_json
 from percussim.solver.record import Record, parse_record, read_record, record_from_csv, record_to_csv
 from percussim.solver.study import check_calibration, parse_calibration
-
-from percussim.cli import main
 
 TRUE = {"contact.stiffness": 8e11, "medium.stiffness": 2e9, "medium.damping": 1e5}
 BOUNDS = {"contact.stiffness": [1e9, 1e15], "medium.stiffness": [1e7, 1e11], "medium.damping": [0.0, 1e6]}

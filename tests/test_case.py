@@ -4,6 +4,7 @@ import json
 
 import pytest
 from conftest import BASE_CASE, merge
+
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.grid import resolve_numerics
 from percussim.solver.limits import Limits, check_limits

@@ -17,16 +17,16 @@ import numpy as np
 import pytest
 from conftest import CHATTERS, merge
 from live_stack import ROOT, Stack, wait_for
+from test_cli import _percussim
+from test_live import LONG
+
+from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 from percussim.solver.case import load_case
 from percussim.solver.io import read_result
 from percussim.solver.presets import load_preset, preset_json
 from percussim.solver.record import read_record
 from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import COLUMNS, Sweep
-from test_cli import _percussim
-from test_live import LONG
-
-from percussim.client import Client, JobFailed, NotFound, Refused, ServiceError, Unauthorized, Unavailable
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -276,8 +276,9 @@ def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_pa
 def _csv_record(path, quantity: str, stretch: float = 1.0):
     """A σ-scheme record with noise (see test_calibrate) written to `path` as CSV, its times
     multiplied by `stretch` (1000: milliseconds given as seconds)."""
-    from percussim.solver.record import parse_record, record_to_csv
     from test_calibrate import other_setting_record
+
+    from percussim.solver.record import parse_record, record_to_csv
 
     record = other_setting_record(quantity)
     record["time"] = [t * stretch for t in record["time"]]
@@ -288,8 +289,9 @@ def _csv_record(path, quantity: str, stretch: float = 1.0):
 def test_a_calibration_from_a_csv_file_gives_the_local_fit(api, tmp_path):
     """The client reads the CSV record, the service's workers fit it: the same fit, number for
     number, as `percussim.calibrate` here (both are deterministic: a seeded global stage)."""
-    from percussim.solver.calibrate import calibrate
     from test_calibrate import BOUNDS, TRUE, start_case
+
+    from percussim.solver.calibrate import calibrate
 
     names = ("contact.stiffness", "medium.stiffness")
     request = {

@@ -2,9 +2,10 @@
 and a streamed run's memory stays bounded."""
 
 import numpy as np
-import percussim.solver.controller as controller
 import pytest
 from conftest import BASE_CASE, merge
+
+import percussim.solver.controller as controller
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.errors import Cancelled

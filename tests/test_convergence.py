@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from conftest import merge
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 

@@ -431,7 +431,7 @@ def test_the_http_health_checks_pass_on_200_and_fail_otherwise(final, api_stand_
 
 
 def test_the_worker_health_check_follows_its_heartbeat(tmp_path):
-    from percussim.worker.store import WorkerRegistry
+    from percussim.common.store import WorkerRegistry
 
     test = healthcheck_test(yaml.safe_load(COMPOSE.read_text())["services"]["worker"])
     assert test[:3] == ["CMD", "python", "-c"]

@@ -7,10 +7,11 @@ fields with other quadratures, so a wrong term in the kernel's audit cannot hide
 import numpy as np
 import pytest
 from conftest import BASE_CASE, merge
+from scipy.integrate import trapezoid
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import tool_area
-from scipy.integrate import trapezoid
 
 DAMPED_DRIVEN = merge(
     BASE_CASE,

@@ -14,6 +14,7 @@ import math
 import numpy as np
 import pytest
 from conftest import BASE_CASE, merge
+
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.simulate import simulate
 

@@ -15,6 +15,7 @@ import h5py
 import pytest
 from conftest import CHATTERS, merge, report
 from live_stack import RedisServer, Stack, children, command_line, wait_for
+
 from percussim.solver.presets import preset_json
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports

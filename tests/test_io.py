@@ -8,11 +8,12 @@ from pathlib import Path
 
 import h5py
 import numpy as np
-import percussim.solver.controller as controller
-import percussim.solver.io as io
 import pytest
 from closed_forms import drilling
 from conftest import BASE_CASE, merge
+
+import percussim.solver.controller as controller
+import percussim.solver.io as io
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.errors import Cancelled

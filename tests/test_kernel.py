@@ -8,11 +8,12 @@ vectorised pass, the extreme's node found in its block) against NumPy's sums, mi
 
 import numpy as np
 import pytest
+from scipy.linalg import solve_banded
+
 from percussim.solver import kernel as K
 from percussim.solver.controller import tool_on
 from percussim.solver.grid import make_grid
 from percussim.solver.presets import load_preset
-from scipy.linalg import solve_banded
 
 RNG = np.random.default_rng(7)
 

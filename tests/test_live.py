@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 from conftest import merge
 from live_stack import Stack, redis_server, wait_for
+
 from percussim.solver.case import parse_case
 from percussim.solver.presets import load_preset, preset_json
 from percussim.solver.simulate import simulate

@@ -5,12 +5,13 @@ import math
 import numpy as np
 import pytest
 from conftest import BASE_CASE, STEEL, merge
+from scipy.integrate import trapezoid
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import HISTORY_PATHS, simulate_rod
 from percussim.solver.errors import Cancelled
 from percussim.solver.grid import tool_mass
 from percussim.solver.lumped import NO_FIELDS_WARNING, simulate_lumped
-from scipy.integrate import trapezoid
 
 
 def relative(value: float, reference: float) -> float:

@@ -10,6 +10,7 @@ odd instants; one to several contacts.
 """
 
 import pytest
+
 from percussim.solver.accuracy import estimated_values
 from percussim.solver.case import parse_case
 from percussim.solver.matrix import converged_reference, draw_cases

@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 from closed_forms import MEDIUM_FINE as FINE
 from closed_forms import SOIL_RESISTANCE, lundberg, lundberg_optimum, rock_case, rock_penetration, smith_set, soil_case
-from percussim.solver.case import CaseError
 
 import percussim
+from percussim.solver.case import CaseError
 
 
 def test_lundbergs_optimum():

@@ -7,11 +7,11 @@ import math
 
 import pytest
 from closed_forms import AREA, lundberg_optimum, matched_tool_case, passed_share
+
+from percussim.cli import main
 from percussim.solver.case import CaseError
 from percussim.solver.optimize import optimize
 from percussim.solver.presets import preset_json
-
-from percussim.cli import main
 
 ROCK_K = 5e8
 

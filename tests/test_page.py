@@ -13,8 +13,9 @@ import pytest
 from browser import HDF5_SIGNATURE, KEY, LONG, case_in_page, drawn, fill_json, shown, shown_job
 from closed_forms import drilling
 from conftest import merge, report
-from percussim.solver.presets import preset_json
 from playwright.sync_api import Page, expect
+
+from percussim.solver.presets import preset_json
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -173,8 +174,9 @@ def test_a_calibration_from_an_uploaded_record_shows_its_fit(page, stack, tmp_pa
     """A CSV record chosen from disk, the form's two stiffnesses: the page shows the service's fit
     (values, standard errors, bounds, correlation, the overlay plot) and loads the fitted case; a
     record's bad sample is named with its line in the file, a file that is no record is not sent."""
-    from percussim.solver.record import parse_record, record_to_csv
     from test_calibrate import BOUNDS, other_setting_record, start_case
+
+    from percussim.solver.record import parse_record, record_to_csv
 
     names = ("contact.stiffness", "medium.stiffness")
     fill_json(page, json.dumps(start_case(names), indent=2))
@@ -237,6 +239,7 @@ def test_an_evenly_sampled_triggered_record_is_fitted_with_its_time_offset(page,
     start and rate, and shows the fitted time_offset with its standard error beside the
     striker's velocity."""
     from closed_forms import Hopkinson as H
+
     from percussim.solver.record import record_from_csv
 
     text, offset = H.triggered_record()

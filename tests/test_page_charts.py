@@ -13,8 +13,9 @@ from pathlib import Path
 import pytest
 from browser import shown
 from conftest import merge
-from percussim.solver.presets import preset_json
 from playwright.sync_api import Page, expect
+
+from percussim.solver.presets import preset_json
 
 pytestmark = pytest.mark.slow  # a live stack and a browser
 

@@ -10,6 +10,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+
 from percussim.solver.case import CaseError, load_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import wave_speed

@@ -6,11 +6,12 @@ with a JSONDecodeError and the job was lost)."""
 import json
 import os
 
-import percussim.worker.queue_files as queue_files
 import pytest
 from kombu import Connection
+
+import percussim.common.queue_files as queue_files
+from percussim.common.settings import Settings
 from percussim.worker.app import make_app
-from percussim.worker.settings import Settings
 
 
 @pytest.fixture
@@ -18,7 +19,7 @@ def connection(tmp_path):
     folder = str(tmp_path)
     with Connection(
         "filesystem://",
-        transport="percussim.worker.queue_files:Transport",
+        transport="percussim.common.queue_files:Transport",
         transport_options={"data_folder_in": folder, "data_folder_out": folder, "control_folder": folder},
     ) as c:
         yield c
@@ -38,7 +39,7 @@ def test_a_message_is_renamed_into_the_queue_only_once_written(connection, tmp_p
         )
         replace(source, target)
 
-    monkeypatch.setattr(os, "replace", watched)  # as worker.store.write_atomic calls it
+    monkeypatch.setattr(os, "replace", watched)  # as common.store.write_atomic calls it
     with connection.SimpleQueue("jobs") as queue:
         queue.put({"job": "abc"})
         message = queue.get(timeout=1)

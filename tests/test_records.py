@@ -13,14 +13,15 @@ from datetime import UTC, datetime, timedelta
 import pytest
 from conftest import BASE_CASE, merge, report
 from fastapi.testclient import TestClient
+from sqlalchemy import text
+
+from percussim.common.database import _open, database
+from percussim.common.metrics import job_observations
+from percussim.common.settings import Settings
+from percussim.common.store import CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDED, JobStore, SweepStore, UnknownJob
 from percussim.service.app import create_app
 from percussim.service.retention import delete_expired
 from percussim.solver.simulate import simulate
-from percussim.worker.database import _open, database
-from percussim.worker.metrics import job_observations
-from percussim.worker.settings import Settings
-from percussim.worker.store import CANCELLED, FAILED, QUEUED, RUNNING, SUCCEEDED, JobStore, SweepStore, UnknownJob
-from sqlalchemy import text
 
 SUMMARY = json.dumps({"peak_contact_force": {"value": 1.0}})
 

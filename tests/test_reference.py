@@ -3,6 +3,7 @@
 import math
 
 import numpy as np
+
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 

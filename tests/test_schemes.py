@@ -5,9 +5,10 @@ import math
 from pathlib import Path
 
 import numpy as np
-import percussim.solver.grid as grid_module
 import pytest
 from conftest import BASE_CASE, merge
+
+import percussim.solver.grid as grid_module
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import resolve_numerics

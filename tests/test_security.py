@@ -8,9 +8,10 @@ import os
 import pytest
 from conftest import BASE_CASE, merge
 from fastapi.testclient import TestClient
+
+from percussim.common.settings import Settings
 from percussim.service.app import create_app
 from percussim.solver.presets import preset_json
-from percussim.worker.settings import Settings
 
 # Only what a test sets: nothing from the caller's shell.
 pytestmark = pytest.mark.usefixtures("clean_environment")

@@ -11,18 +11,19 @@ import math
 
 import h5py
 import numpy as np
-import percussim.solver.series as series_module
 import pytest
 from closed_forms import drilling
 from conftest import BASE_CASE, merge, succeeded_job
 from fastapi.testclient import TestClient
+
+import percussim.solver.series as series_module
+from percussim.common.store import JobStore
 from percussim.solver.case import parse_case
 from percussim.solver.io import write_result
 from percussim.solver.plots import NotAvailable
 from percussim.solver.presets import preset_json
 from percussim.solver.series import SERIES, UnknownSeries, csv_chunks, dumps, problems, series
 from percussim.solver.simulate import simulate
-from percussim.worker.store import JobStore
 
 
 def _write(folder, name: str, case: dict) -> str:

@@ -12,14 +12,15 @@ import time
 import pytest
 from conftest import BASE_CASE, merge
 from fastapi.testclient import TestClient
+
+from percussim.common.broker import queue_folder
+from percussim.common.settings import Settings
+from percussim.common.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 from percussim.service.app import create_app
 from percussim.service.main import MAX_ATTEMPTS, queue_again, restore_queue
 from percussim.service.queue import JobQueue
 from percussim.solver.presets import PRESETS_ENV, preset_json, preset_names
 from percussim.solver.simulate import simulate
-from percussim.worker.broker import queue_folder
-from percussim.worker.settings import Settings
-from percussim.worker.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 
 # Only what a test sets: nothing from the caller's shell.
 pytestmark = pytest.mark.usefixtures("clean_environment")

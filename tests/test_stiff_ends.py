@@ -4,6 +4,7 @@ contacts that must not chatter, and boundary forces recorded as the scheme appli
 import numpy as np
 import pytest
 from conftest import merge
+
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.characteristics import solve
 from percussim.solver.presets import preset_json

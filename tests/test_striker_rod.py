@@ -32,9 +32,9 @@ from closed_forms import (
     stepped_piston_case,
 )
 from closed_forms import PISTON_FINE as FINE
-from percussim.solver.case import CaseError
 
 import percussim
+from percussim.solver.case import CaseError
 
 
 def force_at(result, fraction: float) -> float:

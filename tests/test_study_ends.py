@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+
 from percussim.solver.calibrate import calibrate
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod

@@ -2,9 +2,9 @@
 
 import pytest
 from conftest import duration_only
-from percussim.solver.summary import Summary
 
 import percussim
+from percussim.solver.summary import Summary
 
 
 @pytest.mark.parametrize(

@@ -1,5 +1,5 @@
-"""percussim.worker: the queue worker (Celery app, the job task) and what the API and the workers
-share: the results store (`store`) and the settings (`settings`)."""
+"""percussim.worker: the queue worker, the Celery app (`app`) and its tasks (`tasks`: a job, a
+study's parts). What it shares with the API is `percussim.common`."""
 
 # Installed as percussim.worker: see solver/__init__.py for why no other name is allowed.
 if __name__ != "percussim.worker":

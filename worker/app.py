@@ -1,4 +1,4 @@
-"""The Celery app, configured from the environment (`worker.settings`).
+"""The Celery app, configured from the environment (`common.settings`).
 
 Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
 delivered again; each worker process takes one job at a time.
@@ -11,9 +11,9 @@ import threading
 from celery import Celery
 from celery.signals import worker_init, worker_ready, worker_shutdown
 
-from .broker import broker_config, queue_folder
-from .settings import Settings, settings
-from .store import WorkerRegistry
+from percussim.common.broker import broker_config, queue_folder
+from percussim.common.settings import Settings, settings
+from percussim.common.store import WorkerRegistry
 
 HEARTBEAT_SECONDS = 5.0
 

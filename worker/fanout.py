@@ -21,9 +21,8 @@ import time
 from collections.abc import Callable
 from pathlib import Path
 
+from percussim.common.store import write_atomic
 from percussim.solver.evaluate import Batch, LocalEvaluator, evaluate_batch, split
-
-from .store import write_atomic
 
 PARTS_PER_WORKER = 2  # parts a batch is cut into, per worker that may take one
 POLL_SECONDS = 0.02

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import socket
 
-from .settings import settings
+from percussim.common.settings import settings
 
 
 def run_worker(concurrency: int = 1, loglevel: str = "info", name: str | None = None) -> None:

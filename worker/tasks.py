@@ -15,20 +15,11 @@ from collections.abc import Callable
 from typing import TypeVar
 
 from celery.exceptions import Reject
-from percussim.solver.calibrate import calibrate
-from percussim.solver.case import CaseError, parse_case
-from percussim.solver.errors import Cancelled, NumericalFailure
-from percussim.solver.io import remove_partial
-from percussim.solver.optimize import optimize
-from percussim.solver.simulate import simulate
-from percussim.solver.study_plots import render_study
 
-from .app import app
-from .broker import EVALUATE_PART, RUN_JOB
-from .fanout import QueueEvaluator, take_part
-from .metrics import job_observations
-from .settings import settings
-from .store import (
+from percussim.common.broker import EVALUATE_PART, RUN_JOB
+from percussim.common.metrics import job_observations
+from percussim.common.settings import settings
+from percussim.common.store import (
     CALIBRATION,
     CANCELLED,
     FAILED,
@@ -40,6 +31,16 @@ from .store import (
     UnknownJob,
     WorkerRegistry,
 )
+from percussim.solver.calibrate import calibrate
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.errors import Cancelled, NumericalFailure
+from percussim.solver.io import remove_partial
+from percussim.solver.optimize import optimize
+from percussim.solver.simulate import simulate
+from percussim.solver.study_plots import render_study
+
+from .app import app
+from .fanout import QueueEvaluator, take_part
 
 T = TypeVar("T")
 

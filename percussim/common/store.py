@@ -1,4 +1,4 @@
-"""The results store: each job's record in the database (`worker.database`), its files in a folder
+"""The results store: each job's record in the database (`common.database`), its files in a folder
 of its own under the results folder, readable by any process.
 
     jobs/<id>/case.json     the case as submitted

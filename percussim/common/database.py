@@ -141,7 +141,7 @@ def migrate(engine: Engine, results_dir: Path) -> None:
     from alembic.config import Config
 
     config = Config()
-    config.set_main_option("script_location", "percussim.worker:migrations")
+    config.set_main_option("script_location", "percussim.common:migrations")
     with engine.connect() as connection, _migration_lock(connection):
         config.attributes |= {"connection": connection, "results_dir": results_dir}
         command.upgrade(config, "head")

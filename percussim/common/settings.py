@@ -13,9 +13,10 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any
 
-from percussim.solver.limits import Limits
 from pydantic import BeforeValidator, Field, ValidationError, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
+
+from percussim.solver.limits import Limits
 
 PREFIX = "PERCUSSIM_"
 

@@ -1,7 +1,7 @@
 """Where jobs are queued, for given settings: shared by the workers and the API, no side effects.
 
 With no broker URL the queue is Celery's filesystem transport under the results folder, each
-message written whole before a worker can see it (`worker.queue_files`); with one (Redis), the
+message written whole before a worker can see it (`common.queue_files`); with one (Redis), the
 transport options bound how long a dead connection can hold a caller.
 """
 
@@ -27,7 +27,7 @@ def broker_config(settings: Settings) -> dict:
         folder = str(queue_folder(settings))
         return {
             "broker_url": "filesystem://",
-            "broker_transport": "percussim.worker.queue_files:Transport",
+            "broker_transport": "percussim.common.queue_files:Transport",
             # The control folder defaults to ./control: keep everything under the results folder.
             "broker_transport_options": {
                 "data_folder_in": folder,

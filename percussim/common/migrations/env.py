@@ -1,4 +1,4 @@
-"""Alembic's environment: migrations run on the connection `percussim.worker.database.migrate`
+"""Alembic's environment: migrations run on the connection `percussim.common.database.migrate`
 hands over (no alembic.ini; the database is the service's own configuration)."""
 
 from alembic import context
