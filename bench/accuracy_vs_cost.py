@@ -27,13 +27,13 @@ import re
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
+from percussim.solver.accuracy import estimated_values
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.controller import simulate_rod, warm_up
+from percussim.solver.grid import resolve_numerics, wave_speed
+from percussim.solver.presets import preset_json
 
-from percussim.solver.accuracy import estimated_values  # noqa: E402
-from percussim.solver.case import CaseError, parse_case  # noqa: E402
-from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
-from percussim.solver.grid import resolve_numerics, wave_speed  # noqa: E402
-from percussim.solver.presets import preset_json  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 _spec = importlib.util.spec_from_file_location("matrix_bench", ROOT / "bench" / "matrix.py")
 matrix_bench = importlib.util.module_from_spec(_spec)

@@ -12,16 +12,11 @@ import) or not.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from live_stack import Stack, redis_server  # noqa: E402
-
-from percussim.solver.presets import preset_json  # noqa: E402
+from percussim.solver.presets import preset_json
+from percussim.testing.live_stack import Stack, redis_server
 
 
 def status_kb(pid: int, field: str) -> int:

@@ -23,13 +23,11 @@ import time
 from datetime import datetime
 from pathlib import Path
 
+from percussim.solver.controller import warm_up
+from percussim.solver.presets import preset_json
+from percussim.testing.live_stack import Stack, redis_server, wait_for
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from live_stack import Stack, redis_server, wait_for  # noqa: E402
-
-from percussim.solver.controller import warm_up  # noqa: E402
-from percussim.solver.presets import preset_json  # noqa: E402
 
 PROBE = """
 import json, time

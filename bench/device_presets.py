@@ -5,7 +5,7 @@ Lundberg's efficiency, and the pile blow after blow.
     .venv/bin/python bench/device_presets.py [--repeats 10] [--write]
 
 Times are the least of `--repeats` runs after compilation (`percussim.simulate`, one process).
-The closed forms (`solver/reference.py`): the rock drill's piston, of the rod's impedance Z, sends
+The closed forms (`percussim/testing/reference.py`): the rock drill's piston, of the rod's impedance Z, sends
 Z·v/2 for 2L_p/a, and Lundberg's bilinear rock gives the bit's peak force, the penetration and the
 rock's share of the energy (`LundbergRock`); the pile's ram on its linear cushion on a pile of
 impedance Z gives the first peak force before the toe's reflection is back (`CushionedImpact`);
@@ -18,17 +18,15 @@ from __future__ import annotations
 
 import argparse
 import re
-import sys
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
+from percussim.solver.presets import load_preset, preset_json
+from percussim.solver.simulate import run_sweep, simulate
+from percussim.solver.sweep import Sweep, variants
+from percussim.testing.reference import CushionedImpact, LundbergRock
 
-from percussim.solver.presets import load_preset, preset_json  # noqa: E402
-from percussim.solver.reference import CushionedImpact, LundbergRock  # noqa: E402
-from percussim.solver.simulate import run_sweep, simulate  # noqa: E402
-from percussim.solver.sweep import Sweep, variants  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 PISTON_LENGTHS = (0.1, 0.2, 0.3, 0.5, 0.8)
 PILE_BLOWS = 4

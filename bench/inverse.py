@@ -20,7 +20,7 @@ e. The striker–tool impedance ratio: an elastic striker (0.2 m) on a 1-m tool 
    matched dashpot; energy.transfer_efficiency over the striker's first pulse maximised over
    striker.area in [A/4, 4A] (A the tool's), against the rod–rod transmission 4r/(1 + r)², whose
    maximum is r = 1 (a budget of 200 runs, 2 processes).
-f. A split Hopkinson bar's incident pulse as a recorder writes it (tests/closed_forms.py,
+f. A split Hopkinson bar's incident pulse as a recorder writes it (percussim/testing/closed_forms.py,
    `Hopkinson`: made by d'Alembert's solution, not the kernel): 12.5 MHz from the trigger at 10% of
    the plateau, times of 3 significant digits, 1% noise. The striker's velocity and length, the
    contact's stiffness and the record's time_offset fitted (2 processes), against the truth and
@@ -46,21 +46,18 @@ from pathlib import Path
 
 import numpy as np
 
+from percussim.solver.calibrate import calibrate
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod, warm_up
+from percussim.solver.evaluate import LocalEvaluator
+from percussim.solver.optimize import optimize
+from percussim.solver.presets import preset_json
+from percussim.solver.record import record_from_csv
+from percussim.solver.study import OFFSET, fitted_bounds, parse_calibration
+from percussim.solver.study_plots import fit_figure
+from percussim.testing import closed_forms as CF
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
-
-import closed_forms as CF  # noqa: E402
-
-from percussim.solver.calibrate import calibrate  # noqa: E402
-from percussim.solver.case import parse_case  # noqa: E402
-from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
-from percussim.solver.evaluate import LocalEvaluator  # noqa: E402
-from percussim.solver.optimize import optimize  # noqa: E402
-from percussim.solver.presets import preset_json  # noqa: E402
-from percussim.solver.record import record_from_csv  # noqa: E402
-from percussim.solver.study import OFFSET, fitted_bounds, parse_calibration  # noqa: E402
-from percussim.solver.study_plots import fit_figure  # noqa: E402
 
 TRUE = {"contact.stiffness": 8e11, "medium.stiffness": 2e9, "medium.damping": 1e5}
 START = {"contact.stiffness": 1e11, "medium.stiffness": 5e8, "medium.damping": 4e5}

@@ -12,19 +12,16 @@ cache (run `bench/matrix.py --prepare` first on a fresh clone). `--write` writes
 
 from __future__ import annotations
 
-import sys
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
+import matrix as bench_matrix
+
+from percussim.solver import accuracy, adaptive, grid
+from percussim.solver.controller import warm_up
+from percussim.solver.matrix import draw_cases
+
 ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-sys.path.insert(0, str(ROOT / "bench"))
-
-import matrix as bench_matrix  # noqa: E402
-
-from percussim.solver import accuracy, adaptive, grid  # noqa: E402
-from percussim.solver.controller import warm_up  # noqa: E402
-from percussim.solver.matrix import draw_cases  # noqa: E402
 
 LOOSE = {"MIN_RUNS": 3, "SAFETY_FACTOR": 1.0, "UNCONFIRMED_ORDER": 2.0, "LOWEST_ORDER": 1.0}
 SETTINGS = [

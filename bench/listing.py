@@ -35,7 +35,6 @@ from __future__ import annotations
 import argparse
 import random
 import statistics
-import sys
 import tempfile
 import time
 from contextlib import ExitStack
@@ -43,16 +42,13 @@ from datetime import timedelta
 from pathlib import Path
 from urllib.parse import urlencode
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
+from sqlalchemy import and_, func, insert, select, text, true
 
-from live_stack import Stack, postgres_server  # noqa: E402
-from sqlalchemy import and_, func, insert, select, text, true  # noqa: E402
-
-from percussim.common.database import database  # noqa: E402
+from percussim.common.database import database
 from percussim.common.database import jobs as JOBS
-from percussim.common.settings import Settings  # noqa: E402
-from percussim.common.store import JobStore, new_id, now  # noqa: E402
+from percussim.common.settings import Settings
+from percussim.common.store import JobStore, new_id, now
+from percussim.testing.live_stack import Stack, postgres_server
 
 DATABASES = ("sqlite", "postgresql")
 SIZES = (1000, 10_000, 100_000)

@@ -21,21 +21,16 @@ from __future__ import annotations
 
 import argparse
 import statistics
-import sys
 import tempfile
 import time
 from contextlib import nullcontext
 from datetime import datetime
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from live_stack import Stack, postgres_server, redis_server  # noqa: E402
-
-from percussim.solver.controller import warm_up  # noqa: E402
-from percussim.solver.presets import load_preset, preset_json  # noqa: E402
-from percussim.solver.simulate import simulate  # noqa: E402
+from percussim.solver.controller import warm_up
+from percussim.solver.presets import load_preset, preset_json
+from percussim.solver.simulate import simulate
+from percussim.testing.live_stack import Stack, postgres_server, redis_server
 
 FINISHED = ("succeeded", "failed", "cancelled")
 

@@ -31,23 +31,21 @@ import json
 import math
 import re
 import statistics
-import sys
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT))
-
-from percussim.solver import characteristics, matrix  # noqa: E402
-from percussim.solver.accuracy import estimated_values  # noqa: E402
-from percussim.solver.adaptive import explicit_numerics  # noqa: E402
+from percussim.solver import characteristics, matrix
+from percussim.solver.accuracy import estimated_values
+from percussim.solver.adaptive import explicit_numerics
 from percussim.solver.case import parse_case
-from percussim.solver.controller import simulate_rod, warm_up  # noqa: E402
-from percussim.solver.grid import wave_speed  # noqa: E402
-from percussim.solver.matrix import converged_reference, draw_cases, reference_cells  # noqa: E402
-from percussim.solver.presets import preset_json, preset_names  # noqa: E402
-from percussim.solver.simulate import simulate  # noqa: E402
+from percussim.solver.controller import simulate_rod, warm_up
+from percussim.solver.grid import wave_speed
+from percussim.solver.matrix import converged_reference, draw_cases, reference_cells
+from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.simulate import simulate
+
+ROOT = Path(__file__).resolve().parents[1]
 
 TOLERANCES = (1e-2, 1e-3)
 CACHE = ROOT / "bench" / ".cache"

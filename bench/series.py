@@ -14,20 +14,15 @@ times, each from opening the file to the last byte.
 from __future__ import annotations
 
 import argparse
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from conftest import merge  # noqa: E402
-
-from percussim.solver.controller import warm_up  # noqa: E402
-from percussim.solver.presets import preset_json  # noqa: E402
-from percussim.solver.series import csv_chunks, dumps, series  # noqa: E402
-from percussim.solver.simulate import simulate  # noqa: E402
+from percussim.solver.controller import warm_up
+from percussim.solver.presets import preset_json
+from percussim.solver.series import csv_chunks, dumps, series
+from percussim.solver.simulate import simulate
+from percussim.testing import merge
 
 
 def best(make, repeat: int) -> tuple[int, float]:

@@ -11,12 +11,9 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
-from pathlib import Path
 
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.presets import load_preset
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:

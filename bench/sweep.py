@@ -15,21 +15,16 @@ from __future__ import annotations
 
 import argparse
 import math
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "tests"))
-
-from conftest import merge  # noqa: E402
-from live_stack import Stack, redis_server, wait_for  # noqa: E402
-
-from percussim.solver.controller import warm_up  # noqa: E402
-from percussim.solver.presets import preset_json  # noqa: E402
-from percussim.solver.simulate import run_sweep  # noqa: E402
-from percussim.solver.sweep import Sweep  # noqa: E402
+from percussim.solver.controller import warm_up
+from percussim.solver.presets import preset_json
+from percussim.solver.simulate import run_sweep
+from percussim.solver.sweep import Sweep
+from percussim.testing import merge
+from percussim.testing.live_stack import Stack, redis_server, wait_for
 
 CASES = {
     "preset numerics": preset_json("fig5"),

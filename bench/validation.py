@@ -15,7 +15,7 @@
    explicit scheme at Courant number 1 (tests/test_stiff_ends.py, tests/test_accuracy.py).
 6. The models beyond the paper against the closed forms of one-dimensional impact, each at fine
    numerics and at `numerics.tolerance` 0.01, with its energy residual, cells and run time; the
-   cases and formulas are the tests' own (tests/closed_forms.py): the elastic striker (the pulses
+   cases and formulas are the tests' own (percussim/testing/closed_forms.py): the elastic striker (the pulses
    of r = 0.5, 1, 2 and a fractional last cell; tests/test_striker_rod.py), bilinear rock against
    Lundberg's η(x) and Smith soil's set and loop (tests/test_media.py), and the set per blow, blow
    after blow (tests/test_blows.py).
@@ -28,7 +28,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import sys
 from pathlib import Path
 from time import perf_counter
 from typing import NamedTuple
@@ -41,9 +40,10 @@ from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import explicit_numerics
 from percussim.solver.lumped import simulate_lumped
 from percussim.solver.presets import load_preset
-from percussim.solver.reference import LinearImpact, observed_order
 from percussim.solver.result import Result
 from percussim.solver.simulate import simulate
+from percussim.testing import closed_forms as CF
+from percussim.testing.reference import LinearImpact, observed_order
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMES = ("paper", "sigma", "explicit")
@@ -276,8 +276,8 @@ def damped_contact() -> list[str]:
 
 def saint_venant() -> list[str]:
     from percussim.solver.characteristics import solve
-    from percussim.solver.reference import RigidImpact
     from percussim.solver.simulate import simulate
+    from percussim.testing.reference import RigidImpact
 
     ref = RigidImpact()
     case = parse_case(ref.case())
@@ -361,8 +361,8 @@ def stiff_contacts() -> list[str]:
 def recorded_force_report() -> list[str]:
     from percussim.solver.characteristics import solve
     from percussim.solver.presets import preset_json
-    from percussim.solver.reference import recorded_force
     from percussim.solver.simulate import simulate
+    from percussim.testing.reference import recorded_force
 
     data = preset_json("fig9")
     data["numerics"] = {"duration": data["numerics"]["duration"]}
@@ -377,10 +377,8 @@ def recorded_force_report() -> list[str]:
     ]
 
 
-# --- The models beyond the paper: the one-dimensional impacts of tests/closed_forms.py ------------
+# --- The models beyond the paper: the one-dimensional impacts of percussim/testing/closed_forms.py ------------
 
-sys.path.insert(0, str(ROOT / "tests"))  # tests/closed_forms.py: the cases and closed forms the tests assert
-import closed_forms as CF  # noqa: E402
 
 TOLERANCE = 0.01
 
@@ -1113,9 +1111,9 @@ def report(figures: dict[str, Figure]) -> str:
         "",
         "Produced by `bench/validation.py --write docs/validation.md`, tables and figures; rerun it to "
         "check every number. The test suite holds the solver to the same references with the same "
-        "code (`solver/reference.py`): `tests/test_reference.py`, `tests/test_schemes.py`, "
+        "code (`percussim/testing/reference.py`): `tests/test_reference.py`, `tests/test_schemes.py`, "
         "`tests/test_convergence.py`, `tests/test_lumped.py`, `tests/test_energy.py`; the models beyond "
-        "the paper, with the cases and closed forms of `tests/closed_forms.py`: "
+        "the paper, with the cases and closed forms of `percussim/testing/closed_forms.py`: "
         "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`. An energy "
         "residual is `energy.numerical` over the energy supplied.",
         "",

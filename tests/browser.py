@@ -10,8 +10,9 @@ from decimal import ROUND_HALF_UP, Decimal
 from pathlib import Path
 
 import pytest
-from live_stack import Stack
 from playwright.sync_api import Page, expect, sync_playwright
+
+from percussim.testing.live_stack import Stack
 
 KEY = "page-test-key"
 HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"

@@ -2,31 +2,18 @@
 
 from __future__ import annotations
 
-import copy
 import os
 import shutil
 
 import pytest
 
 from percussim.solver.presets import preset_json
-from percussim.solver.reference import LinearImpact
+from percussim.testing import merge
+from percussim.testing.reference import LinearImpact
 
 pytest_plugins = ["browser"]  # the job page's fixtures (stack, browser, open_page, page)
 
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
-
-
-def merge(base: dict, changes: dict) -> dict:
-    """`base` with `changes` merged in, recursively (a None value removes the key)."""
-    out = copy.deepcopy(base)
-    for key, value in changes.items():
-        if value is None:
-            out.pop(key, None)
-        elif isinstance(value, dict) and isinstance(out.get(key), dict):
-            out[key] = merge(out[key], value)
-        else:
-            out[key] = value
-    return out
 
 
 BASE_CASE = {
@@ -107,7 +94,7 @@ def duration_only(name: str) -> dict:
 def postgres():
     """One real PostgreSQL server for the session (the system's package); each test that wants a
     database asks it for a new one (`postgres.database()`)."""
-    from live_stack import postgres_server
+    from percussim.testing.live_stack import postgres_server
 
     with postgres_server() as server:
         yield server

@@ -15,8 +15,8 @@ from percussim.solver.case import CaseError, parse_case
 from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference
 from percussim.solver.presets import preset_json
-from percussim.solver.reference import LinearImpact, true_errors
 from percussim.solver.simulate import simulate
+from percussim.testing.reference import LinearImpact, true_errors
 
 
 def truth_of(case: dict) -> dict[str, float]:

@@ -18,9 +18,9 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from closed_forms import AREA, STEEL, V, anvil_case, linear_three_bodies, two_body_impact
 
 import percussim
+from percussim.testing.closed_forms import AREA, STEEL, V, anvil_case, linear_three_bodies, two_body_impact
 
 FINE = {"scheme": "explicit", "cells": 800}
 TOLERANCE = {"tolerance": 0.01}

@@ -4,9 +4,9 @@ carry their state into the next, each blow meets fresh rock, and the set per blo
 from __future__ import annotations
 
 import pytest
-from closed_forms import AREA, OPTIMUM, PISTON, STEEL, V, drilling, rock_penetration
 
 import percussim
+from percussim.testing.closed_forms import AREA, OPTIMUM, PISTON, STEEL, V, drilling, rock_penetration
 
 
 @pytest.fixture(scope="module")

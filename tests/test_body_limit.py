@@ -13,7 +13,8 @@ import httpx
 import pytest
 import requests
 from conftest import BASE_CASE, merge
-from live_stack import Stack
+
+from percussim.testing.live_stack import Stack
 
 pytestmark = pytest.mark.slow  # a live server
 

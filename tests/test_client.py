@@ -16,7 +16,6 @@ import httpx
 import numpy as np
 import pytest
 from conftest import CHATTERS, merge
-from live_stack import ROOT, Stack, wait_for
 from test_cli import _percussim
 from test_live import LONG
 
@@ -27,6 +26,7 @@ from percussim.solver.presets import load_preset, preset_json
 from percussim.solver.record import read_record
 from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import COLUMNS, Sweep
+from percussim.testing.live_stack import ROOT, Stack, wait_for
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

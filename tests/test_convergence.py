@@ -6,10 +6,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from conftest import merge
 
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
+from percussim.testing import merge
 
 TAPERED = json.loads((Path(__file__).parent / "cases" / "tapered_hertz.json").read_text())
 WAVE_SPEED = math.sqrt(2.1e11 / 7800.0)

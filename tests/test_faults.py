@@ -14,9 +14,9 @@ import time
 import h5py
 import pytest
 from conftest import CHATTERS, merge, report
-from live_stack import RedisServer, Stack, children, command_line, wait_for
 
 from percussim.solver.presets import preset_json
+from percussim.testing.live_stack import RedisServer, Stack, children, command_line, wait_for
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

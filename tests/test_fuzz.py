@@ -17,7 +17,8 @@ from conftest import BASE_CASE, report
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 from hypothesis.errors import Unsatisfiable
-from live_stack import Stack
+
+from percussim.testing.live_stack import Stack
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

@@ -9,7 +9,6 @@ from pathlib import Path
 import h5py
 import numpy as np
 import pytest
-from closed_forms import drilling
 from conftest import BASE_CASE, merge
 
 import percussim.solver.controller as controller
@@ -19,6 +18,7 @@ from percussim.solver.controller import simulate_rod
 from percussim.solver.errors import Cancelled
 from percussim.solver.io import read_result, remove_partial, write_result
 from percussim.solver.simulate import simulate
+from percussim.testing.closed_forms import drilling
 
 HDF5_DOC = Path(__file__).resolve().parents[1] / "docs" / "hdf5.md"
 CASE = merge(

@@ -1,5 +1,6 @@
 """The layers point down: percussim (API, command line, client) → service and worker, side by side
-→ common (what they share) → solver, and what validates input loads no kernel."""
+→ common (what they share) → solver, and what validates input loads no kernel. percussim.testing
+(the tests' and benches' references and live stack) stands beside them: none imports it."""
 
 from __future__ import annotations
 
@@ -11,16 +12,31 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-ABOVE_SOLVER = ("percussim.common", "percussim.service", "percussim.worker", "percussim.cli", "percussim.client")
+ABOVE_SOLVER = (
+    "percussim.common",
+    "percussim.service",
+    "percussim.worker",
+    "percussim.cli",
+    "percussim.client",
+    "percussim.testing",
+)
 # Each folder, the package it installs as, and the packages it may not import.
 LAYERS = {
     "solver": ("percussim.solver", (*ABOVE_SOLVER, "fastapi", "celery", "starlette", "sqlalchemy")),
     "percussim/common": (
         "percussim.common",
-        ("percussim.service", "percussim.worker", "percussim.cli", "percussim.client", "fastapi", "celery"),
+        (
+            "percussim.service",
+            "percussim.worker",
+            "percussim.cli",
+            "percussim.client",
+            "percussim.testing",
+            "fastapi",
+            "celery",
+        ),
     ),
-    "worker": ("percussim.worker", ("percussim.service", "percussim.cli", "fastapi")),
-    "service": ("percussim.service", ("percussim.worker", "percussim.cli")),
+    "worker": ("percussim.worker", ("percussim.service", "percussim.cli", "percussim.testing", "fastapi")),
+    "service": ("percussim.service", ("percussim.worker", "percussim.cli", "percussim.testing")),
 }
 
 

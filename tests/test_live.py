@@ -12,12 +12,12 @@ from datetime import datetime
 import h5py
 import numpy as np
 import pytest
-from conftest import merge
-from live_stack import Stack, redis_server, wait_for
 
 from percussim.solver.case import parse_case
 from percussim.solver.presets import load_preset, preset_json
 from percussim.solver.simulate import simulate
+from percussim.testing import merge
+from percussim.testing.live_stack import Stack, redis_server, wait_for
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

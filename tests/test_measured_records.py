@@ -10,7 +10,6 @@ import math
 
 import numpy as np
 import pytest
-from closed_forms import Hopkinson as H
 
 from percussim.cli import main
 from percussim.solver.calibrate import calibrate
@@ -26,6 +25,7 @@ from percussim.solver.record import (
     record_to_csv,
 )
 from percussim.solver.study import OFFSET, check_calibration, fitted_bounds, parse_calibration
+from percussim.testing.closed_forms import Hopkinson as H
 
 
 def test_the_closed_form_pulse_is_the_kernels_on_a_fine_grid():

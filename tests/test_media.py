@@ -15,11 +15,19 @@ import math
 
 import numpy as np
 import pytest
-from closed_forms import MEDIUM_FINE as FINE
-from closed_forms import SOIL_RESISTANCE, lundberg, lundberg_optimum, rock_case, rock_penetration, smith_set, soil_case
 
 import percussim
 from percussim.solver.case import CaseError
+from percussim.testing.closed_forms import MEDIUM_FINE as FINE
+from percussim.testing.closed_forms import (
+    SOIL_RESISTANCE,
+    lundberg,
+    lundberg_optimum,
+    rock_case,
+    rock_penetration,
+    smith_set,
+    soil_case,
+)
 
 
 def test_lundbergs_optimum():

@@ -6,12 +6,12 @@ import json
 import math
 
 import pytest
-from closed_forms import AREA, lundberg_optimum, matched_tool_case, passed_share
 
 from percussim.cli import main
 from percussim.solver.case import CaseError
 from percussim.solver.optimize import optimize
 from percussim.solver.presets import preset_json
+from percussim.testing.closed_forms import AREA, lundberg_optimum, matched_tool_case, passed_share
 
 ROCK_K = 5e8
 
@@ -32,7 +32,7 @@ def short_rock_drill() -> dict:
 
 def lundberg_optimal_length(case: dict) -> float:
     """The piston length that maximises Lundberg's efficiency 2(1 − e^−x)²/x·(1 − k/k_u), x =
-    k·(2L_p/a)/Z, from the stationary point of (1 − e^−x)²/x (tests/closed_forms.py)."""
+    k·(2L_p/a)/Z, from the stationary point of (1 − e^−x)²/x (percussim/testing/closed_forms.py)."""
     x, _ = lundberg_optimum()
     assert x == pytest.approx(1.2564, abs=1e-4)
     tool = case["tool"]

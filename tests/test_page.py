@@ -11,11 +11,11 @@ from pathlib import Path
 
 import pytest
 from browser import HDF5_SIGNATURE, KEY, LONG, case_in_page, drawn, fill_json, shown, shown_job
-from closed_forms import drilling
 from conftest import merge, report
 from playwright.sync_api import Page, expect
 
 from percussim.solver.presets import preset_json
+from percussim.testing.closed_forms import drilling
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 
@@ -238,9 +238,8 @@ def test_an_evenly_sampled_triggered_record_is_fitted_with_its_time_offset(page,
     its clock started by the pulse at the gauge. The page reads the rate, sends the record as its
     start and rate, and shows the fitted time_offset with its standard error beside the
     striker's velocity."""
-    from closed_forms import Hopkinson as H
-
     from percussim.solver.record import record_from_csv
+    from percussim.testing.closed_forms import Hopkinson as H
 
     text, offset = H.triggered_record()
     record = record_from_csv(text)

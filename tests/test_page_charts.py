@@ -12,10 +12,10 @@ from pathlib import Path
 
 import pytest
 from browser import shown
-from conftest import merge
 from playwright.sync_api import Page, expect
 
 from percussim.solver.presets import preset_json
+from percussim.testing import merge
 
 pytestmark = pytest.mark.slow  # a live stack and a browser
 

@@ -15,10 +15,8 @@ import xml.etree.ElementTree as ET
 import h5py
 import numpy as np
 import pytest
-from closed_forms import MEDIUM_FINE, drilling, soil_case
 from conftest import BASE_CASE, merge, succeeded_job
 from fastapi.testclient import TestClient
-from live_stack import ROOT
 
 import percussim.solver.plots as plots
 from percussim.cli import main
@@ -30,6 +28,8 @@ from percussim.solver.io import write_result
 from percussim.solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
+from percussim.testing.closed_forms import MEDIUM_FINE, drilling, soil_case
+from percussim.testing.live_stack import ROOT
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 # The result each plot is drawn from in the tests that draw every plot: the Fig. 9 preset's, but

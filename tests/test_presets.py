@@ -15,8 +15,8 @@ from percussim.solver.case import CaseError, load_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import wave_speed
 from percussim.solver.presets import PRESETS_ENV, load_preset, preset_json, preset_names
-from percussim.solver.reference import CushionedImpact, LundbergRock, impedance
 from percussim.solver.simulate import simulate
+from percussim.testing.reference import CushionedImpact, LundbergRock, impedance
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "solver" / "presets"  # as shipped
 PAPER_FIGURES = [f"fig{k}" for k in range(3, 10)]

@@ -12,7 +12,7 @@ import percussim.solver.grid as grid_module
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import resolve_numerics
-from percussim.solver.reference import observed_order
+from percussim.testing.reference import observed_order
 
 TAPERED = json.loads((Path(__file__).parent / "cases" / "tapered_hertz.json").read_text())
 LADDER = (25, 50, 100, 200, 400, 800)
@@ -20,7 +20,7 @@ LADDER = (25, 50, 100, 200, 400, 800)
 
 @pytest.fixture(scope="module")
 def reference_errors(request):
-    from percussim.solver.reference import LinearImpact
+    from percussim.testing.reference import LinearImpact
 
     ref = LinearImpact()
     table = {}
@@ -49,7 +49,7 @@ def test_maximum_stress_converges_at_second_order_where_a_reflected_front_meets_
     """With a stiff contact (ζ = 0.6) the stress peak travels down the rod into the front
     reflected at its free end: the largest stress lies next to a kink, which a refinement between
     nodes would overshoot by O(h)."""
-    from percussim.solver.reference import LinearImpact, true_errors
+    from percussim.testing.reference import LinearImpact, true_errors
 
     ref = LinearImpact(zeta=zeta, m1=m1)
     cells = (50, 100, 200, 400, 800)

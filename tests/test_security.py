@@ -119,7 +119,7 @@ def test_cors_answers_only_the_configured_origins(tmp_path):
 def test_keys_logs_and_paths_on_the_live_stack(tmp_path):
     """The same through the running server and a real worker: the key's job runs, another key
     cannot see it, no log holds a key, and encoded traversals reach no file."""
-    from live_stack import RedisServer, Stack
+    from percussim.testing.live_stack import RedisServer, Stack
 
     redis = RedisServer(tmp_path / "redis")
     redis.start()

@@ -12,7 +12,6 @@ import math
 import h5py
 import numpy as np
 import pytest
-from closed_forms import drilling
 from conftest import BASE_CASE, merge, succeeded_job
 from fastapi.testclient import TestClient
 
@@ -24,6 +23,7 @@ from percussim.solver.plots import NotAvailable
 from percussim.solver.presets import preset_json
 from percussim.solver.series import SERIES, UnknownSeries, csv_chunks, dumps, problems, series
 from percussim.solver.simulate import simulate
+from percussim.testing.closed_forms import drilling
 
 
 def _write(folder, name: str, case: dict) -> str:

@@ -3,13 +3,13 @@ contacts that must not chatter, and boundary forces recorded as the scheme appli
 
 import numpy as np
 import pytest
-from conftest import merge
 
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.characteristics import solve
 from percussim.solver.presets import preset_json
-from percussim.solver.reference import LinearImpact, RigidImpact, recorded_force, true_errors
 from percussim.solver.simulate import simulate
+from percussim.testing import merge
+from percussim.testing.reference import LinearImpact, RigidImpact, recorded_force, true_errors
 
 
 @pytest.fixture(scope="module")

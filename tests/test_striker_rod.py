@@ -16,7 +16,10 @@ from __future__ import annotations
 import h5py
 import numpy as np
 import pytest
-from closed_forms import (
+
+import percussim
+from percussim.solver.case import CaseError
+from percussim.testing.closed_forms import (
     AREA,
     PISTON,
     SPEED,
@@ -31,10 +34,7 @@ from closed_forms import (
     reflection,
     stepped_piston_case,
 )
-from closed_forms import PISTON_FINE as FINE
-
-import percussim
-from percussim.solver.case import CaseError
+from percussim.testing.closed_forms import PISTON_FINE as FINE
 
 
 def force_at(result, fraction: float) -> float:

@@ -8,15 +8,15 @@ import csv
 import json
 
 import pytest
-from conftest import merge
 
 from percussim.cli import main
 from percussim.solver.case import CaseError
 from percussim.solver.limits import Limits
 from percussim.solver.presets import preset_json
-from percussim.solver.reference import LundbergRock
 from percussim.solver.simulate import run_sweep, simulate
 from percussim.solver.sweep import Sweep, table_row, variants
+from percussim.testing import merge
+from percussim.testing.reference import LundbergRock
 
 FIG5 = preset_json("fig5")
 ROCK, PILE = preset_json("rock_drill"), preset_json("pile")

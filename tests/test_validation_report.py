@@ -9,7 +9,8 @@ import importlib.util
 import re
 
 import pytest
-from live_stack import ROOT
+
+from percussim.testing.live_stack import ROOT
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
 

@@ -28,6 +28,8 @@ import math
 import numpy as np
 from scipy.linalg import expm
 
+from .reference import LundbergRock
+
 STEEL = {"youngs_modulus": 2.1e11, "density": 7800.0}
 V = 10.0  # m/s, the piston at impact
 AREA = 1e-3  # m², the tool's (and a piston of r = 1)
@@ -161,9 +163,14 @@ def rock_stiffness(x: float) -> float:
     return x * Z / T
 
 
+def lundberg_rock(x: float, unloading: float = UNLOADING) -> LundbergRock:
+    """Lundberg's rock (`reference.LundbergRock`) at x = k·T/Z under the piston's wave F_i."""
+    return LundbergRock(INCIDENT, T, Z, rock_stiffness(x), unloading * rock_stiffness(x))
+
+
 def lundberg(x: float, unloading: float = UNLOADING) -> float:
     """Lundberg's η = 2(1 − e^(−x))²/x·(1 − k/k_u): the share of the wave's energy rock keeps."""
-    return 2.0 * (1.0 - math.exp(-x)) ** 2 / x * (1.0 - 1.0 / unloading)
+    return lundberg_rock(x, unloading).efficiency
 
 
 def lundberg_optimum() -> tuple[float, float]:
@@ -176,8 +183,8 @@ def lundberg_optimum() -> tuple[float, float]:
 
 def rock_penetration(x: float, unloading: float = UNLOADING) -> tuple[float, float]:
     """(deepest, permanent): F_max/k with F_max = 2F_i(1 − e^(−x)), and (1 − k/k_u) of it."""
-    deepest = 2.0 * INCIDENT * (1.0 - math.exp(-x)) / rock_stiffness(x)
-    return deepest, deepest * (1.0 - 1.0 / unloading)
+    rock = lundberg_rock(x, unloading)
+    return rock.max_penetration, rock.permanent_penetration
 
 
 def smith_set(resistance: float = SOIL_RESISTANCE, stiffness: float = SOIL_STIFFNESS) -> tuple[float, float]:

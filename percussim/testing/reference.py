@@ -20,8 +20,8 @@ from typing import NamedTuple
 
 import numpy as np
 
-from .accuracy import headline
-from .grid import wave_speed
+from percussim.solver.accuracy import headline
+from percussim.solver.grid import wave_speed
 
 
 class LinearImpact:
