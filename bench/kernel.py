@@ -377,8 +377,8 @@ def banded_run(s: Setup) -> dict[str, float]:
     z = solve_banded((1, 1), ab, unit)  # the tool's response to a unit contact force
 
     state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
-    (u, y, ends, layers), (extremes, contacts) = state, observed
-    energy = layers[0]  # the kernel's latest layer; this solve needs no other
+    (extremes, contacts), u, y, ends = observed, state.u, state.y, state.ends
+    energy = state.energy[0]  # the kernel's latest layer; this solve needs no other
     y[2] = -w1 * tau
     ends[K.S_IN_CONTACT] = 1.0
     initial_energy = 0.5 * m1 * w1 * w1
