@@ -1,0 +1,239 @@
+"""The energy audit: the tool's energy and stresses in one vectorised pass, the scheme's and the
+impedance ends' energy terms, and the largest energy the scheme made.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from llvmlite import ir
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from ..compiled import compiled
+from ..layout import (
+    E_ANVIL_KINETIC,
+    E_CONTACT_POTENTIAL,
+    E_DISSIPATED_CONTACT,
+    E_DISSIPATED_MEDIUM,
+    E_EXTERNAL_WORK,
+    E_LAUNCHED,
+    E_MEDIUM_PLASTIC,
+    E_MEDIUM_POTENTIAL,
+    E_STRIKER_KINETIC,
+    E_STRIKER_STRAIN,
+    E_TOOL_KINETIC,
+    E_TOOL_STRAIN,
+    E_WITHDRAWN,
+    X_ENERGY_EXCESS,
+)
+from .bundles import S_ANVIL_DISP, S_ANVIL_VELOCITY, S_BACK_ENERGY, S_POTENTIAL_BEFORE
+from .contact import contact_law
+from .working_end import medium_energy, medium_state
+
+
+def _llvm_binary(name):
+    """A Numba function `(float64, float64) → float64` that is the LLVM intrinsic `name`."""
+
+    @intrinsic
+    def call(typingctx, a, b):
+        def codegen(context, builder, signature, args):
+            double = ir.DoubleType()
+            fn = cgutils.get_or_insert_function(builder.module, ir.FunctionType(double, [double, double]), name)
+            return builder.call(fn, args)
+
+        return types.float64(types.float64, types.float64), codegen
+
+    return call
+
+
+# LLVM vectorises a min/max reduction written with these. Numba's `min`/`max` are a compare and a
+# select, which it does not, even under `fastmath` (Numba flags the compare, not the select).
+fmin = _llvm_binary("llvm.minnum.f64")
+fmax = _llvm_binary("llvm.maxnum.f64")
+
+# Nodes a block: enough for a block's vector reduction to pay, few for searching one to be cheap
+STRESS_BLOCK = 64
+
+
+# One pass for the energy and the stresses, in one vectorised loop; its fast-math flags:
+# - `reassoc`: sums of N terms may be reordered, which changes them by rounding only;
+# - `nnan`, `nsz`: min/max are plain vector instructions, without NaN or signed-zero fix-ups (LLVM
+#   vectorises them beside the sums only with both). Sound: a non-finite displacement makes the
+#   kinetic energy non-finite, which `advance` checks before it uses the stresses, and a stress of
+#   −0 or +0 is the same record.
+@compiled(fastmath={"contract", "reassoc", "nnan", "nsz"})
+def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_sigma, half_e_over_h):
+    """The tool's energy terms between the layers in rows `new`, `cur` of `u` and the interior
+    stress extremes of the layer in row `stressed`: `(Σ S_i·(u_i − uc_i)², Σ S_{i+½}·[σ(e_a² +
+    e_b²) + (1 − 2σ)·e_a·e_b], least stress, its block, greatest stress, its block)`.
+
+    The sums are twice the kinetic energy times τ²/(ρh) and twice the strain energy times h/E, e
+    the cell strains. The stresses are `½·E/h·(u_{i+1} − u_{i−1})` at the interior nodes of that
+    layer (±inf when it has none), each with the first node of the first block of `STRESS_BLOCK`
+    nodes that holds it: a loop that carries an extreme's index does not vectorise, so
+    `first_node` finds the node in the block, when it is wanted.
+    """
+    n = u.shape[1] - 1
+    one = np.uint64(1)
+    strain_cross = 1.0 - 2.0 * strain_sigma
+    du = u[new, 0] - u[cur, 0]
+    kinetic = node_area[0] * du * du
+    strain = 0.0
+    low, high = np.inf, -np.inf
+    low_start = high_start = 0
+    for start in range(1, n, STRESS_BLOCK):
+        lo, hi = low, high
+        for i in range(np.uint64(start), np.uint64(min(start + STRESS_BLOCK, n))):
+            du = u[new, i] - u[cur, i]
+            kinetic += node_area[i] * du * du
+            ea = u[new, i] - u[new, i - one]
+            eb = u[cur, i] - u[cur, i - one]
+            strain += area_mid[i - one] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
+            s = half_e_over_h * (u[stressed, i + one] - u[stressed, i - one])
+            lo = fmin(lo, s)
+            hi = fmax(hi, s)
+        if lo < low:
+            low, low_start = lo, start
+        if hi > high:
+            high, high_start = hi, start
+    du = u[new, n] - u[cur, n]
+    kinetic += node_area[n] * du * du
+    ea = u[new, n] - u[new, n - 1]
+    eb = u[cur, n] - u[cur, n - 1]
+    strain += area_mid[n - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
+    return kinetic, strain, low, low_start, high, high_start
+
+
+@compiled(fastmath={"nnan"})
+def first_node(u, row, half_e_over_h, start, value):
+    """The first node of the block from `start` where the stress is `value` (its last if none)."""
+    one = np.uint64(1)
+    last = min(start + STRESS_BLOCK, u.shape[1] - 1) - 1
+    first = last
+    for i in range(np.uint64(start), np.uint64(last + 1)):
+        found = half_e_over_h * (u[row, i + one] - u[row, i - one]) == value
+        first = min(first, np.int64(i) if found else last)
+    return first
+
+
+# --- Energy audit, extremes, recording ------------------------------------------------------------
+
+
+@compiled(inline="always")
+def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step):
+    """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
+    dissipates), into `energy[0]`; returns the balance (stored + dissipated − input: > 0 is energy
+    created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
+    the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
+    `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
+    u, y, ends, energy, _ = state
+    new, cur, old, ref = layer
+    delta = y[new] - u[new, 0]
+    n, tau = step.n, rod.time_step
+    _, spring_weight, damper_factor, _ = step.boundary
+    dy = y[new] - y[cur]
+    striker_kinetic = 0.5 * contact.striker_mass * dy * dy * step.inv_tau2
+    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
+        u, new, cur, rec, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    )
+    tool_kinetic *= step.kinetic_factor
+    tool_strain *= 0.5 * step.e_over_h
+    contact_pot = spring_weight * potential + (1.0 - spring_weight) * ends[S_POTENTIAL_BEFORE]
+    medium_pot = (
+        0.5 * medium.stiffness * (spring_weight * u[new, n] * u[new, n] + (1.0 - spring_weight) * u[cur, n] * u[cur, n])
+    )
+    energy[0, E_EXTERNAL_WORK] += r_n * 0.5 * (y[new] - y[old])
+    rate = damper_factor * (delta - overlaps.ref)
+    energy[0, E_DISSIPATED_CONTACT] += contact.damping * rate * rate * tau
+    rate = damper_factor * (u[new, n] - u[ref, n])
+    energy[0, E_DISSIPATED_MEDIUM] += medium.damping * rate * rate * tau
+    energy[0, E_STRIKER_KINETIC] = striker_kinetic
+    energy[0, E_TOOL_KINETIC] = tool_kinetic
+    energy[0, E_TOOL_STRAIN] = tool_strain
+    energy[0, E_CONTACT_POTENTIAL] = contact_pot
+    energy[0, E_MEDIUM_POTENTIAL] = medium_pot
+    balance = (
+        striker_kinetic
+        + tool_kinetic
+        + tool_strain
+        + contact_pot
+        + medium_pot
+        + energy[0, E_DISSIPATED_CONTACT]
+        + energy[0, E_DISSIPATED_MEDIUM]
+        - step.initial_energy
+        - energy[0, E_EXTERNAL_WORK]
+    )
+    return balance, (low, low_block, high, high_block)
+
+
+@compiled(inline="always")
+def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool, step):
+    """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
+    at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
+    tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
+    compares them at m − ½."""
+    u, y, ends, energy, striker_u = state
+    new, cur, _, _ = layer
+    n = step.n
+    work, dissipated, dissipated_far = flows
+    if anvil.present:
+        anvil_at = ends[S_ANVIL_DISP]
+        velocity_a = ends[S_ANVIL_VELOCITY]
+        potential = contact_law(y[new] - anvil_at, contact)[1] + contact_law(anvil_at - u[new, 0], anvil.contact)[1]
+        energy[0, E_ANVIL_KINETIC] = 0.5 * anvil.mass * velocity_a * velocity_a
+    else:
+        potential = contact_law(y[new] - u[new, 0], contact)[1]
+    stored, plastic = medium_energy(u[new, n], medium_state(ends), medium)
+    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
+        u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    )
+    energy[0, E_EXTERNAL_WORK] += work
+    energy[0, E_DISSIPATED_CONTACT] += dissipated
+    energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
+    energy[0, E_TOOL_KINETIC] = tool_kinetic * step.kinetic_factor
+    energy[0, E_TOOL_STRAIN] = tool_strain * 0.5 * step.e_over_h
+    energy[0, E_CONTACT_POTENTIAL] = potential
+    energy[0, E_MEDIUM_POTENTIAL] = stored
+    energy[0, E_MEDIUM_PLASTIC] = plastic
+    balance = (
+        energy[0, E_TOOL_KINETIC]
+        + energy[0, E_TOOL_STRAIN]
+        - step.initial_energy
+        - step.anvil_energy
+        + energy[0, E_WITHDRAWN]
+        - energy[0, E_LAUNCHED]
+    )
+    if striker.elastic:
+        s_tool, s_rod = striker.tool, striker.rod
+        e_over_h = s_rod.youngs_modulus / s_rod.cell_length
+        kinetic, strain, _, _, _, _ = tool_energy_and_stresses(
+            striker_u, new, cur, new, s_tool.node_area, s_tool.area_mid, step.strain_sigma, 0.5 * e_over_h
+        )
+        energy[0, E_STRIKER_KINETIC] = kinetic * 0.5 * s_rod.density * s_rod.cell_length * step.inv_tau2
+        energy[0, E_STRIKER_STRAIN] = strain * 0.5 * e_over_h + ends[S_BACK_ENERGY]
+        balance += energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN]
+    else:
+        energy[0, E_STRIKER_KINETIC] = 0.5 * contact.striker_mass * velocity * velocity
+        balance += 0.5 * (energy[0, E_STRIKER_KINETIC] + energy[1, E_STRIKER_KINETIC])
+    for slot in (
+        E_CONTACT_POTENTIAL,
+        E_MEDIUM_POTENTIAL,
+        E_MEDIUM_PLASTIC,
+        E_ANVIL_KINETIC,
+        E_DISSIPATED_CONTACT,
+        E_DISSIPATED_MEDIUM,
+    ):
+        balance += 0.5 * (energy[0, slot] + energy[1, slot])
+    balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
+    return balance, (low, low_block, high, high_block)
+
+
+@compiled(inline="always")
+def track_energy_excess(extremes, balance):
+    """Whether the energy balance is finite; the largest energy the scheme created so far."""
+    if not abs(balance) < 1e300:
+        return False
+    if balance > extremes[X_ENERGY_EXCESS]:
+        extremes[X_ENERGY_EXCESS] = balance
+    return True

@@ -1,0 +1,162 @@
+"""What a step takes and carries, by name: the force and medium kinds, the ends' slots
+(`S_…`), the named bundles `advance` takes (`Tool`, `ToolRows`, `Rod`, `Weights`, `Contact`,
+`Medium`, `ForceLaw`, `Striker`, `Anvil`, `State`, `Observed`, `Recorders`) and those within a
+step, and the state before a run.
+"""
+
+from __future__ import annotations
+
+from collections import namedtuple
+
+import numpy as np
+
+from ..compiled import compiled
+from ..layout import ENERGY_SLOTS, new_extremes
+
+# Force kinds (`force_kind`)
+FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
+# Medium kinds (`Medium.kind`)
+MEDIUM_LINEAR, MEDIUM_BILINEAR, MEDIUM_SMITH = 0, 1, 2
+
+# End slots (`ends[S_…]`): what the next step needs of the ends beyond the layers. Whether the
+# striker is in contact and since when; the end forces and the contact potential at the last
+# recorded layers (m−1, m−2, m−3); for the ends that integrate their own equations, the
+# striker's velocity and the incoming waves' displacements G at the struck end and at the
+# working end, at layers m−1, m−2
+S_IN_CONTACT, S_CONTACT_START = 0, 1
+S_FORCE_BEFORE, S_FORCE_BEFORE_THAT, S_FORCE_EARLIER = 2, 3, 4  # the contact force
+S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER = 5, 6, 7
+S_POTENTIAL_BEFORE, S_POTENTIAL_BEFORE_THAT = 8, 9  # contact potential Φ at layers m−1, m−2
+S_STRIKER_VELOCITY = 10
+S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
+# A medium that yields: its permanent penetration (the set) and, for rock, the deepest penetration
+# of the present loading, the surface it started from and the plastic work of the loadings before
+S_MEDIUM = 15  # 15 … 18: set, deepest, surface, spent (`MEDIUM_STATE` slots)
+MEDIUM_STATE = 4
+S_MEDIUM_SET = S_MEDIUM
+# An elastic striker: the incoming waves' displacements G at its face and at its back end (layers
+# m−1, m−2), the back end's incoming rate over the last two steps (mean and slope of each: the
+# free end returns it after the `back_delay`), and the contact's impulse so far
+S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE = 19, 20, 21, 22
+S_BACK_RATE = 23  # 23, 24: mean, slope of step m−1; 25, 26: of step m−2
+S_IMPULSE = 27
+S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at layer m − ½
+# An anvil: its displacement and velocity, and its force on the tool's end, at layer m − 1
+S_ANVIL_DISP, S_ANVIL_VELOCITY, S_ANVIL_FORCE = 29, 30, 31
+END_SLOTS = 32
+
+STATUS_OK, STATUS_NON_FINITE = 0, 1
+
+# What `advance` takes, as named bundles. Numba passes a namedtuple's fields as separate values and
+# reads them as registers: a bundle costs nothing in the step (typing them all costs about 3 µs a
+# call of `advance`, against ~10 ms of steps a call). Build them by keyword, as `solver.controller`
+# does: a bundle of another kind in the place of one does not compile.
+Tool = namedtuple("Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area")
+"""The tool on its grid (`solver.grid.Grid`): the operator's weights `lower_i`, `upper_i` of the
+neighbours (all 1 when `uniform`), the nodes' areas S̄_i (`node_area·ρh` is a node's mass: half a
+cell at the ends, 0 at a massless end), the cells' areas S_{i+½} and the areas at the struck and
+working ends (their stresses are the end forces over them)."""
+ToolRows = namedtuple("ToolRows", "p inv_den coefficient coefficient_product p_product")
+"""The tool's rows u_1 … u_N eliminated once (`factor_tool_rows`)."""
+Rod = namedtuple(
+    "Rod", "cell_length time_step courant_squared youngs_modulus density struck_end_stiffness working_end_stiffness"
+)
+"""The rod's constants: h, τ, r = (a·τ/h)², E, ρ and the end cells' stiffness k_0, k_N = S·E/h."""
+Weights = namedtuple("Weights", "new old centered end_masses impedance_ends")
+"""The scheme (`solver.schemes.Scheme`): the weights of layers n+1 and n−1 in the tool's operator
+(γ and 0 for the paper's, σ and σ for the σ-scheme, 0 and 0 explicit; layer n has the rest),
+whether the boundary terms are centred on layer n, whether the ends carry their half-cell masses,
+and whether each end integrates its own equations (the explicit scheme at Courant number 1)."""
+Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponent tension_stiffness damping impedance")
+"""The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
+contact and `c0·δ` in separation (c1, α, c0), its damper (b1), and the impedance ρ·a·S of the
+tool's end cell (N·s/m)."""
+Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness ultimate_resistance damping_factor")
+"""The working end: the medium's `MEDIUM_…` kind, its loading stiffness (c2, rock's k, or soil's
+R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading
+stiffness k_u, soil's ultimate resistance R_u and Smith damping J (s/m)."""
+ForceLaw = namedtuple("ForceLaw", "kind amplitude omega start duration")
+"""R(t) on the striker: a `FORCE_…` kind and its parameters."""
+Striker = namedtuple("Striker", "elastic tool rod impedance back_impedance mass back_delay")
+"""The striker as a rod (when `elastic`): its `Tool` and `Rod` on its own grid (node 0 its impact
+face, at Courant number 1 with the tool's time step), the impedances ρ·a·S of its face and back
+cells, its mass, and `back_delay`: the time a wave takes there and back over the part of the striker beyond
+its last node, less than 2τ (its length is rarely a whole number of cells)."""
+Anvil = namedtuple("Anvil", "present mass velocity contact")
+"""A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
+impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end
+impedance); the case's `Contact` is then the striker's with the anvil."""
+State = namedtuple("State", "u y ends energy striker")
+"""What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
+(3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
+the one before) and an elastic striker's layers (3 × (N_s+1); its node 0 is `y`)."""
+Observed = namedtuple("Observed", "extremes contacts")
+"""What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
+intervals (start, end; one row each, those beyond its rows counted only)."""
+Recorders = namedtuple(
+    "Recorders",
+    "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress",
+)
+"""Where a call records its layers: every `history_stride`-th to `history` (a column each) and
+`probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
+with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each)
+and an elastic striker's to `striker_u`/`striker_stress`; strides ≤ 0 keep nothing."""
+
+# Within a step
+Layers = namedtuple("Layers", "new cur old ref")
+"""The rows of `u` and `y` holding layers n+1, n, n−1, and the boundary terms' reference layer."""
+Overlaps = namedtuple("Overlaps", "cur old ref")
+"""The overlap δ = y − u_0 of layers n and n−1 and of the reference layer."""
+Boundary = namedtuple("Boundary", "end_weight spring_weight damper_factor back")
+"""How the end rows and the boundary terms weight the layers (`boundary_weights`)."""
+StepConstants = namedtuple(
+    "StepConstants",
+    "n weight_cur inv_tau2 m1_tau2 mass_0 mass_n boundary "
+    "lag strain_sigma e_over_h half_e_over_h "
+    "kinetic_factor initial_energy anvil_energy segments "
+    "explicit",
+)
+"""What every step derives from the bundles (`step_constants`): `initial_energy` the striker's at
+impact, `anvil_energy` the anvil's; `segments` is `segment_layout`'s."""
+Recorded = namedtuple("Recorded", "row time velocity contact_force medium_force struck_end_stress working_end_stress")
+"""A layer as it is recorded: its row of `u`, its time, the striker's velocity, the end forces the
+scheme applies there and the stresses they make at the ends (tension +)."""
+
+# Independent chains a recurrence along the tool is split into: enough to hide the multiply-add's
+# latency (4 cycles) behind the other chains' work. `sweep_toward_struck_end` and
+# `substitute_toward_working_end` are written out for this many.
+SEGMENTS = 4
+MIN_SEGMENT = 8  # shorter segments are not worth their carries: the tool is swept serially
+
+
+def new_state(cells: int, striker_cells: int = 0) -> State:
+    """The state before a run on `cells` cells, with an elastic striker on `striker_cells`
+    (`advance` sets layer 0 and the one before)."""
+    return State(
+        u=np.zeros((3, cells + 1)),
+        y=np.zeros(3),
+        ends=np.zeros(END_SLOTS),
+        energy=np.zeros((2, ENERGY_SLOTS)),
+        striker=np.zeros((3, striker_cells + 1)),
+    )
+
+
+def new_observed(max_contacts: int) -> Observed:
+    """Nothing observed yet, with room for `max_contacts` contact intervals."""
+    return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)))
+
+
+@compiled()
+def boundary_weights(weights, tau):
+    """How the end rows and the boundary terms of the scheme (`Weights`) weight the layers.
+
+    Returns `Boundary(end_weight, spring_weight, damper_factor, back)`: the end rows' weight of the
+    new layer in the tool's own stiffness (the interior's with end masses; 1 for quasi-static
+    massless ends); the boundary springs' weight of the new layer (the rest on the reference
+    layer); the dampers' rate factor (`1/(2τ)` centred, `1/τ` backward); how many layers before
+    the new one the boundary terms' reference layer lies (2: n−1 centred; 1: n for the paper).
+    """
+    end_weight = weights.new if weights.end_masses else 1.0
+    if weights.centered:
+        return Boundary(end_weight=end_weight, spring_weight=0.5, damper_factor=0.5 / tau, back=2)
+    return Boundary(end_weight=end_weight, spring_weight=1.0, damper_factor=1.0 / tau, back=1)

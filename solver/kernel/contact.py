@@ -1,0 +1,131 @@
+"""The contact and the external force: R(t), the contact law (Φ'(δ), Φ(δ)) and its stiffness,
+the difference quotient a step applies, and the safeguarded Newton solve of the overlap.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..compiled import compiled
+from .bundles import FORCE_ABS_SINE, FORCE_PULSE, FORCE_SINE
+
+
+@compiled(inline="always")
+def external_force(t, force):
+    """`R(t)` of the `ForceLaw`: P·sin(ωt), P·|sin(ωt)|, or P on [t1, t1 + Δt]."""
+    kind, amplitude, omega, start, duration = force
+    if kind == FORCE_SINE:
+        return amplitude * np.sin(omega * t)
+    if kind == FORCE_ABS_SINE:
+        return amplitude * abs(np.sin(omega * t))
+    if kind == FORCE_PULSE:
+        if start <= t <= start + duration:
+            return amplitude
+    return 0.0
+
+
+@compiled(inline="always")
+def contact_law(delta, contact):
+    """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
+    separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
+    for both, as on a small grid the contact solve is a large part of a step."""
+    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
+    if delta >= 0.0:
+        force = c1 * delta ** (alpha + 1.0)
+        return force, force * delta / (alpha + 2.0)
+    return c0 * delta, 0.5 * c0 * delta * delta
+
+
+@compiled(inline="always")
+def contact_spring(delta, contact):
+    """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
+    exponents without a power."""
+    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
+    if delta >= 0.0:
+        if alpha == 0.0:
+            return c1 * delta, c1
+        if alpha == 0.5:
+            root = math.sqrt(delta)
+            return c1 * delta * root, 1.5 * c1 * root
+        power = delta**alpha
+        return c1 * delta * power, (alpha + 1.0) * c1 * power
+    return c0 * delta, c0
+
+
+@compiled(inline="always")
+def quotient_force(delta, ref, ref_potential, contact):
+    """`(Φ(δ) − Φ_ref)/(δ − ref)` and its derivative in δ (the midpoint values when δ ≈ ref).
+
+    `Φ_ref` is Φ(ref) but for the state before impact, where no link acts yet and it is 0.
+    """
+    diff = delta - ref
+    if abs(diff) > 1e-7 * (abs(delta) + abs(ref)):
+        spring, potential = contact_law(delta, contact)
+        inverse = 1.0 / diff
+        f = (potential - ref_potential) * inverse
+        return f, (spring - f) * inverse
+    mid = 0.5 * (delta + ref)
+    spring, stiffness = contact_spring(mid, contact)
+    return spring, 0.5 * stiffness
+
+
+@compiled(inline="always")
+def bracketed_newton_step(x, g, slope, lo, hi, scale):
+    """One Newton step on an increasing g, g(x) = `g`, g'(x) = `slope`, within the bracket [lo, hi]
+    narrowed by the sign of g; a step that leaves it is replaced by bisection. Returns the new x,
+    the bracket, and whether the step or the bracket is within `scale`."""
+    if g > 0.0:
+        hi = x
+    else:
+        lo = x
+    x_new = x - g / slope
+    if not lo < x_new < hi:
+        x_new = 0.5 * (lo + hi)
+    return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
+
+
+@compiled()
+def solve_overlap(free, compliance, ref, ref_potential, guess, contact, damper):
+    """The new overlap δ of `δ + compliance·F(δ) = free`, `F(δ) = quotient(δ, ref) + damper·(δ − ref)`.
+
+    F increases with δ (Φ is convex), so the root is unique and lies between `free` and
+    `free − compliance·F(free)`, where `bracketed_newton_step` finds it.
+    """
+    f_free = quotient_force(free, ref, ref_potential, contact)[0] + damper * (free - ref)
+    other = free - compliance * f_free
+    lo, hi = min(free, other), max(free, other)
+    if lo == hi:
+        return free
+    x = min(max(guess, lo), hi)
+    scale = 1e-15 * (abs(lo) + abs(hi))
+    for _ in range(100):
+        f, df = quotient_force(x, ref, ref_potential, contact)
+        g = x + compliance * (f + damper * (x - ref)) - free
+        if g == 0.0:
+            return x
+        x, lo, hi, done = bracketed_newton_step(x, g, 1.0 + compliance * (df + damper), lo, hi, scale)
+        if done:
+            return x
+    return x
+
+
+@compiled(inline="always")
+def crossing(before_that, before, now):
+    """Where in the last step (0 … 1) the overlap crossed zero, on the parabola through its last
+    three values (a straight line when it has only two); third order, so the contact times' error
+    is the scheme's, not where the crossing fell between two layers."""
+    linear = before / (before - now)
+    if not (before_that == before_that):
+        return linear
+    a = 0.5 * (now + before_that) - before
+    b = 0.5 * (now - before_that)
+    disc = b * b - 4.0 * a * before
+    if a == 0.0 or disc < 0.0:
+        return linear
+    root = math.sqrt(disc)
+    for x in ((-b + root) / (2.0 * a), (-b - root) / (2.0 * a)):
+        if 0.0 <= x <= 1.0:
+            return x
+    return linear

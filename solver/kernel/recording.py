@@ -1,0 +1,301 @@
+"""What a run observes and keeps: the contact intervals, the extremes (forces, stresses, between
+layers at the ends), the history, probes and fields.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..compiled import compiled
+from ..layout import (
+    E_ANVIL_KINETIC,
+    E_CONTACT_POTENTIAL,
+    E_DISSIPATED_CONTACT,
+    E_DISSIPATED_MEDIUM,
+    E_EXTERNAL_WORK,
+    E_LAUNCHED,
+    E_MEDIUM_PLASTIC,
+    E_MEDIUM_POTENTIAL,
+    E_STRIKER_KINETIC,
+    E_STRIKER_STRAIN,
+    E_TOOL_KINETIC,
+    E_TOOL_STRAIN,
+    E_WITHDRAWN,
+    H_ANVIL_DISP,
+    H_ANVIL_FORCE,
+    H_ANVIL_KINETIC,
+    H_ANVIL_VEL,
+    H_CONTACT_FORCE,
+    H_CONTACT_POTENTIAL,
+    H_DISSIPATED_CONTACT,
+    H_DISSIPATED_MEDIUM,
+    H_EXTERNAL_FORCE,
+    H_EXTERNAL_WORK,
+    H_LAUNCHED,
+    H_MEDIUM_FORCE,
+    H_MEDIUM_PLASTIC,
+    H_MEDIUM_POTENTIAL,
+    H_OVERLAP,
+    H_PERMANENT_PENETRATION,
+    H_STRIKER_DISP,
+    H_STRIKER_KINETIC,
+    H_STRIKER_STRAIN,
+    H_STRIKER_VEL,
+    H_STRUCK_END,
+    H_TIME,
+    H_TOOL_KINETIC,
+    H_TOOL_STRAIN,
+    H_WITHDRAWN,
+    H_WORKING_END,
+    X_CO_IMPACT,
+    X_CONTACTS,
+    X_MAX_COMPRESSION,
+    X_MAX_TENSION,
+    X_MIN_CONTACT_STEPS,
+    X_PEAK_FORCE,
+    X_PEAK_FORCE_TIME,
+    X_REBOUND_VELOCITY,
+)
+from .audit import first_node
+from .bundles import (
+    S_ANVIL_DISP,
+    S_ANVIL_FORCE,
+    S_ANVIL_VELOCITY,
+    S_CONTACT_START,
+    S_FORCE_BEFORE,
+    S_FORCE_BEFORE_THAT,
+    S_FORCE_EARLIER,
+    S_IN_CONTACT,
+    S_MEDIUM_FORCE,
+    S_MEDIUM_FORCE_BEFORE,
+    S_MEDIUM_FORCE_EARLIER,
+    S_MEDIUM_SET,
+)
+from .contact import crossing, external_force
+
+
+@compiled(inline="always")
+def node_stress(u, recorded, i, step):
+    """`σ_i = E·∂u/∂x` (tension +) at node i of the `Recorded` layer: central inside; at the ends
+    the end force over the area."""
+    if i == 0:
+        return recorded.struck_end_stress
+    if i == step.n:
+        return recorded.working_end_stress
+    return 0.5 * step.e_over_h * (u[recorded.row, i + 1] - u[recorded.row, i - 1])
+
+
+@compiled(inline="always")
+def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
+    """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
+    contact); the first one to close sets the co-impact time and the rebound velocity."""
+    extremes, contacts = observed
+    in_contact = ends[S_IN_CONTACT] != 0.0
+    if in_contact and not into_contact:
+        k = int(extremes[X_CONTACTS])
+        if k < contacts.shape[0]:
+            contacts[k, 0] = ends[S_CONTACT_START]
+            contacts[k, 1] = t_cross
+        extremes[X_CONTACTS] = k + 1
+        steps = (t_cross - ends[S_CONTACT_START]) / tau
+        if steps < extremes[X_MIN_CONTACT_STEPS]:
+            extremes[X_MIN_CONTACT_STEPS] = steps
+        if k == 0:
+            extremes[X_CO_IMPACT] = t_cross
+            extremes[X_REBOUND_VELOCITY] = velocity
+        ends[S_IN_CONTACT] = 0.0
+    elif not in_contact and into_contact:
+        ends[S_IN_CONTACT] = 1.0
+        ends[S_CONTACT_START] = t_cross
+
+
+@compiled(inline="always")
+def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
+    """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
+    `Overlaps`: a change of sign placed on the parabola through the last three overlaps."""
+    if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
+        t_cross = t - tau + tau * crossing(overlaps.old if m >= 2 else np.nan, overlaps.cur, delta)
+        track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
+
+
+@compiled(inline="always")
+def vertex(earliest, before_that, before, now):
+    """The maximum between four equally spaced samples whose third is a strict maximum: the vertex
+    of the parabola through the last three, `(value, where it lies from the third sample in
+    steps)`, when the samples are a parabola's (their third difference small against the second:
+    a parabola fitted across a jump, such as a stiff link's unresolved rise, overshoots by a
+    fraction of the jump); else `(before, 0)`."""
+    second = now - 2.0 * before + before_that
+    third = now - 3.0 * before + 3.0 * before_that - earliest
+    if before >= before_that and before > now and abs(third) <= 0.5 * abs(second):
+        offset = 0.5 * (now - before_that) / -second
+        return before + 0.25 * (now - before_that) * offset, offset
+    return before, 0.0
+
+
+@compiled(inline="always")
+def track_end_extreme(extremes, slot, value, x, t):
+    if value > extremes[slot]:
+        extremes[slot] = value
+        extremes[slot + 1] = x
+        extremes[slot + 2] = t
+
+
+@compiled(inline="always")
+def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod, step):
+    """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
+    (largest contact force, its time), `end_range` (the force on the tool's struck end: largest,
+    its time, least, its time) and `working_range` (the medium force's, with their offsets from
+    the step's start)."""
+    f_max, t_max = contact_range
+    e_max, te_max, e_min, te_min = end_range
+    g_max, tg_max, g_min, tg_min = working_range
+    n, h, tau = step.n, rod.cell_length, rod.time_step
+    end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
+    if f_max > extremes[X_PEAK_FORCE]:
+        extremes[X_PEAK_FORCE] = f_max
+        extremes[X_PEAK_FORCE_TIME] = t_max
+    track_end_extreme(extremes, X_MAX_COMPRESSION, e_max / end_area_0, 0.0, te_max)
+    track_end_extreme(extremes, X_MAX_TENSION, -e_min / end_area_0, 0.0, te_min)
+    track_end_extreme(extremes, X_MAX_COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
+    track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
+
+
+@compiled(inline="always")
+def track_stress_extremes(extremes, u, recorded, interior, rod, step):
+    """The recorded layer's extreme stresses along the tool (`interior`: its interior nodes' least
+    and greatest stress with their blocks, `tool_energy_and_stresses`) against the records.
+
+    Not refined between nodes: next to a kink (a reflected front meeting the peak) a parabola
+    through three nodes overshoots by O(h), where the nodes' own error is O(h²)."""
+    low, low_block, high, high_block = interior
+    s0, sn = recorded.struck_end_stress, recorded.working_end_stress
+    s_low, s_high = min(s0, low, sn), max(s0, high, sn)
+    for peak, value, inside, block, slot in (
+        (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
+        (s_high, s_high, high, high_block, X_MAX_TENSION),
+    ):
+        if peak > extremes[slot]:
+            # Where, only for a new record (most layers set none): the first node of that
+            # stress, from the struck end.
+            if value == s0:
+                node = 0
+            elif value == inside:
+                node = first_node(u, recorded.row, step.half_e_over_h, block, value)
+            else:
+                node = step.n
+            extremes[slot] = peak
+            extremes[slot + 1] = node * rod.cell_length
+            extremes[slot + 2] = recorded.time
+
+
+@compiled(inline="always")
+def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_vertex):
+    """The peak contact force and the end stresses' extremes between layers, from the recorded
+    layer's end forces and those of the three layers before it (carried in `ends`); at the struck
+    end only when the contact force is the force on it (`struck_vertex`: not with an anvil,
+    whose substeps' extremes are all there is)."""
+    contact_force, medium_force = recorded.contact_force, recorded.medium_force
+    t_rec, n, h, tau = recorded.time, step.n, rod.cell_length, rod.time_step
+    end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
+    if contact_force > extremes[X_PEAK_FORCE]:
+        extremes[X_PEAK_FORCE] = contact_force
+        extremes[X_PEAK_FORCE_TIME] = t_rec
+    # Extremes of the end forces between layers: the vertex of the parabola through the last
+    # three, so that their error is the scheme's, not the sampling's.
+    f1, f2, f3 = ends[S_FORCE_BEFORE], ends[S_FORCE_BEFORE_THAT], ends[S_FORCE_EARLIER]
+    g1, g2, g3 = ends[S_MEDIUM_FORCE], ends[S_MEDIUM_FORCE_BEFORE], ends[S_MEDIUM_FORCE_EARLIER]
+    if m_rec >= 3 and struck_vertex:
+        top, offset = vertex(f3, f2, f1, contact_force)
+        when = t_rec - tau + offset * tau
+        if top > extremes[X_PEAK_FORCE]:
+            extremes[X_PEAK_FORCE] = top
+            extremes[X_PEAK_FORCE_TIME] = when
+        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_0, 0.0, when)
+        top, offset = vertex(-f3, -f2, -f1, -contact_force)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau)
+    if m_rec >= 3:
+        top, offset = vertex(g3, g2, g1, medium_force)
+        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+        top, offset = vertex(-g3, -g2, -g1, -medium_force)
+        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+    ends[S_FORCE_EARLIER] = f2
+    ends[S_FORCE_BEFORE_THAT] = f1
+    ends[S_FORCE_BEFORE] = contact_force
+    ends[S_MEDIUM_FORCE_EARLIER] = g2
+    ends[S_MEDIUM_FORCE_BEFORE] = g1
+    ends[S_MEDIUM_FORCE] = medium_force
+
+
+@compiled(inline="always")
+def record_history(recorders, column, state, recorded, m_rec, force, anvil, step):
+    """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
+    them; none yet for layer 0, whose energy is all the striker's)."""
+    history = recorders.history
+    u, y, _, energy, _ = state
+    rec, t_rec = recorded.row, recorded.time
+    history[H_TIME, column] = t_rec
+    history[H_STRIKER_DISP, column] = y[rec]
+    history[H_STRIKER_VEL, column] = recorded.velocity
+    history[H_STRUCK_END, column] = u[rec, 0]
+    history[H_WORKING_END, column] = u[rec, step.n]
+    history[H_CONTACT_FORCE, column] = recorded.contact_force
+    struck = state.ends[S_ANVIL_DISP] if anvil.present else u[rec, 0]  # what the striker meets
+    history[H_OVERLAP, column] = y[rec] - struck
+    history[H_MEDIUM_FORCE, column] = recorded.medium_force
+    history[H_EXTERNAL_FORCE, column] = external_force(t_rec, force)
+    history[H_EXTERNAL_WORK, column] = energy[0, E_EXTERNAL_WORK]
+    history[H_DISSIPATED_CONTACT, column] = energy[0, E_DISSIPATED_CONTACT]
+    history[H_DISSIPATED_MEDIUM, column] = energy[0, E_DISSIPATED_MEDIUM]
+    history[H_PERMANENT_PENETRATION, column] = state.ends[S_MEDIUM_SET]
+    history[H_STRIKER_STRAIN, column] = energy[0, E_STRIKER_STRAIN]
+    history[H_ANVIL_DISP, column] = state.ends[S_ANVIL_DISP]
+    history[H_ANVIL_VEL, column] = state.ends[S_ANVIL_VELOCITY]
+    history[H_ANVIL_FORCE, column] = state.ends[S_ANVIL_FORCE]
+    history[H_ANVIL_KINETIC, column] = energy[0, E_ANVIL_KINETIC]
+    history[H_LAUNCHED, column] = energy[0, E_LAUNCHED]
+    history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
+    if m_rec == 0:
+        history[H_STRIKER_KINETIC, column] = step.initial_energy
+        for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL, H_MEDIUM_PLASTIC):
+            history[c, column] = 0.0
+    else:
+        history[H_STRIKER_KINETIC, column] = energy[0, E_STRIKER_KINETIC]
+        history[H_TOOL_KINETIC, column] = energy[0, E_TOOL_KINETIC]
+        history[H_TOOL_STRAIN, column] = energy[0, E_TOOL_STRAIN]
+        history[H_CONTACT_POTENTIAL, column] = energy[0, E_CONTACT_POTENTIAL]
+        history[H_MEDIUM_POTENTIAL, column] = energy[0, E_MEDIUM_POTENTIAL]
+        history[H_MEDIUM_PLASTIC, column] = energy[0, E_MEDIUM_PLASTIC]
+
+
+@compiled(inline="always")
+def record_probes(recorders, row, u, recorded, step):
+    """The stress at each probe into `row` of `probes`: linear between its two nodes."""
+    for k in range(len(recorders.probe_node)):
+        j = recorders.probe_node[k]
+        w = recorders.probe_weight[k]
+        s = (1.0 - w) * node_stress(u, recorded, j, step)
+        if w > 0.0:
+            s += w * node_stress(u, recorded, j + 1, step)
+        recorders.probes[row, k] = s
+
+
+@compiled(inline="always")
+def record_fields(recorders, row, state, recorded, striker, step):
+    """The displacement and the stress along the tool into `row` of the fields, and along an
+    elastic striker: its x runs from its face away from the tool, so its stress is `−E·∂u/∂x`
+    (tension +; the contact force at its face, one-sided at its last node)."""
+    u, rec = state.u, recorded.row
+    for i in range(step.n + 1):
+        recorders.field_u[row, i] = u[rec, i]
+        recorders.field_stress[row, i] = node_stress(u, recorded, i, step)
+    if striker.elastic:
+        s_u, stress = state.striker, recorders.striker_stress
+        n_s = s_u.shape[1] - 1
+        e_over_h = striker.rod.youngs_modulus / striker.rod.cell_length
+        for i in range(n_s + 1):
+            recorders.striker_u[row, i] = s_u[rec, i]
+        stress[row, 0] = -recorded.contact_force / striker.tool.struck_end_area
+        for i in range(1, n_s):
+            stress[row, i] = -0.5 * e_over_h * (s_u[rec, i + 1] - s_u[rec, i - 1])
+        stress[row, n_s] = -e_over_h * (s_u[rec, n_s] - s_u[rec, n_s - 1])

@@ -1,0 +1,452 @@
+"""The step: `advance` runs a chunk of steps, each its phases in order; a blow's start and the
+striker's launch.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import types
+from numba.core import cgutils
+from numba.extending import intrinsic
+
+from ..compiled import compiled
+from ..layout import (
+    E_ANVIL_KINETIC,
+    E_CONTACT_POTENTIAL,
+    E_LAUNCHED,
+    E_STRIKER_KINETIC,
+    E_STRIKER_STRAIN,
+    E_WITHDRAWN,
+    ENERGY_SLOTS,
+    X_FAILED_TIME,
+    X_MAX_PENETRATION,
+)
+from .audit import audit_impedance_energy, audit_scheme_energy, track_energy_excess
+from .bundles import (
+    MEDIUM_BILINEAR,
+    MEDIUM_STATE,
+    S_ANVIL_DISP,
+    S_ANVIL_FORCE,
+    S_ANVIL_VELOCITY,
+    S_BACK_ENERGY,
+    S_BACK_INCOMING,
+    S_BACK_RATE,
+    S_CONTACT_START,
+    S_FACE_INCOMING,
+    S_FAR_INCOMING,
+    S_FORCE_BEFORE,
+    S_IMPULSE,
+    S_IN_CONTACT,
+    S_INCOMING,
+    S_MEDIUM,
+    S_MEDIUM_FORCE,
+    S_POTENTIAL_BEFORE,
+    S_POTENTIAL_BEFORE_THAT,
+    S_STRIKER_VELOCITY,
+    STATUS_NON_FINITE,
+    STATUS_OK,
+    Layers,
+    Overlaps,
+    Recorded,
+    StepConstants,
+    boundary_weights,
+)
+from .contact import contact_law, external_force
+from .recording import (
+    record_fields,
+    record_history,
+    record_probes,
+    track_contact,
+    track_end_forces,
+    track_ends_between_layers,
+    track_overlap,
+    track_stress_extremes,
+)
+from .rows import back_substitute, explicit_interior, right_hand_sides, segment_layout, sweep
+from .struck_end import free_back_end, incoming_wave, mean_velocity, solve_struck_end, struck_end_step, struck_forces
+from .working_end import fresh_rock, medium_state, working_end_force, working_end_row, working_end_step
+
+# --- A step's phases ------------------------------------------------------------------------------
+#
+# `advance` is the loop over layers; each phase of a step is one of the functions below. They are
+# `inline="always"`: Numba puts them into `advance` before typing it, so that they are compiled
+# with its fast-math flags and make the same multiply-adds as had they been written there. (As
+# functions of their own, called, they would have their own flags, and LLVM does not inline them.)
+#
+# Each array an inlined function takes, alone or in a bundle, is a new reference, which Numba
+# counts with atomic instructions (the module's docstring says what they cost); LLVM removes few of
+# those counts where a phase has loops or calls, and with the bundles counted a step of the paper's
+# scheme on 100 cells cost 70% more. `advance` holds its arguments for the whole call, so it hands
+# the phases bundles whose arrays are `uncounted`: the same arrays, without the meminfo that
+# Numba's counting goes through.
+
+
+def _uncounted_value(context, builder, typ, value):
+    if isinstance(typ, types.Array):
+        view = context.make_array(typ)(context, builder, value=value)
+        view.meminfo = cgutils.get_null_value(view.meminfo.type)
+        return view._getvalue()
+    if isinstance(typ, types.BaseTuple):
+        for k, member in enumerate(typ):
+            item = builder.extract_value(value, k)
+            value = builder.insert_value(value, _uncounted_value(context, builder, member, item), k)
+    return value
+
+
+@intrinsic
+def uncounted(typingctx, bundle):
+    """The bundle (or array) with the same arrays, whose references are not counted: for use
+    while something else holds them."""
+
+    def codegen(context, builder, signature, args):
+        return _uncounted_value(context, builder, bundle, args[0])
+
+    return bundle(bundle), codegen
+
+
+@compiled(inline="always")
+def step_constants(tool, rod, weights, contact, anvil):
+    """What every step derives from the bundles (`StepConstants`)."""
+    n = len(tool.node_area) - 1
+    h, tau, density = rod.cell_length, rod.time_step, rod.density
+    striker_mass, striker_velocity = contact.striker_mass, contact.striker_velocity
+    inv_tau2 = 1.0 / (tau * tau)
+    e_over_h = rod.youngs_modulus / h
+    lag = 1 if weights.centered and not weights.impedance_ends else 0  # recorded: layer m − lag
+    strain_sigma = weights.new if weights.centered else 0.25  # 0.25: strain energy at the midpoint
+    anvil_energy = 0.5 * anvil.mass * anvil.velocity * anvil.velocity if anvil.present else 0.0
+    explicit = weights.new == 0.0 and weights.old == 0.0
+    return StepConstants(
+        n=n,
+        weight_cur=1.0 - weights.new - weights.old,
+        inv_tau2=inv_tau2,
+        m1_tau2=striker_mass * inv_tau2,
+        mass_0=density * h * tool.node_area[0] * inv_tau2,
+        mass_n=density * h * tool.node_area[n] * inv_tau2,
+        boundary=boundary_weights(weights, tau),
+        lag=lag,
+        strain_sigma=strain_sigma,
+        e_over_h=e_over_h,
+        half_e_over_h=0.5 * e_over_h,
+        kinetic_factor=0.5 * density * h * inv_tau2,
+        initial_energy=0.5 * striker_mass * striker_velocity * striker_velocity,
+        anvil_energy=anvil_energy,
+        segments=segment_layout(n),
+        explicit=explicit,
+    )
+
+
+@compiled(inline="always")
+def launch_striker(state, row, row_before, at, contact, striker, tau):
+    """The striker at `at` in the layer in `row`, moving at W1 in it and in the layer before
+    (`row_before`), unstrained: an elastic striker's incoming waves each carry W1/2."""
+    y, ends, striker_u = state.y, state.ends, state.striker
+    velocity = contact.striker_velocity
+    y[row] = at
+    y[row_before] = at - velocity * tau
+    ends[S_STRIKER_VELOCITY] = velocity
+    ends[S_IMPULSE] = 0.0
+    if striker.elastic:
+        for i in range(striker_u.shape[1]):
+            striker_u[row, i] = at
+            striker_u[row_before, i] = at - velocity * tau
+        for slot in (S_FACE_INCOMING, S_BACK_INCOMING):
+            ends[slot] = 0.0  # G of the layer in `row` (only its differences count)
+            ends[slot + 1] = -0.5 * velocity * tau
+        for slot in (S_BACK_RATE, S_BACK_RATE + 2):
+            ends[slot] = 0.5 * velocity
+            ends[slot + 1] = 0.0
+        ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
+
+
+@compiled()
+def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
+    """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
+    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
+    strikes (the struck end, or the anvil, which stays where it is and starts again at its own
+    velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there.
+    Rock meets the blow fresh (`fresh_rock`)."""
+    u, y, ends, energy, _ = state
+    if medium.kind == MEDIUM_BILINEAR:
+        rock = fresh_rock(u[m % 3, u.shape[1] - 1], medium_state(ends), medium)
+        for k in range(MEDIUM_STATE):
+            ends[S_MEDIUM + k] = rock[k]
+    row, row_before = m % 3, (m - 1) % 3
+    t = m * tau
+    struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
+    potential = contact_law(y[row] - struck, contact)[1]
+    energy[0, E_WITHDRAWN] += (
+        energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN] + potential + energy[0, E_ANVIL_KINETIC]
+    )
+    if ends[S_IN_CONTACT] != 0.0:
+        track_contact(
+            ends,
+            observed,
+            t,
+            mean_velocity(ends[S_IMPULSE], contact, striker) if striker.elastic else ends[S_STRIKER_VELOCITY],
+            False,
+            tau,
+        )
+    launch_striker(state, row, row_before, struck, contact, striker, tau)
+    launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
+    # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
+    beyond = ends[S_BACK_ENERGY] if striker.elastic else 0.0
+    anvil_energy = 0.0
+    if anvil.present:
+        ends[S_ANVIL_VELOCITY] = anvil.velocity
+        anvil_energy = 0.5 * anvil.mass * anvil.velocity * anvil.velocity
+    energy[0, E_LAUNCHED] += launched + anvil_energy
+    energy[0, E_STRIKER_KINETIC] = launched - beyond
+    energy[0, E_STRIKER_STRAIN] = beyond
+    energy[0, E_ANVIL_KINETIC] = anvil_energy
+    energy[0, E_CONTACT_POTENTIAL] -= potential  # the anvil's with the tool stays
+    ends[S_IN_CONTACT] = 1.0
+    ends[S_CONTACT_START] = t
+
+
+@compiled(inline="always")
+def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step):
+    """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
+    from the first instant), an anvil at 0 between them moving at its own velocity; and layer −1
+    (row 2) one step before. Returns layer 0 as recorded."""
+    u, y, ends, energy, striker_u = state
+    striker_velocity = contact.striker_velocity
+    for i in range(step.n + 1):
+        u[layer.new, i] = 0.0
+        u[2, i] = 0.0
+    launch_striker(state, layer.new, 2, 0.0, contact, striker, rod.time_step)
+    ends[S_IN_CONTACT] = 1.0
+    ends[S_CONTACT_START] = 0.0
+    # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
+    ends[S_POTENTIAL_BEFORE] = 0.0
+    ends[S_POTENTIAL_BEFORE_THAT] = 0.0
+    ends[S_ANVIL_DISP] = 0.0
+    ends[S_ANVIL_VELOCITY] = anvil.velocity
+    energy[0, E_ANVIL_KINETIC] = step.anvil_energy
+    if weights.impedance_ends:
+        contact_force, end_force = struck_forces(
+            (0.0, striker_velocity, 0.0, anvil.velocity, 0.0), 0.0, 0.5 * striker_velocity, contact, striker, anvil
+        )
+        energy[0, E_STRIKER_KINETIC] = step.initial_energy
+    else:
+        contact_force = end_force = contact.damping * striker_velocity
+    ends[S_ANVIL_FORCE] = end_force
+    return Recorded(
+        row=layer.new,
+        time=t,
+        velocity=striker_velocity,
+        contact_force=contact_force,
+        medium_force=0.0,
+        struck_end_stress=-end_force / tool.struck_end_area,
+        working_end_stress=0.0,
+    )
+
+
+@compiled(inline="always")
+def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step):
+    """The ends that integrate their own equations, over the step to `t`: the waves arriving at
+    them, then the striker, the anvil and the struck end (`struck_end_step`), an elastic striker's
+    back end (`free_back_end`) and the working end (`working_end_step`), with the contacts and the
+    end forces' extremes their substeps see. Returns whether the new ends are finite (they are
+    written to the new layer only then), the striker's velocity, the contact force, the force on
+    the tool's struck end (the anvil's, or the contact's), the medium's, and `(work of R,
+    dissipated by the contacts, by the medium)` over the step. `scratch`: room for the struck
+    end's and the working end's states and the events."""
+    u, y, ends, _, striker_u = state
+    new, cur, _, _ = layer
+    n, tau = step.n, rod.time_step
+    end_state, far_state, events = scratch
+    v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, S_INCOMING, tau)
+    v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, S_FAR_INCOMING, tau)
+    face_in, face_slope = 0.0, 0.0
+    if striker.elastic:
+        face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, S_FACE_INCOMING, tau)
+    end_state[0] = y[cur]
+    end_state[1] = ends[S_STRIKER_VELOCITY]
+    end_state[2] = u[cur, 0]
+    end_state[3] = ends[S_FORCE_BEFORE]
+    end_state[4] = ends[S_IMPULSE]
+    end_state[5] = ends[S_IN_CONTACT]
+    end_state[6] = ends[S_ANVIL_DISP]
+    end_state[7] = ends[S_ANVIL_VELOCITY]
+    end_state[8] = ends[S_ANVIL_FORCE]
+    work, dissipated, crossings, contact_range, end_range = struck_end_step(
+        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
+    )
+    far_state[0] = u[cur, n]
+    far_state[1] = ends[S_MEDIUM_FORCE]
+    for k in range(MEDIUM_STATE):
+        far_state[2 + k] = ends[S_MEDIUM + k]
+    dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
+    track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
+    flows = (work, dissipated, dissipated_far)
+    if not (
+        abs(end_state[0]) < 1e300
+        and abs(end_state[2]) < 1e300
+        and abs(end_state[6]) < 1e300
+        and abs(far_state[0]) < 1e300
+    ):
+        return False, 0.0, 0.0, 0.0, 0.0, flows
+    y[new] = end_state[0]
+    u[new, 0] = end_state[2]
+    u[new, n] = far_state[0]
+    for k in range(MEDIUM_STATE):
+        ends[S_MEDIUM + k] = far_state[2 + k]
+    ends[S_STRIKER_VELOCITY] = end_state[1]
+    ends[S_IMPULSE] = end_state[4]
+    ends[S_ANVIL_DISP] = end_state[6]
+    ends[S_ANVIL_VELOCITY] = end_state[7]
+    ends[S_ANVIL_FORCE] = end_state[8]
+    velocity = end_state[1]
+    if striker.elastic:
+        striker_u[new, 0] = y[new]
+        free_back_end(striker_u, layer, ends, striker, tau)
+        velocity = mean_velocity(end_state[4], contact, striker)
+    for k in range(crossings):
+        track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
+    return True, velocity, end_state[3], end_state[8], far_state[1], flows
+
+
+# `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
+# CPU has one: each of the two recurrences along the tool then has a single operation a node on its
+# critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
+# non-finite values rely on that.
+@compiled(fastmath={"contract"})
+def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders):
+    """Compute layers `first … last` (inclusive; layer 0 is the initial state).
+
+    The `Tool` with its rows factored (`ToolRows`), the `Rod`'s constants and the scheme's
+    `Weights`; the ends: the `Contact` at the struck end, the `Striker` when it is a rod, the
+    `Medium` (at the working end), and R(t) on the striker (`ForceLaw`). The `State` carries the layers from call to
+    call, the `Observed` extremes and contacts accumulate, and the `Recorders` take the layers
+    this call records, from the first of each buffer.
+
+    The interior operator weights layers n+1, n, n−1 by `weights.new`, `1 − new − old`,
+    `weights.old`. `weights.centered` centres the boundary terms on layer n (springs
+    `(z^{n+1} + z^{n−1})/2`, dampers `(z^{n+1} − z^{n−1})/(2τ)`, the contact quotient between
+    δ^{n+1} and δ^{n−1}); otherwise they are the paper's (new layer, `(z^{n+1} − z^n)/τ`).
+    `weights.end_masses` gives the end rows the interior's weights (they then carry their half-cell
+    mass `node_area·ρh`); massless ends are quasi-static, all on the new layer.
+    `weights.impedance_ends` (the explicit scheme at Courant number 1 only) integrates each end's
+    own equations instead (`integrate_ends`).
+
+    What is recorded of a layer is what the scheme applies there: the centred schemes' boundary
+    forces are centred on layer n, so a layer is recorded one step after it is computed (the
+    caller runs one layer more); the paper's act on the new layer, the ends that integrate their
+    own equations have their forces at every instant.
+
+    Returns `(status, layers of history written, rows of fields written)`; on a non-finite value
+    it stops with `STATUS_NON_FINITE` and the time in `extremes[X_FAILED_TIME]`.
+    """
+    tool, rows, striker, state, observed, recorders = uncounted((tool, rows, striker, state, observed, recorders))
+    step = step_constants(tool, rod, weights, contact, anvil)
+    u, y, ends, energy, striker_u = state
+    extremes = observed.extremes
+    tau = rod.time_step
+    # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
+    # step `uncounted`: `scratch` holds them through the loop
+    scratch = (np.empty(9), np.empty(6), np.empty((4, 3)))
+    n_hist = 0
+    n_field = 0
+
+    for m in range(first, last + 1):
+        layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3, ref=(m - step.boundary.back) % 3)
+        new, cur, old, ref = layer
+        t = m * tau
+        if m == 0:
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step)
+            interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
+        else:
+            for slot in range(ENERGY_SLOTS):
+                energy[1, slot] = energy[0, slot]
+            # Right-hand sides of rows u_N … u_1 over their diagonals; Q_i is kept in row `new`
+            # until the substitution.
+            if not weights.impedance_ends:
+                working_end_row(u, layer, rows, rod, weights, medium, step)
+            right_hand_sides(u, layer, tool, rows, rod, weights, step)
+            if striker.elastic:
+                explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
+
+            if weights.impedance_ends:
+                finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
+                    state,
+                    observed,
+                    layer,
+                    t,
+                    tool,
+                    rod,
+                    contact,
+                    striker,
+                    anvil,
+                    medium,
+                    force,
+                    uncounted(scratch),
+                    step,
+                )
+                if not finite:
+                    extremes[X_FAILED_TIME] = t
+                    return STATUS_NON_FINITE, n_hist, n_field
+                rec, t_rec = new, t
+                balance, interior = audit_impedance_energy(
+                    state, layer, flows, velocity, contact, striker, anvil, medium, tool, step
+                )
+            else:
+                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0], ref=y[ref] - u[ref, 0])
+                r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
+                q_1, carries = sweep(u, layer, rows, step)
+                y_new, u0_new, contact_force = solve_struck_end(
+                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step
+                )
+                end_force = contact_force
+                if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
+                    extremes[X_FAILED_TIME] = t
+                    return STATUS_NON_FINITE, n_hist, n_field
+                y[new] = y_new
+                u[new, 0] = u0_new
+                back_substitute(u, layer, u0_new, carries, rows, step)
+                medium_force = working_end_force(u, layer, medium, step)
+                # Φ of the new layer from its own overlap, as the next steps' quotients take it
+                delta = y_new - u0_new
+                potential = contact_law(delta, contact)[1]
+                if step.lag:
+                    rec, t_rec = cur, t - tau
+                    velocity = (y_new - y[old]) / (2.0 * tau)
+                else:
+                    rec, t_rec = new, t
+                    velocity = (
+                        contact.striker_velocity if m == 1 else (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau)
+                    )
+                balance, interior = audit_scheme_energy(
+                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step
+                )
+                ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
+                ends[S_POTENTIAL_BEFORE] = potential
+                track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
+
+            if not track_energy_excess(extremes, balance):
+                extremes[X_FAILED_TIME] = t
+                return STATUS_NON_FINITE, n_hist, n_field
+            recorded = Recorded(
+                row=rec,
+                time=t_rec,
+                velocity=velocity,
+                contact_force=contact_force,
+                medium_force=medium_force,
+                struck_end_stress=-end_force / tool.struck_end_area,
+                working_end_stress=-medium_force / tool.working_end_area,
+            )
+
+        if m < step.lag:
+            continue  # the centred schemes record layer 0 once its forces are known
+        m_rec = m - step.lag
+        track_stress_extremes(extremes, u, recorded, interior, rod, step)
+        extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
+        track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
+        if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
+            record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
+            record_probes(recorders, n_hist, u, recorded, step)
+            n_hist += 1
+        if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
+            record_fields(recorders, n_field, state, recorded, striker, step)
+            n_field += 1
+    return STATUS_OK, n_hist, n_field
