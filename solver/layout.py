@@ -20,6 +20,9 @@ HISTORY_COLUMNS = 26
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
 X_MAX_COMPRESSION, X_MAX_COMPRESSION_X, X_MAX_COMPRESSION_TIME = 2, 3, 4
 X_MAX_TENSION, X_MAX_TENSION_X, X_MAX_TENSION_TIME = 5, 6, 7
+# A peak stress with where and when it was: (value, x, time)
+COMPRESSION = (X_MAX_COMPRESSION, X_MAX_COMPRESSION_X, X_MAX_COMPRESSION_TIME)
+TENSION = (X_MAX_TENSION, X_MAX_TENSION_X, X_MAX_TENSION_TIME)
 X_CONTACTS = 8  # finished contact intervals
 X_CO_IMPACT, X_REBOUND_VELOCITY = 9, 10  # when the first contact ended, the striker's velocity then
 X_ENERGY_EXCESS = 11  # max over time of (stored + dissipated − input): > 0 means energy created

@@ -31,19 +31,25 @@ S_STRIKER_VELOCITY = 10
 S_INCOMING, S_INCOMING_BEFORE, S_FAR_INCOMING, S_FAR_INCOMING_BEFORE = 11, 12, 13, 14
 # A medium that yields: its permanent penetration (the set) and, for rock, the deepest penetration
 # of the present loading, the surface it started from and the plastic work of the loadings before
-S_MEDIUM = 15  # 15 … 18: set, deepest, surface, spent (`MEDIUM_STATE` slots)
-MEDIUM_STATE = 4
-S_MEDIUM_SET = S_MEDIUM
+S_MEDIUM_SET, S_MEDIUM_DEEPEST, S_MEDIUM_SURFACE, S_MEDIUM_SPENT = 15, 16, 17, 18
+MEDIUM_SLOTS = (S_MEDIUM_SET, S_MEDIUM_DEEPEST, S_MEDIUM_SURFACE, S_MEDIUM_SPENT)  # `medium_state`'s order
+MEDIUM_STATE = len(MEDIUM_SLOTS)
 # An elastic striker: the incoming waves' displacements G at its face and at its back end (layers
 # m−1, m−2), the back end's incoming rate over the last two steps (mean and slope of each: the
 # free end returns it after the `back_delay`), and the contact's impulse so far
 S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_BACK_INCOMING, S_BACK_INCOMING_BEFORE = 19, 20, 21, 22
-S_BACK_RATE = 23  # 23, 24: mean, slope of step m−1; 25, 26: of step m−2
+# The rate of the wave arriving at the back end: its mean and slope over step m−1, and over m−2
+S_BACK_MEAN, S_BACK_SLOPE, S_BACK_MEAN_BEFORE, S_BACK_SLOPE_BEFORE = 23, 24, 25, 26
 S_IMPULSE = 27
 S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at layer m − ½
 # An anvil: its displacement and velocity, and its force on the tool's end, at layer m − 1
 S_ANVIL_DISP, S_ANVIL_VELOCITY, S_ANVIL_FORCE = 29, 30, 31
 END_SLOTS = 32
+# The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
+INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
+FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end
+FACE_INCOMING = (S_FACE_INCOMING, S_FACE_INCOMING_BEFORE)  # at an elastic striker's face
+BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE)  # at its back end
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 

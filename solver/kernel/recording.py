@@ -8,6 +8,7 @@ import numpy as np
 
 from ..compiled import compiled
 from ..layout import (
+    COMPRESSION,
     E_ANVIL_KINETIC,
     E_CONTACT_POTENTIAL,
     E_DISSIPATED_CONTACT,
@@ -47,10 +48,9 @@ from ..layout import (
     H_TOOL_STRAIN,
     H_WITHDRAWN,
     H_WORKING_END,
+    TENSION,
     X_CO_IMPACT,
     X_CONTACTS,
-    X_MAX_COMPRESSION,
-    X_MAX_TENSION,
     X_MIN_CONTACT_STEPS,
     X_PEAK_FORCE,
     X_PEAK_FORCE_TIME,
@@ -134,11 +134,13 @@ def vertex(earliest, before_that, before, now):
 
 
 @compiled(inline="always")
-def track_end_extreme(extremes, slot, value, x, t):
-    if value > extremes[slot]:
-        extremes[slot] = value
-        extremes[slot + 1] = x
-        extremes[slot + 2] = t
+def track_end_extreme(extremes, peak, value, x, t):
+    """A new record of the `peak`'s (`COMPRESSION` or `TENSION`) value, with where and when."""
+    value_slot, place_slot, time_slot = peak
+    if value > extremes[value_slot]:
+        extremes[value_slot] = value
+        extremes[place_slot] = x
+        extremes[time_slot] = t
 
 
 @compiled(inline="always")
@@ -155,10 +157,10 @@ def track_ends_between_layers(extremes, contact_range, end_range, working_range,
     if f_max > extremes[X_PEAK_FORCE]:
         extremes[X_PEAK_FORCE] = f_max
         extremes[X_PEAK_FORCE_TIME] = t_max
-    track_end_extreme(extremes, X_MAX_COMPRESSION, e_max / end_area_0, 0.0, te_max)
-    track_end_extreme(extremes, X_MAX_TENSION, -e_min / end_area_0, 0.0, te_min)
-    track_end_extreme(extremes, X_MAX_COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
-    track_end_extreme(extremes, X_MAX_TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
+    track_end_extreme(extremes, COMPRESSION, e_max / end_area_0, 0.0, te_max)
+    track_end_extreme(extremes, TENSION, -e_min / end_area_0, 0.0, te_min)
+    track_end_extreme(extremes, COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
+    track_end_extreme(extremes, TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
 
 
 @compiled(inline="always")
@@ -171,11 +173,12 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
     low, low_block, high, high_block = interior
     s0, sn = recorded.struck_end_stress, recorded.working_end_stress
     s_low, s_high = min(s0, low, sn), max(s0, high, sn)
-    for peak, value, inside, block, slot in (
-        (-s_low, s_low, low, low_block, X_MAX_COMPRESSION),
-        (s_high, s_high, high, high_block, X_MAX_TENSION),
+    for peak, value, inside, block, slots in (
+        (-s_low, s_low, low, low_block, COMPRESSION),
+        (s_high, s_high, high, high_block, TENSION),
     ):
-        if peak > extremes[slot]:
+        value_slot, place_slot, time_slot = slots
+        if peak > extremes[value_slot]:
             # Where, only for a new record (most layers set none): the first node of that
             # stress, from the struck end.
             if value == s0:
@@ -184,9 +187,9 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
                 node = first_node(u, recorded.row, step.half_e_over_h, block, value)
             else:
                 node = step.n
-            extremes[slot] = peak
-            extremes[slot + 1] = node * rod.cell_length
-            extremes[slot + 2] = recorded.time
+            extremes[value_slot] = peak
+            extremes[place_slot] = node * rod.cell_length
+            extremes[time_slot] = recorded.time
 
 
 @compiled(inline="always")
@@ -211,14 +214,14 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
         if top > extremes[X_PEAK_FORCE]:
             extremes[X_PEAK_FORCE] = top
             extremes[X_PEAK_FORCE_TIME] = when
-        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_0, 0.0, when)
+        track_end_extreme(extremes, COMPRESSION, top / end_area_0, 0.0, when)
         top, offset = vertex(-f3, -f2, -f1, -contact_force)
-        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau)
     if m_rec >= 3:
         top, offset = vertex(g3, g2, g1, medium_force)
-        track_end_extreme(extremes, X_MAX_COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
         top, offset = vertex(-g3, -g2, -g1, -medium_force)
-        track_end_extreme(extremes, X_MAX_TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
     ends[S_FORCE_EARLIER] = f2
     ends[S_FORCE_BEFORE_THAT] = f1
     ends[S_FORCE_BEFORE] = contact_force

@@ -23,22 +23,25 @@ from ..layout import (
 )
 from .audit import audit_impedance_energy, audit_scheme_energy, track_energy_excess
 from .bundles import (
+    BACK_INCOMING,
+    FACE_INCOMING,
+    FAR_INCOMING,
+    INCOMING,
     MEDIUM_BILINEAR,
+    MEDIUM_SLOTS,
     MEDIUM_STATE,
     S_ANVIL_DISP,
     S_ANVIL_FORCE,
     S_ANVIL_VELOCITY,
     S_BACK_ENERGY,
-    S_BACK_INCOMING,
-    S_BACK_RATE,
+    S_BACK_MEAN,
+    S_BACK_MEAN_BEFORE,
+    S_BACK_SLOPE,
+    S_BACK_SLOPE_BEFORE,
     S_CONTACT_START,
-    S_FACE_INCOMING,
-    S_FAR_INCOMING,
     S_FORCE_BEFORE,
     S_IMPULSE,
     S_IN_CONTACT,
-    S_INCOMING,
-    S_MEDIUM,
     S_MEDIUM_FORCE,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
@@ -150,12 +153,12 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
         for i in range(striker_u.shape[1]):
             striker_u[row, i] = at
             striker_u[row_before, i] = at - velocity * tau
-        for slot in (S_FACE_INCOMING, S_BACK_INCOMING):
-            ends[slot] = 0.0  # G of the layer in `row` (only its differences count)
-            ends[slot + 1] = -0.5 * velocity * tau
-        for slot in (S_BACK_RATE, S_BACK_RATE + 2):
-            ends[slot] = 0.5 * velocity
-            ends[slot + 1] = 0.0
+        for last, before in (FACE_INCOMING, BACK_INCOMING):
+            ends[last] = 0.0  # G of the layer in `row` (only its differences count)
+            ends[before] = -0.5 * velocity * tau
+        for mean, slope in ((S_BACK_MEAN, S_BACK_SLOPE), (S_BACK_MEAN_BEFORE, S_BACK_SLOPE_BEFORE)):
+            ends[mean] = 0.5 * velocity
+            ends[slope] = 0.0
         ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
 
 
@@ -170,7 +173,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     if medium.kind == MEDIUM_BILINEAR:
         rock = fresh_rock(u[m % 3, u.shape[1] - 1], medium_state(ends), medium)
         for k in range(MEDIUM_STATE):
-            ends[S_MEDIUM + k] = rock[k]
+            ends[MEDIUM_SLOTS[k]] = rock[k]
     row, row_before = m % 3, (m - 1) % 3
     t = m * tau
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
@@ -256,11 +259,11 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     new, cur, _, _ = layer
     n, tau = step.n, rod.time_step
     end_state, far_state, events = scratch
-    v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, S_INCOMING, tau)
-    v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, S_FAR_INCOMING, tau)
+    v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, INCOMING, tau)
+    v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, FAR_INCOMING, tau)
     face_in, face_slope = 0.0, 0.0
     if striker.elastic:
-        face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, S_FACE_INCOMING, tau)
+        face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, FACE_INCOMING, tau)
     end_state[0] = y[cur]
     end_state[1] = ends[S_STRIKER_VELOCITY]
     end_state[2] = u[cur, 0]
@@ -276,7 +279,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     far_state[0] = u[cur, n]
     far_state[1] = ends[S_MEDIUM_FORCE]
     for k in range(MEDIUM_STATE):
-        far_state[2 + k] = ends[S_MEDIUM + k]
+        far_state[2 + k] = ends[MEDIUM_SLOTS[k]]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
@@ -291,7 +294,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     u[new, 0] = end_state[2]
     u[new, n] = far_state[0]
     for k in range(MEDIUM_STATE):
-        ends[S_MEDIUM + k] = far_state[2 + k]
+        ends[MEDIUM_SLOTS[k]] = far_state[2 + k]
     ends[S_STRIKER_VELOCITY] = end_state[1]
     ends[S_IMPULSE] = end_state[4]
     ends[S_ANVIL_DISP] = end_state[6]

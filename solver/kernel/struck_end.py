@@ -9,11 +9,14 @@ import math
 
 from ..compiled import compiled
 from .bundles import (
+    BACK_INCOMING,
     FORCE_ABS_SINE,
     FORCE_PULSE,
     S_BACK_ENERGY,
-    S_BACK_INCOMING,
-    S_BACK_RATE,
+    S_BACK_MEAN,
+    S_BACK_MEAN_BEFORE,
+    S_BACK_SLOPE,
+    S_BACK_SLOPE_BEFORE,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
 )
@@ -516,7 +519,7 @@ def rate_integral(rates, tau, a, b, power):
 @compiled(inline="always")
 def back_rates(ends, now):
     """The back end's incoming rate over this step (`now`) and the two before, for `rate_integral`."""
-    return (now, (ends[S_BACK_RATE], ends[S_BACK_RATE + 1]), (ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3]))
+    return (now, (ends[S_BACK_MEAN], ends[S_BACK_SLOPE]), (ends[S_BACK_MEAN_BEFORE], ends[S_BACK_SLOPE_BEFORE]))
 
 
 @compiled(inline="always")
@@ -526,7 +529,7 @@ def free_back_end(striker_u, layer, ends, striker, tau):
     `y_N' = v_b(t) + v_b(t − d)`, integrated over the step exactly for rates linear in each step."""
     new, cur, _, _ = layer
     n_s = striker_u.shape[1] - 1
-    now = incoming_wave(striker_u, layer, n_s - 1, n_s, ends, S_BACK_INCOMING, tau)
+    now = incoming_wave(striker_u, layer, n_s - 1, n_s, ends, BACK_INCOMING, tau)
     d = striker.back_delay
     rates = back_rates(ends, now)
     returned = rate_integral(rates, tau, -d, tau - d, 1)
@@ -534,21 +537,22 @@ def free_back_end(striker_u, layer, ends, striker, tau):
     # each wave there carries Z·v² of power, the arriving one for the last d/2, the returned one
     # for the d/2 before: Z·∫v_b² over [t − d, t], at the step's middle as the grid's energy is
     ends[S_BACK_ENERGY] = striker.back_impedance * rate_integral(rates, tau, 0.5 * tau - d, 0.5 * tau, 2)
-    ends[S_BACK_RATE + 2], ends[S_BACK_RATE + 3] = ends[S_BACK_RATE], ends[S_BACK_RATE + 1]
-    ends[S_BACK_RATE], ends[S_BACK_RATE + 1] = now
+    ends[S_BACK_MEAN_BEFORE], ends[S_BACK_SLOPE_BEFORE] = ends[S_BACK_MEAN], ends[S_BACK_SLOPE]
+    ends[S_BACK_MEAN], ends[S_BACK_SLOPE] = now
 
 
 @compiled(inline="always")
-def incoming_wave(u, layer, inner, edge, ends, slot, tau):
+def incoming_wave(u, layer, inner, edge, ends, slots, tau):
     """For the ends that integrate their own equations: the mean rate over this step of the wave
     arriving at the end node `edge` (its neighbour `inner`) and its slope within the step. Its
     displacement `G_m = u_inner^{m−1} − u_edge^{m−2} + G_{m−2}`: G_{m−1}, G_{m−2} are carried in
-    `ends[slot]`, `ends[slot + 1]`; G_m, G_{m+1} come from the layers."""
+    the end's `slots` (`INCOMING`…); G_m, G_{m+1} come from the layers."""
     new, cur, old, _ = layer
-    g_before, g_last = ends[slot + 1], ends[slot]
+    last, before = slots
+    g_before, g_last = ends[before], ends[last]
     g_now = u[cur, inner] - u[old, edge] + g_before
     g_next = u[new, inner] - u[cur, edge] + g_last
     rate = (g_now - g_last) / tau
     slope = limited_slope((g_last - g_before) / tau, rate, (g_next - g_now) / tau, tau)
-    ends[slot + 1], ends[slot] = g_last, g_now
+    ends[before], ends[last] = g_last, g_now
     return rate, slope

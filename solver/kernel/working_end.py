@@ -8,7 +8,15 @@ from __future__ import annotations
 import math
 
 from ..compiled import compiled
-from .bundles import MEDIUM_BILINEAR, MEDIUM_LINEAR, S_MEDIUM, boundary_weights
+from .bundles import (
+    MEDIUM_BILINEAR,
+    MEDIUM_LINEAR,
+    S_MEDIUM_DEEPEST,
+    S_MEDIUM_SET,
+    S_MEDIUM_SPENT,
+    S_MEDIUM_SURFACE,
+    boundary_weights,
+)
 from .struck_end import SDIRK_GAMMA, SDIRK_MONOTONE, substeps
 
 
@@ -73,7 +81,7 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
 @compiled(inline="always")
 def medium_state(ends):
     """The medium's state `(set, deepest, surface, spent)` from its end slots."""
-    return ends[S_MEDIUM], ends[S_MEDIUM + 1], ends[S_MEDIUM + 2], ends[S_MEDIUM + 3]
+    return ends[S_MEDIUM_SET], ends[S_MEDIUM_DEEPEST], ends[S_MEDIUM_SURFACE], ends[S_MEDIUM_SPENT]
 
 
 @compiled(inline="always")
