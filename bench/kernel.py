@@ -95,6 +95,7 @@ from percussim.solver.controller import (
     tool_on,
 )
 from percussim.solver.grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, wave_speed
+from percussim.solver.laws import contact_law
 from percussim.solver.layout import HISTORY_COLUMNS
 from percussim.solver.summary import MAX_CONTACTS
 
@@ -211,7 +212,7 @@ def numba_run(s: Setup) -> dict[str, float]:
         striker,
         anvil,
         medium,
-        force_law(case),
+        force_law(case.force),
         state,
         observed,
         recorders,
@@ -319,11 +320,11 @@ def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
 
 
 def contact_potential(d: float, c1: float, alpha: float, c0: float) -> float:
-    return c1 * d ** (alpha + 2.0) / (alpha + 2.0) if d >= 0.0 else 0.5 * c0 * d * d
+    return contact_law(d, c1, alpha, c0)[1]
 
 
 def contact_spring_force(d: float, c1: float, alpha: float, c0: float) -> float:
-    return c1 * d ** (alpha + 1.0) if d >= 0.0 else c0 * d
+    return contact_law(d, c1, alpha, c0)[0]
 
 
 def quotient_force(d: float, ref: float, ref_potential: float, law: tuple) -> float:

@@ -12,9 +12,10 @@ import numpy as np
 from . import kernel as K
 from . import layout as L
 from .blows import BlowLog
-from .case import Case, Medium
+from .case import Case, Force, Medium
 from .errors import Cancelled, NumericalFailure
 from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass, wave_speed
+from .laws import FORCE_KINDS
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
 from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows, launch_energy
 
@@ -88,15 +89,13 @@ def _probe_nodes(grid: Grid, probes: list[float]) -> tuple[np.ndarray, np.ndarra
     return node, weight
 
 
-def force_law(case: Case) -> K.ForceLaw:
-    """R(t) as the kernel takes it."""
-    f = case.force
+def force_law(f: Force | None) -> K.ForceLaw:
+    """R(t) as the kernel (and `laws.external_force`) takes it."""
     if f is None:
         return K.ForceLaw(kind=K.FORCE_NONE, amplitude=0.0, omega=0.0, start=0.0, duration=0.0)
     if f.kind == "pulse":
         return K.ForceLaw(kind=K.FORCE_PULSE, amplitude=f.amplitude, omega=0.0, start=f.start, duration=f.duration)
-    kind = K.FORCE_SINE if f.kind == "sine" else K.FORCE_ABS_SINE
-    return K.ForceLaw(kind=kind, amplitude=f.amplitude, omega=f.omega, start=0.0, duration=0.0)
+    return K.ForceLaw(kind=FORCE_KINDS[f.kind], amplitude=f.amplitude, omega=f.omega, start=0.0, duration=0.0)
 
 
 MEDIUM_KINDS = {"linear": K.MEDIUM_LINEAR, "bilinear": K.MEDIUM_BILINEAR, "smith": K.MEDIUM_SMITH}
@@ -272,7 +271,7 @@ def simulate_rod(
     striker = striker_on(case, num, tool, rod)
     anvil = anvil_on(case, grid, contact)
     rows = K.factor_tool_rows(tool, rod, weights, medium)
-    force = force_law(case)
+    force = force_law(case.force)
 
     out = case.outputs
     probe_node, probe_weight = _probe_nodes(grid, out.probes)

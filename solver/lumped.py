@@ -27,9 +27,10 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from . import laws
 from . import layout as L
 from .case import Case, Force
-from .controller import HISTORY_PATHS
+from .controller import HISTORY_PATHS, force_law
 from .errors import Cancelled, NumericalFailure
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass, tool_mass_ahead
 from .result import CancelCheck, ProgressCallback, Result
@@ -110,35 +111,26 @@ class Segment:
 
 
 def spring_force(delta, p: Parameters, contact: bool):
-    """`G(δ)·δ` on one branch: `c1·|δ|^α·δ` (contact, odd so it stays smooth past 0) or `c0·δ`."""
+    """`G(δ)·δ` on one branch: the contact's, continued smoothly past 0 (`laws.pressed_branch`),
+    or `c0·δ`."""
     if contact:
-        return p.c1 * np.abs(delta) ** p.alpha * delta
+        return laws.pressed_branch(delta, p.c1, p.alpha)
     return p.c0 * delta
 
 
 def contact_force(delta, rate, p: Parameters):
-    """Contact force on the tool `F = G(δ)·δ + b1·δ'`, the branch chosen by the sign of δ."""
-    spring = np.where(delta >= 0.0, spring_force(delta, p, True), spring_force(delta, p, False))
-    return spring + p.b1 * rate
+    """Contact force on the tool `F = G(δ)·δ + b1·δ'` at each instant (`laws.contact_law_on`)."""
+    return laws.contact_law_on(delta, p.c1, p.alpha, p.c0)[0] + p.b1 * rate
 
 
 def contact_potential(delta, p: Parameters):
-    """`c1·δ^(α+2)/(α+2)` in contact, `c0·δ²/2` in separation."""
-    pressed = p.c1 * np.abs(delta) ** (p.alpha + 2.0) / (p.alpha + 2.0)
-    return np.where(delta >= 0.0, pressed, 0.5 * p.c0 * delta * delta)
+    """The contact's stored energy Φ(δ) at each instant (`laws.contact_law_on`)."""
+    return laws.contact_law_on(delta, p.c1, p.alpha, p.c0)[1]
 
 
 def external_force(force: Force | None, t):
-    """`R(t)`: P·sin ωt, P·|sin ωt|, or P on t1 ≤ t ≤ t1 + Δt (as in the rod kernel)."""
-    t = np.asarray(t, dtype=float)
-    if force is None:
-        return np.zeros_like(t)
-    if force.kind == "sine":
-        return force.amplitude * np.sin(force.omega * t)
-    if force.kind == "abs_sine":
-        return force.amplitude * np.abs(np.sin(force.omega * t))
-    on = (force.start <= t) & (t <= force.start + force.duration)
-    return np.where(on, force.amplitude, 0.0)
+    """`R(t)` at each instant (`laws.external_force_on`)."""
+    return laws.external_force_on(t, *force_law(force))
 
 
 def segment_force(force: Force | None, t0: float, t1: float) -> Callable[[float], float]:

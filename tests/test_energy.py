@@ -12,6 +12,7 @@ from scipy.integrate import trapezoid
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod
 from percussim.solver.grid import tool_area
+from percussim.solver.laws import contact_law
 
 DAMPED_DRIVEN = merge(
     BASE_CASE,
@@ -39,7 +40,7 @@ def _independent_budget(result) -> dict[str, float]:
     v = (u - u_before) / (fields.time[-1] - fields.time[-2])
     area_mid = tool_area(case.tool, 0.5 * (x[1:] + x[:-1]))
     d = overlap[-1]
-    contact = c.stiffness * d ** (c.exponent + 2) / (c.exponent + 2) if d >= 0 else 0.5 * c.tension_stiffness * d * d
+    contact = contact_law(d, c.stiffness, c.exponent, c.tension_stiffness)[1]
     return {
         "external_work": trapezoid(h["external/force"] * h["striker/velocity"], t),
         "dissipated_contact": trapezoid(c.damping * np.gradient(overlap, t) ** 2, t),

@@ -69,6 +69,7 @@ bundles `uncounted`). Where LLVM cannot prove an index non-negative, it is unsig
 negative indices around, and that check on every load keeps loops from vectorising.
 """
 
+from ..laws import FORCE_ABS_SINE, FORCE_NONE, FORCE_PULSE, FORCE_SINE
 from ..layout import (
     E_CONTACT_POTENTIAL,
     E_DISSIPATED_CONTACT,
@@ -89,10 +90,6 @@ from ..layout import (
 )
 from .audit import first_node, tool_energy_and_stresses
 from .bundles import (
-    FORCE_ABS_SINE,
-    FORCE_NONE,
-    FORCE_PULSE,
-    FORCE_SINE,
     MEDIUM_BILINEAR,
     MEDIUM_LINEAR,
     MEDIUM_SMITH,

@@ -13,9 +13,7 @@ import numpy as np
 from ..compiled import compiled
 from ..layout import ENERGY_SLOTS, new_extremes
 
-# Force kinds (`force_kind`)
-FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
-# Medium kinds (`Medium.kind`)
+# Medium kinds (`Medium.kind`); R(t)'s kinds are `laws.FORCE_…`
 MEDIUM_LINEAR, MEDIUM_BILINEAR, MEDIUM_SMITH = 0, 1, 2
 
 # End slots (`ends[S_…]`): what the next step needs of the ends beyond the layers. Whether the
@@ -82,7 +80,7 @@ Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffn
 R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading
 stiffness k_u, soil's ultimate resistance R_u and Smith damping J (s/m)."""
 ForceLaw = namedtuple("ForceLaw", "kind amplitude omega start duration")
-"""R(t) on the striker: a `FORCE_…` kind and its parameters."""
+"""R(t) on the striker: a `laws.FORCE_…` kind and its parameters."""
 Striker = namedtuple("Striker", "elastic tool rod impedance back_impedance mass back_delay")
 """The striker as a rod (when `elastic`): its `Tool` and `Rod` on its own grid (node 0 its impact
 face, at Courant number 1 with the tool's time step), the impedances ρ·a·S of its face and back

@@ -6,52 +6,30 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-
+from .. import laws
 from ..compiled import compiled
-from .bundles import FORCE_ABS_SINE, FORCE_PULSE, FORCE_SINE
+
+_external_force = compiled(inline="always")(laws.external_force)
+_contact_law = compiled(inline="always")(laws.contact_law)
+_contact_spring = compiled(inline="always")(laws.contact_spring)
 
 
 @compiled(inline="always")
 def external_force(t, force):
-    """`R(t)` of the `ForceLaw`: P·sin(ωt), P·|sin(ωt)|, or P on [t1, t1 + Δt]."""
-    kind, amplitude, omega, start, duration = force
-    if kind == FORCE_SINE:
-        return amplitude * np.sin(omega * t)
-    if kind == FORCE_ABS_SINE:
-        return amplitude * abs(np.sin(omega * t))
-    if kind == FORCE_PULSE:
-        if start <= t <= start + duration:
-            return amplitude
-    return 0.0
+    """`R(t)` of the `ForceLaw` (`laws.external_force`)."""
+    return _external_force(t, force.kind, force.amplitude, force.omega, force.start, force.duration)
 
 
 @compiled(inline="always")
 def contact_law(delta, contact):
-    """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
-    separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
-    for both, as on a small grid the contact solve is a large part of a step."""
-    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
-    if delta >= 0.0:
-        force = c1 * delta ** (alpha + 1.0)
-        return force, force * delta / (alpha + 2.0)
-    return c0 * delta, 0.5 * c0 * delta * delta
+    """`(Φ'(δ), Φ(δ))` of the `Contact` (`laws.contact_law`)."""
+    return _contact_law(delta, contact.stiffness, contact.exponent, contact.tension_stiffness)
 
 
 @compiled(inline="always")
 def contact_spring(delta, contact):
-    """`(Φ'(δ), Φ''(δ))`: the contact's spring force G(δ)·δ and its stiffness; the common
-    exponents without a power."""
-    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
-    if delta >= 0.0:
-        if alpha == 0.0:
-            return c1 * delta, c1
-        if alpha == 0.5:
-            root = math.sqrt(delta)
-            return c1 * delta * root, 1.5 * c1 * root
-        power = delta**alpha
-        return c1 * delta * power, (alpha + 1.0) * c1 * power
-    return c0 * delta, c0
+    """`(Φ'(δ), Φ''(δ))` of the `Contact` (`laws.contact_spring`)."""
+    return _contact_spring(delta, contact.stiffness, contact.exponent, contact.tension_stiffness)
 
 
 @compiled(inline="always")

@@ -8,10 +8,9 @@ from __future__ import annotations
 import math
 
 from ..compiled import compiled
+from ..laws import FORCE_ABS_SINE, FORCE_PULSE
 from .bundles import (
     BACK_INCOMING,
-    FORCE_ABS_SINE,
-    FORCE_PULSE,
     S_BACK_ENERGY,
     S_BACK_MEAN,
     S_BACK_MEAN_BEFORE,
