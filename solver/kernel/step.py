@@ -314,6 +314,109 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
 # CPU has one: each of the two recurrences along the tool then has a single operation a node on its
 # critical path. No other fast-math assumption is made (NaN, infinities, reordering): the checks for
 # non-finite values rely on that.
+AT_REST = (np.inf, 0, -np.inf, 0)  # the tool's interior at rest: only the end stresses count
+
+
+@compiled(inline="always")
+def impedance_ends_step(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step):
+    """The ends that integrate their own equations, then the energy audit: whether all stayed
+    finite, what the layer records, the interior's stress extremes and the energy balance."""
+    finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
+        state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, uncounted(scratch), step
+    )
+    recorded = Recorded(
+        row=layer.new,
+        time=t,
+        velocity=velocity,
+        contact_force=contact_force,
+        medium_force=medium_force,
+        struck_end_stress=-end_force / tool.struck_end_area,
+        working_end_stress=-medium_force / tool.working_end_area,
+    )
+    if not finite:
+        return False, recorded, AT_REST, 0.0
+    balance, interior = audit_impedance_energy(
+        state, layer, flows, velocity, contact, striker, anvil, medium, tool, step
+    )
+    return True, recorded, interior, balance
+
+
+@compiled(inline="always")
+def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, contact, medium, force, step):
+    """The paper's rows at the ends: the sweep, the striker and struck-end rows with the contact
+    law, the substitution and the medium's force, then the energy audit and the contact's
+    tracking; returns as `impedance_ends_step` does."""
+    u, y, ends = state.u, state.y, state.ends
+    new, cur, old, ref = layer
+    tau = rod.time_step
+    overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0], ref=y[ref] - u[ref, 0])
+    r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
+    q_1, carries = sweep(u, layer, rows, step)
+    y_new, u0_new, contact_force = solve_struck_end(
+        state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step
+    )
+    if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
+        failed = Recorded(
+            row=new,
+            time=t,
+            velocity=0.0,
+            contact_force=0.0,
+            medium_force=0.0,
+            struck_end_stress=0.0,
+            working_end_stress=0.0,
+        )
+        return False, failed, AT_REST, 0.0
+    y[new] = y_new
+    u[new, 0] = u0_new
+    back_substitute(u, layer, u0_new, carries, rows, step)
+    medium_force = working_end_force(u, layer, medium, step)
+    # Φ of the new layer from its own overlap, as the next steps' quotients take it
+    delta = y_new - u0_new
+    potential = contact_law(delta, contact)[1]
+    if step.lag:
+        rec, t_rec = cur, t - tau
+        velocity = (y_new - y[old]) / (2.0 * tau)
+    else:
+        rec, t_rec = new, t
+        velocity = contact.striker_velocity if m == 1 else (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau)
+    balance, interior = audit_scheme_energy(
+        state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step
+    )
+    ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
+    ends[S_POTENTIAL_BEFORE] = potential
+    track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
+    recorded = Recorded(
+        row=rec,
+        time=t_rec,
+        velocity=velocity,
+        contact_force=contact_force,
+        medium_force=medium_force,
+        struck_end_stress=-contact_force / tool.struck_end_area,
+        working_end_stress=-medium_force / tool.working_end_area,
+    )
+    return True, recorded, interior, balance
+
+
+@compiled(inline="always")
+def record_layer(
+    state, observed, recorders, recorded, interior, m_rec, n_hist, n_field, tool, rod, striker, anvil, force, step
+):
+    """The recorded layer's extremes, and its history, probes and fields when their strides take
+    it: returns the rows of history and of fields written so far."""
+    u, ends, extremes = state.u, state.ends, observed.extremes
+    track_stress_extremes(extremes, u, recorded, interior, rod, step)
+    extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
+    track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
+    if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
+        record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
+        record_probes(recorders, n_hist, u, recorded, step)
+        n_hist += 1
+    if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
+        record_fields(recorders, n_field, state, recorded, striker, step)
+        n_field += 1
+    return n_hist, n_field
+
+
 @compiled(fastmath={"contract"})
 def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
@@ -343,7 +446,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
     """
     tool, rows, striker, state, observed, recorders = uncounted((tool, rows, striker, state, observed, recorders))
     step = step_constants(tool, rod, weights, contact, anvil)
-    u, y, ends, energy, striker_u = state
+    u, energy, striker_u = state.u, state.energy, state.striker
     extremes = observed.extremes
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
@@ -354,11 +457,10 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
 
     for m in range(first, last + 1):
         layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3, ref=(m - step.boundary.back) % 3)
-        new, cur, old, ref = layer
         t = m * tau
         if m == 0:
             recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step)
-            interior = (np.inf, 0, -np.inf, 0)  # the tool at rest: only the end stresses count
+            interior = AT_REST
         else:
             for slot in range(ENERGY_SLOTS):
                 energy[1, slot] = energy[0, slot]
@@ -369,87 +471,32 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
             if striker.elastic:
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
-
             if weights.impedance_ends:
-                finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
-                    state,
-                    observed,
-                    layer,
-                    t,
-                    tool,
-                    rod,
-                    contact,
-                    striker,
-                    anvil,
-                    medium,
-                    force,
-                    uncounted(scratch),
-                    step,
-                )
-                if not finite:
-                    extremes[X_FAILED_TIME] = t
-                    return STATUS_NON_FINITE, n_hist, n_field
-                rec, t_rec = new, t
-                balance, interior = audit_impedance_energy(
-                    state, layer, flows, velocity, contact, striker, anvil, medium, tool, step
+                finite, recorded, interior, balance = impedance_ends_step(
+                    state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step
                 )
             else:
-                overlaps = Overlaps(cur=y[cur] - u[cur, 0], old=y[old] - u[old, 0], ref=y[ref] - u[ref, 0])
-                r_n = external_force((m - 1) * tau, force)  # R(t_n), explicit in row (11)
-                q_1, carries = sweep(u, layer, rows, step)
-                y_new, u0_new, contact_force = solve_struck_end(
-                    state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step
+                finite, recorded, interior, balance = scheme_ends_step(
+                    state, observed, layer, m, t, tool, rows, rod, weights, contact, medium, force, step
                 )
-                end_force = contact_force
-                if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
-                    extremes[X_FAILED_TIME] = t
-                    return STATUS_NON_FINITE, n_hist, n_field
-                y[new] = y_new
-                u[new, 0] = u0_new
-                back_substitute(u, layer, u0_new, carries, rows, step)
-                medium_force = working_end_force(u, layer, medium, step)
-                # Φ of the new layer from its own overlap, as the next steps' quotients take it
-                delta = y_new - u0_new
-                potential = contact_law(delta, contact)[1]
-                if step.lag:
-                    rec, t_rec = cur, t - tau
-                    velocity = (y_new - y[old]) / (2.0 * tau)
-                else:
-                    rec, t_rec = new, t
-                    velocity = (
-                        contact.striker_velocity if m == 1 else (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau)
-                    )
-                balance, interior = audit_scheme_energy(
-                    state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step
-                )
-                ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
-                ends[S_POTENTIAL_BEFORE] = potential
-                track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
-
-            if not track_energy_excess(extremes, balance):
+            if not (finite and track_energy_excess(extremes, balance)):
                 extremes[X_FAILED_TIME] = t
                 return STATUS_NON_FINITE, n_hist, n_field
-            recorded = Recorded(
-                row=rec,
-                time=t_rec,
-                velocity=velocity,
-                contact_force=contact_force,
-                medium_force=medium_force,
-                struck_end_stress=-end_force / tool.struck_end_area,
-                working_end_stress=-medium_force / tool.working_end_area,
+        if m >= step.lag:  # the centred schemes record layer 0 once its forces are known
+            n_hist, n_field = record_layer(
+                state,
+                observed,
+                recorders,
+                recorded,
+                interior,
+                m - step.lag,
+                n_hist,
+                n_field,
+                tool,
+                rod,
+                striker,
+                anvil,
+                force,
+                step,
             )
-
-        if m < step.lag:
-            continue  # the centred schemes record layer 0 once its forces are known
-        m_rec = m - step.lag
-        track_stress_extremes(extremes, u, recorded, interior, rod, step)
-        extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
-        track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
-        if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
-            record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
-            record_probes(recorders, n_hist, u, recorded, step)
-            n_hist += 1
-        if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
-            record_fields(recorders, n_field, state, recorded, striker, step)
-            n_field += 1
     return STATUS_OK, n_hist, n_field
