@@ -318,21 +318,28 @@ AT_REST = (np.inf, 0, -np.inf, 0)  # the tool's interior at rest: only the end s
 
 
 @compiled(inline="always")
-def impedance_ends_step(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step):
-    """The ends that integrate their own equations, then the energy audit: whether all stayed
-    finite, what the layer records, the interior's stress extremes and the energy balance."""
-    finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
-        state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, uncounted(scratch), step
-    )
-    recorded = Recorded(
-        row=layer.new,
-        time=t,
+def recorded_at(row, time, velocity, contact_force, end_force, medium_force, tool):
+    """What a layer records: its row and time, the striker's velocity, the contact's and the
+    medium's forces, and the stresses the end forces make at the tool's ends."""
+    return Recorded(
+        row=row,
+        time=time,
         velocity=velocity,
         contact_force=contact_force,
         medium_force=medium_force,
         struck_end_stress=-end_force / tool.struck_end_area,
         working_end_stress=-medium_force / tool.working_end_area,
     )
+
+
+@compiled(inline="always")
+def impedance_ends_step(state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step):
+    """The ends that integrate their own equations, then the energy audit: whether all stayed
+    finite, what the layer records, the interior's stress extremes and the energy balance."""
+    finite, velocity, contact_force, end_force, medium_force, flows = integrate_ends(
+        state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, uncounted(scratch), step
+    )
+    recorded = recorded_at(layer.new, t, velocity, contact_force, end_force, medium_force, tool)
     if not finite:
         return False, recorded, AT_REST, 0.0
     balance, interior = audit_impedance_energy(
@@ -356,16 +363,7 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
         state, layer, overlaps, (rows.p[1], q_1), r_n, contact, rod, weights, step
     )
     if not (abs(y_new) < 1e300 and abs(u0_new) < 1e300):
-        failed = Recorded(
-            row=new,
-            time=t,
-            velocity=0.0,
-            contact_force=0.0,
-            medium_force=0.0,
-            struck_end_stress=0.0,
-            working_end_stress=0.0,
-        )
-        return False, failed, AT_REST, 0.0
+        return False, recorded_at(new, t, 0.0, 0.0, 0.0, 0.0, tool), AT_REST, 0.0
     y[new] = y_new
     u[new, 0] = u0_new
     back_substitute(u, layer, u0_new, carries, rows, step)
@@ -385,16 +383,7 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
     ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
     ends[S_POTENTIAL_BEFORE] = potential
     track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
-    recorded = Recorded(
-        row=rec,
-        time=t_rec,
-        velocity=velocity,
-        contact_force=contact_force,
-        medium_force=medium_force,
-        struck_end_stress=-contact_force / tool.struck_end_area,
-        working_end_stress=-medium_force / tool.working_end_area,
-    )
-    return True, recorded, interior, balance
+    return True, recorded_at(rec, t_rec, velocity, contact_force, contact_force, medium_force, tool), interior, balance
 
 
 @compiled(inline="always")
