@@ -144,7 +144,8 @@ class Record(BaseModel):
                     None,
                 )
             steps = np.diff(self.time)
-            if (steps <= 0.0).any() and ((steps < 0.0).any() or even_sampling(self.time) is None):
+            # a step back, or repeats that no even sampling explains (`sample_times` kept them)
+            if (steps < 0.0).any() or (np.diff(self.sample_times) <= 0.0).any():
                 i = int(np.argmax(steps <= 0.0)) + 1
                 raise field_error(
                     "Record",
@@ -235,9 +236,9 @@ class Record(BaseModel):
         rise = max(rise, 1e-3 * arrival, float(t[1] - t[0]))
         return max(0.0, arrival - rise) - t[0], arrival + rise - t[0]
 
-    def check_against(self, case: Case, field: str = "record", offset_high: float | None = None) -> None:
-        """Refuse, naming the field, a record this case cannot produce; `offset_high` is the
-        largest time_offset a fit will try, when it is fitted."""
+    def check_against(self, case: Case, field: str = "record", end: float | None = None) -> None:
+        """Refuse, naming the field, a record this case cannot produce; `end` is the model's time
+        the runs must reach (by default the last sample's, at the record's time_offset)."""
         errors = []
         if self.quantity == "stress" and not 0.0 <= self.x <= case.tool.length:
             errors.append(
@@ -253,8 +254,9 @@ class Record(BaseModel):
             errors.append(
                 FieldError(field=f"{field}.quantity", message="a medium force needs a medium: the case has none")
             )
-        offset = self.time_offset if self.time_offset is not None else (offset_high or 0.0)
-        end = float(self.instants[-1]) + offset
+        last = float(self.instants[-1])
+        end = last + (self.time_offset or 0.0) if end is None else end
+        offset = end - last
         if end > case.numerics.duration:
             shifted = f" (its last sample + time_offset {offset:.6g} s)" if offset else ""
             errors.append(

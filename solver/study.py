@@ -15,7 +15,7 @@ from pydantic import BaseModel, Field, model_validator
 
 from .case import INPUT, Case, CaseError, FieldError, Numerics, Whole, field_error, validated
 from .evaluate import Batch, Space, check_grid, evaluate_batch
-from .grid import first_cells
+from .grid import fewest_cells, first_cells
 from .limits import Limits
 from .record import Record
 from .summary import Summary
@@ -125,18 +125,18 @@ def check_calibration(calibration: Calibration, limits: Limits = Limits()) -> Sp
     case, record = study_case(calibration.case), calibration.record
     space = Space.of(fitted_bounds(calibration), "parameters")
     case_space = space.without(OFFSET)
-    record.check_against(case, offset_high=space.high[space.paths.index(OFFSET)] if OFFSET in space.paths else None)
+    duration = run_span(record, space)
+    record.check_against(case, end=duration)
     if case_space.paths:
         case_space.check(case, "parameters")
-    corners = [corner.model_dump(mode="json", exclude_none=True) for corner in case_space.corners(case)]
-    for corner in corners:
-        corner["outputs"] = record.outputs()
-    coarse = max(first_cells(case, COARSE_TOLERANCE), case_space.fewest_cells(case))
-    duration = run_span(record, space)
+    corners = case_space.corners(case)
+    coarse = max([first_cells(case, COARSE_TOLERANCE)] + [fewest_cells(corner) for corner in corners])
     check_grid(case, coarse, duration, limits, field="record.time", remedy=GRID_REMEDY)
     answers = evaluate_batch(
         Batch(
-            cases=corners,
+            cases=[
+                corner.model_dump(mode="json", exclude_none=True) | {"outputs": record.outputs()} for corner in corners
+            ],
             cells=coarse,
             duration=duration,
             series={"quantity": record.quantity, "times": None},
