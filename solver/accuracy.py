@@ -1,17 +1,27 @@
-"""The headline quantities a summary's accuracy is stated for, and when one has no relative error.
+"""Estimation's one home: what a run says of its own accuracy.
 
-Every summary states the relative error of six headline quantities (`HEADLINE`). A quantity that
-is absent or negligible in a scene has no meaningful relative error and is left out of the
-estimate with the reason (`left_out`): a first contact that lasts the whole run has no co-impact
-time and no rebound; a tension or a rebound that is a small fraction of its natural scale, or the
-energy to a medium that takes almost nothing, would ask for an accuracy nobody needs at a cost
-nobody wants.
+A run calls it once, with the runs it made (`assess`), and gets its `Accuracy`: the error
+estimate, the tolerance asked, the grids and why they are those, and the warnings the estimate
+calls for. The summary only prints it (`summary.add_accuracy`). `adaptive` chooses which runs to
+make, reading the same estimate (`from_runs`) to decide the next grid.
+
+Every summary states the relative error of six headline quantities (`HEADLINE`) and the transfer
+efficiency. A quantity that is absent or negligible in a scene has no meaningful relative error
+and is left out of the estimate with the reason (`left_out`): a first contact that lasts the whole
+run has no co-impact time and no rebound; a tension or a rebound that is a small fraction of its
+natural scale, or the energy to a medium that takes almost nothing, would ask for an accuracy
+nobody needs at a cost nobody wants.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .case import Case
+    from .grid import ResolvedNumerics
 
 HEADLINE = (
     "co_impact_time",
@@ -218,6 +228,64 @@ def estimate(
     # changes none of the quantities estimated by more than their differences show
     contacts = tuple(s["contacts_total"] for s in summaries[-3:])
     return Estimate(errors, skip, contacts[-1] == contacts[-2], contacts, formal_order)
+
+
+def from_runs(case: Case, runs: list[tuple[ResolvedNumerics, dict]], formal_order: float) -> Estimate:
+    """The error of the finest of `case`'s `runs` (numerics and summary, coarse to fine)."""
+    return estimate(
+        [case.tool.length / n.cells for n, _ in runs],
+        [s for _, s in runs],
+        formal_order,
+        case.striker.velocity,
+        case.medium is not None,
+    )
+
+
+def modelled(case: Case, summary: dict, error: float) -> Estimate:
+    """A model's own error, `error` on every quantity the run does not leave out (the lumped
+    model's ε², which no grid reduces)."""
+    skip = not_estimated(summary, case.striker.velocity, case.medium is not None)
+    return Estimate({name: QuantityError(error, None, False) for name in ESTIMATED if name not in skip}, skip, True)
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """What a run says of its accuracy (`assess`), as the summary prints it: the tolerance asked
+    (None on a fixed grid), the estimate (None when none could be made), why the grids are those
+    they are, the grids (coarse to fine), and the warnings."""
+
+    tolerance: float | None
+    estimate: Estimate | None
+    why: str
+    runs: list[ResolvedNumerics]
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def error_estimate(self) -> dict[str, float] | None:
+        return self.estimate.relative() if self.estimate else None
+
+    @property
+    def not_estimated(self) -> dict[str, str]:
+        return dict(self.estimate.left_out) if self.estimate else {}
+
+
+def assess(
+    found: Estimate | None,
+    summary: dict,
+    *,
+    tolerance: float | None,
+    runs: list[ResolvedNumerics],
+    why: str,
+    unmet: str = "",
+    notes: list[str] = (),
+) -> Accuracy:
+    """The accuracy of the run whose summary is `summary`: the estimate `found`, and as warnings
+    `notes` (the caller's, e.g. why no estimate) then what the estimate calls for
+    (`accuracy_warnings`; `unmet` says why a tolerance could not be met)."""
+    warnings = list(notes)
+    if found is not None:
+        warnings += accuracy_warnings(found, summary, tolerance, unmet)
+    return Accuracy(tolerance, found, why, list(runs), warnings)
 
 
 # --- What a summary says of its accuracy -------------------------------------------------------

@@ -1,4 +1,6 @@
-"""Every answer with its error: tolerance-driven runs, and the estimate of a fixed grid.
+"""Which runs a case takes to answer with its error (`solve`): a ladder of grids to a tolerance,
+a fixed grid with its companions, or the lumped model. Each returns its result and, from one call
+to `accuracy.assess`, what the result says of its accuracy.
 
 **Under a tolerance** (`numerics.tolerance`, or the default 0.01 when the case gives no grid and
 no scheme) the solver chooses the grid: the explicit scheme at Courant number 1, whose ends
@@ -15,24 +17,33 @@ with the estimate it has and says so in `warnings`.
 
 **On a fixed grid** (the case gives cells, a time step or a scheme) the run is the one asked
 for, and two companion runs on grids 2× and 4× coarser in h and τ (about 31% more work) give
-its estimate the same way (`fixed_estimate`).
+its estimate the same way (`fixed_grid`).
 
 `numerics.model = 'lumped'` is the two-mass model (21)–(25), whose modelling error grows as ε²,
 ε the two-mass system's highest frequency over the tool's lowest elastic one (`rigidity`).
+
+A case over the limits is refused before any run (`limits.check_limits`), naming what to change.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 
-from .accuracy import ESTIMATED, SAFETY_FACTOR, Estimate, QuantityError, estimate, not_estimated
+from .accuracy import SAFETY_FACTOR, Accuracy, Estimate, assess, from_runs, modelled
 from .case import Case, CaseError, FieldError, Outputs
 from .controller import simulate_rod
-from .grid import MIN_CELLS, ResolvedNumerics, explicit_numerics, first_cells, resolve_numerics, rigidity
+from .grid import (
+    MIN_CELLS,
+    ResolvedNumerics,
+    explicit_numerics,
+    first_cells,
+    resolve_numerics,
+    rigidity,
+    tolerance_of,
+)
 from .limits import Limits, check_limits
+from .lumped import simulate_lumped
 from .result import CancelCheck, ProgressCallback, Recorder, Result
-from .summary import add_accuracy
 
 CLIMB = 2.0  # refinement from one grid to the next until four in a row are asymptotic
 MIN_RUNS = 4  # an estimate from three grids, its order confirmed by the three before
@@ -44,6 +55,26 @@ ENERGY_CLOSURE = 0.5  # of the tolerance: how closely a ladder's energy audit mu
 UNSETTLED_GRIDS = 3  # contacts that change over this many grids, with no gain, stop a ladder
 COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
+FIXED_SHARE = 0.75  # of a fixed grid's progress: the run asked for; its companions the rest
+CHATTER_STEPS = 5.0  # a contact resolved by fewer steps than this says nothing of the case
+
+
+def solve(
+    case: Case,
+    progress: ProgressCallback | None = None,
+    cancelled: CancelCheck | None = None,
+    limits: Limits = Limits(),
+    recorder: Recorder | None = None,
+) -> tuple[Result, Accuracy]:
+    """Answer `case` as its numerics ask: the lumped model, a tolerance (given, or the default
+    when the case gives neither a grid nor a scheme), or the fixed grid it gives; with what the
+    answer says of its accuracy. With a `recorder`, the result's outputs are recorded there."""
+    if case.numerics.model == "lumped":
+        return lumped(case, progress, cancelled, limits)
+    tol = tolerance_of(case.numerics)
+    if tol is not None:
+        return solve_to_tolerance(case, tol, progress=progress, cancelled=cancelled, limits=limits, recorder=recorder)
+    return fixed_grid(case, progress, cancelled, limits, recorder)
 
 
 def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback | None:
@@ -59,16 +90,6 @@ def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
     """The case with only what a summary needs kept: no probes, no fields, a sparse history."""
     stride = max(1, numerics.steps // 2000)
     return case.model_copy(update={"outputs": Outputs(history_stride=stride)})
-
-
-def _estimate(case: Case, runs: list[tuple[ResolvedNumerics, dict]], order: float) -> Estimate:
-    return estimate(
-        [case.tool.length / n.cells for n, _ in runs],
-        [s for _, s in runs],
-        order,
-        case.striker.velocity,
-        case.medium is not None,
-    )
 
 
 def _limit_refusal(tol: float, numerics: ResolvedNumerics, error: CaseError) -> CaseError:
@@ -91,7 +112,7 @@ def solve_to_tolerance(
     cancelled: CancelCheck | None = None,
     limits: Limits = Limits(),
     recorder: Recorder | None = None,
-) -> Result:
+) -> tuple[Result, Accuracy]:
     """Meet `tol` on every estimated quantity (see the module's docstring); the summary reports the
     estimate, the grids and why.
 
@@ -129,7 +150,7 @@ def solve_to_tolerance(
         if len(runs) < MIN_RUNS:
             cells = math.ceil(cells * CLIMB)
             continue
-        result, found = candidate, _estimate(case, runs, order)
+        result, found = candidate, from_runs(case, runs, order)
         worst.append(found.worst)
         closed = energy_closed(candidate.summary, tol)
         if found.worst <= tol and found.same_contacts and closed:
@@ -155,7 +176,7 @@ def solve_to_tolerance(
         "the explicit scheme at Courant number 1, its ends integrating their own equations, on "
         "grids refined until the error estimated from the last three is within the tolerance"
     )
-    return annotate(result, found, tolerance=tol, runs=[n for n, _ in runs], why=why, unmet=stopped if stopped else "")
+    return result, assess(found, result.summary, tolerance=tol, runs=[n for n, _ in runs], why=why, unmet=stopped)
 
 
 def energy_closed(summary: dict, tol: float) -> bool:
@@ -199,12 +220,21 @@ def next_refinement(found: Estimate, tol: float) -> float:
     return min(needed, cap)
 
 
-def fixed_estimate(
-    case: Case, numerics: ResolvedNumerics, result: Result, run: Callable[[Case, ResolvedNumerics], Result], why: str
-) -> Result:
-    """The error of a run on a fixed grid, from companion runs `COMPANIONS` times coarser in h and
-    τ (as many of them as the grid allows) at the scheme's order; `run` solves a case on given
-    numerics, `why` says why the grid is the one it is."""
+def fixed_grid(
+    case: Case,
+    progress: ProgressCallback | None,
+    cancelled: CancelCheck | None,
+    limits: Limits,
+    recorder: Recorder | None,
+) -> tuple[Result, Accuracy]:
+    """The run on the grid the case gives, its error estimated from companion runs `COMPANIONS`
+    times coarser in h and τ (as many of them as the grid allows) at the scheme's order."""
+    numerics = resolve_numerics(case)
+    check_limits(case, numerics, limits)
+    share = None if progress is None else (lambda fraction: progress(FIXED_SHARE * fraction))
+    result = simulate_rod(case, numerics=numerics, progress=share, cancelled=cancelled, recorder=recorder)
+    refuse_chatter(result.summary, numerics)
+    why = fixed_choice(case, numerics)
     companions, missing = [], []
     for factor in COMPANIONS:
         cells = round(numerics.cells / factor)
@@ -219,13 +249,17 @@ def fixed_estimate(
                 cells=cells,
                 time_step=numerics.time_step * numerics.cells / cells,
             )
-            companions.append((coarse, run(_summary_only(case, coarse), coarse).summary))
+            companion = simulate_rod(_summary_only(case, coarse), numerics=coarse, cancelled=cancelled)
+            refuse_chatter(companion.summary, coarse)
+            companions.append((coarse, companion.summary))
         except CaseError as error:  # a grid too coarse for a stiff contact or medium
             missing.append(f"{factor}× coarser: {error.errors[0].message.split(':')[0]}")
+    if progress is not None:
+        progress(1.0)
     if not companions:
-        return annotate(
-            result,
+        return result, assess(
             None,
+            result.summary,
             tolerance=None,
             runs=[numerics],
             why=why,
@@ -241,50 +275,64 @@ def fixed_estimate(
         else []
     )
     runs = companions + [(numerics, result.summary)]
-    found = _estimate(case, runs, numerics.weights().order)
-    return annotate(result, found, tolerance=None, runs=[n for n, _ in runs], why=why, notes=notes)
+    found = from_runs(case, runs, numerics.weights().order)
+    return result, assess(found, result.summary, tolerance=None, runs=[n for n, _ in runs], why=why, notes=notes)
 
 
-def lumped_estimate(case: Case, result: Result) -> Result:
-    """The lumped model's estimate: its modelling error, `LUMPED_ERROR·ε²` on every quantity."""
+def refuse_chatter(summary: dict, numerics: ResolvedNumerics) -> None:
+    """Refuse the run of a fixed grid whose ends carry a mass, or none, when of several contacts one
+    lasted less than `CHATTER_STEPS` steps: the contact chattered against an end that rings, and
+    the answer is the grid's, not the case's (the ends that integrate their own equations resolve
+    any contact with their own substeps)."""
+    if numerics.ends == "impedance" or summary["contacts_total"] < 2:
+        return  # one contact, however short, is no chatter: the estimate says how far off it is
+    finished = [c for c in summary["contacts"] if c["end"] is not None]
+    shortest = min(((c["end"] - c["start"]) / numerics.time_step for c in finished), default=math.inf)
+    if shortest < CHATTER_STEPS:
+        raise CaseError(
+            [
+                FieldError(
+                    field="contact",
+                    message=f"the contact chattered on this grid ({summary['contacts_total']} contacts, the "
+                    f"shortest over {shortest:.2g} time steps of {numerics.time_step:.3g} s): its "
+                    f"stiffness or its damper is more than the scheme '{numerics.scheme}' with these "
+                    "ends can take on this grid. Leave numerics.cells, time_step and scheme out (the "
+                    "default accuracy takes any contact), or give numerics.scheme = 'explicit' with "
+                    "numerics.cells only",
+                )
+            ]
+        )
+
+
+def fixed_choice(case: Case, numerics: ResolvedNumerics) -> str:
+    """Why a run on a fixed grid used its scheme: the case said so."""
+    num = case.numerics
+    if num.scheme is not None:
+        return (
+            f"numerics.scheme = '{num.scheme}' as asked, on the grid given or its defaults; its "
+            "error estimated from two companion runs on grids 2× and 4× coarser"
+        )
+    return (
+        f"a grid was given, so the paper's weighted scheme (8) with γ = {num.gamma:g} on it; "
+        "its error estimated from two companion runs on grids 2× and 4× coarser"
+    )
+
+
+def lumped(
+    case: Case, progress: ProgressCallback | None, cancelled: CancelCheck | None, limits: Limits
+) -> tuple[Result, Accuracy]:
+    """The two-mass model (21)–(25), its error its modelling error, `LUMPED_ERROR·ε²` on every
+    quantity."""
+    check_limits(case, resolve_numerics(case), limits)
+    result = simulate_lumped(case, progress=progress, cancelled=cancelled)
     eps = rigidity(case)
     error = LUMPED_ERROR * eps**2
-    skip = not_estimated(result.summary, case.striker.velocity, case.medium is not None)
-    found = Estimate({name: QuantityError(error, None, False) for name in ESTIMATED if name not in skip}, skip, True)
-    return annotate(
-        result,
-        found,
+    return result, assess(
+        modelled(case, result.summary, error),
+        result.summary,
         tolerance=case.numerics.tolerance,
         runs=[result.numerics],
         why=f"numerics.model = 'lumped' as asked: the two-mass model problem (21)–(25); "
         f"its modelling error estimated as ε² = {error:.2g} (ε = {eps:.3g}, the "
         "two-mass system's highest frequency over the tool's lowest elastic one)",
     )
-
-
-def annotate(
-    result: Result,
-    found: Estimate | None,
-    tolerance: float | None,
-    runs: list[ResolvedNumerics],
-    why: str,
-    unmet: str = "",
-    notes: list[str] = (),
-) -> Result:
-    """Complete the result's summary with the estimate, the tolerance, the grids and why, and as
-    warnings `notes` and what the estimate calls for (`accuracy.accuracy_warnings`)."""
-    from .accuracy import accuracy_warnings
-
-    warnings = list(notes)
-    if found is not None:
-        warnings += accuracy_warnings(found, result.summary, tolerance, unmet)
-    add_accuracy(
-        result.summary,
-        tolerance=tolerance,
-        error_estimate=found.relative() if found else None,
-        not_estimated=dict(found.left_out) if found else {},
-        why=why,
-        runs=runs,
-        warnings=warnings,
-    )
-    return result

@@ -261,7 +261,8 @@ def study_grid(case: Case, space: Space, tolerance: float | None, limits: Limits
 
     tol = case.numerics.tolerance or tolerance or DEFAULT_TOLERANCE
     plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
-    return max(solve_to_tolerance(plain, tol, limits=limits).numerics.cells, space.fewest_cells(case))
+    result, _ = solve_to_tolerance(plain, tol, limits=limits)
+    return max(result.numerics.cells, space.fewest_cells(case))
 
 
 def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: str, remedy: str) -> None:

@@ -131,7 +131,7 @@ def contact_stiffness_estimate(case: Case) -> float:
 # A contact or a medium this many times as stiff as the tool's end cell (E·S/h) makes the ends ring
 # against it and the contact chatter (tens of contacts where there is one): an end carrying its
 # half-cell mass from about as stiff, the paper's massless end from about 20× (`bench/validation.py`).
-# Below, a contact that still chatters is refused once run (`simulate.refuse_chatter`). Only the
+# Below, a contact that still chatters is refused once run (`adaptive.refuse_chatter`). Only the
 # ends that integrate their own equations take any stiffness.
 STIFF_END = {"mass": 1.0, "massless": 20.0}
 

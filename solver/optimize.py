@@ -24,7 +24,6 @@ import time
 import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
-from .adaptive import solve_to_tolerance
 from .case import Case, CaseError, FieldError
 from .errors import Cancelled
 from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
@@ -32,6 +31,7 @@ from .grid import DEFAULT_TOLERANCE
 from .limits import Limits
 from .paths import quantity
 from .result import CancelCheck, ProgressCallback
+from .simulate import simulate
 from .study import (
     DURATION_REMEDY,
     Optimization,
@@ -316,7 +316,7 @@ def _check(study: _Study, case: Case, tol: float, limits: Limits) -> tuple[tuple
     for entry in ranked[:CHECKED]:
         tree = study.space.tree(case.model_dump(mode="json", exclude_none=True), list(entry["values"].values()))
         accurate = study_case(case.model_validate(tree), tol)
-        result = solve_to_tolerance(accurate, tol, limits=limits)
+        result = simulate(accurate, limits=limits)
         found = {name: quantity(result.summary, name) for name in study.names}
         ok = study.feasible(found)
         checked.append({"values": entry["values"], "quantities": found, "feasible": ok})

@@ -6,7 +6,7 @@ wherever it is served or tested."""
 from __future__ import annotations
 
 import math
-from typing import Literal
+from typing import TYPE_CHECKING, Literal
 
 import numpy as np
 from pydantic import BaseModel, ConfigDict, Field
@@ -14,6 +14,9 @@ from pydantic import BaseModel, ConfigDict, Field
 from . import layout as L
 from .case import Case
 from .grid import ResolvedNumerics, striker_mass
+
+if TYPE_CHECKING:
+    from .accuracy import Accuracy
 
 MAX_CONTACTS = 10_000  # contact intervals kept for the summary; more are counted
 FORCE_HISTORY_POINTS = 2000
@@ -243,27 +246,18 @@ def build_summary(
     }
 
 
-def add_accuracy(
-    summary: dict,
-    *,
-    tolerance: float | None,
-    error_estimate: dict[str, float] | None,
-    not_estimated: dict[str, str],
-    why: str,
-    runs: list[ResolvedNumerics],
-    warnings: list[str],
-) -> None:
-    """Complete `summary` with what its error estimate says (`adaptive.annotate`)."""
+def add_accuracy(summary: dict, accuracy: Accuracy) -> None:
+    """Print into `summary` what the run says of its accuracy (`accuracy.assess`)."""
     summary.update(
         {
-            "tolerance": tolerance,
-            "error_estimate": error_estimate,
-            "not_estimated": not_estimated,
-            "why": why,
+            "tolerance": accuracy.tolerance,
+            "error_estimate": accuracy.error_estimate,
+            "not_estimated": accuracy.not_estimated,
+            "why": accuracy.why,
             "runs": [
                 {"model": n.model, "scheme": n.scheme, "cells": n.cells, "time_step": n.time_step, "steps": n.steps}
-                for n in runs
+                for n in accuracy.runs
             ],
         }
     )
-    summary["warnings"].extend(warnings)
+    summary["warnings"].extend(accuracy.warnings)

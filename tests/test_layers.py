@@ -98,3 +98,41 @@ def test_validating_input_loads_no_kernel(statement):
 def test_a_run_loads_the_kernel_when_it_needs_it():
     loaded = loaded_after("import percussim; percussim.simulate(percussim.load_preset('fig3'))")
     assert {"numba", "percussim.solver.kernel"} <= loaded
+
+
+def runtime_imports(name: str) -> set[str]:
+    """The solver modules `solver/<name>.py` imports when it runs (not those for type hints only)."""
+    tree = ast.parse((ROOT / "solver" / f"{name}.py").read_text())
+    hints = {
+        id(inner)
+        for node in ast.walk(tree)
+        if isinstance(node, ast.If) and getattr(node.test, "id", "") == "TYPE_CHECKING"
+        for inner in ast.walk(node)
+    }
+    return {
+        node.module.split(".")[0]
+        for node in ast.walk(tree)
+        if isinstance(node, ast.ImportFrom) and node.level == 1 and node.module and id(node) not in hints
+    }
+
+
+def callers(function: str) -> set[str]:
+    """The solver modules that call `function` by name."""
+    return {
+        path.stem
+        for path in (ROOT / "solver").glob("*.py")
+        for node in ast.walk(ast.parse(path.read_text()))
+        if isinstance(node, ast.Call) and getattr(node.func, "id", "") == function
+    }
+
+
+def test_the_accuracy_path_runs_one_way_down():
+    """simulate → adaptive (the runs) → accuracy (the estimate, once) → summary (prints it): no
+    module on the way calls back up, estimation is assessed only where the runs are chosen, and
+    only the entry point prints it into the summary."""
+    assert runtime_imports("accuracy").isdisjoint({"adaptive", "controller", "summary", "simulate"})
+    assert runtime_imports("summary").isdisjoint({"accuracy", "adaptive", "simulate"})
+    assert runtime_imports("adaptive").isdisjoint({"simulate", "summary"})
+    assert "accuracy" in runtime_imports("adaptive")
+    assert callers("assess") == {"adaptive"}
+    assert callers("add_accuracy") == {"simulate"}
