@@ -49,6 +49,29 @@ FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end
 FACE_INCOMING = (S_FACE_INCOMING, S_FACE_INCOMING_BEFORE)  # at an elastic striker's face
 BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE)  # at its back end
 
+# The ends' own state over one step, where they integrate their own equations (`integrate_ends`
+# fills it from the layer and the slots, the ends advance it, the new layer takes it back).
+# The struck end's (`struck_end_step`): the striker's displacement and velocity, the tool's end,
+# the contact force, the striker's impulse, whether in contact, the anvil's displacement, velocity
+# and force on the tool.
+(
+    END_STRIKER_DISP,
+    END_STRIKER_VELOCITY,
+    END_TOOL_DISP,
+    END_CONTACT_FORCE,
+    END_IMPULSE,
+    END_IN_CONTACT,
+    END_ANVIL_DISP,
+    END_ANVIL_VELOCITY,
+    END_ANVIL_FORCE,
+) = range(9)
+STRUCK_END_STATE = 9
+# The working end's (`working_end_step`): its displacement u_N, the medium's force F_m, then the
+# medium's state in `medium_state`'s order.
+WORK_DISP, WORK_FORCE, WORK_SET, WORK_DEEPEST, WORK_SURFACE, WORK_SPENT = range(6)
+WORK_MEDIUM = (WORK_SET, WORK_DEEPEST, WORK_SURFACE, WORK_SPENT)
+WORKING_END_STATE = 6
+
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
 # What `advance` takes, as named bundles. Numba passes a namedtuple's fields as separate values and

@@ -24,6 +24,15 @@ from ..layout import (
 from .audit import audit_impedance_energy, audit_scheme_energy, track_energy_excess
 from .bundles import (
     BACK_INCOMING,
+    END_ANVIL_DISP,
+    END_ANVIL_FORCE,
+    END_ANVIL_VELOCITY,
+    END_CONTACT_FORCE,
+    END_IMPULSE,
+    END_IN_CONTACT,
+    END_STRIKER_DISP,
+    END_STRIKER_VELOCITY,
+    END_TOOL_DISP,
     FACE_INCOMING,
     FAR_INCOMING,
     INCOMING,
@@ -48,6 +57,11 @@ from .bundles import (
     S_STRIKER_VELOCITY,
     STATUS_NON_FINITE,
     STATUS_OK,
+    STRUCK_END_STATE,
+    WORK_DISP,
+    WORK_FORCE,
+    WORK_MEDIUM,
+    WORKING_END_STATE,
     Layers,
     Overlaps,
     Recorded,
@@ -264,50 +278,50 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     face_in, face_slope = 0.0, 0.0
     if striker.elastic:
         face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, FACE_INCOMING, tau)
-    end_state[0] = y[cur]
-    end_state[1] = ends[S_STRIKER_VELOCITY]
-    end_state[2] = u[cur, 0]
-    end_state[3] = ends[S_FORCE_BEFORE]
-    end_state[4] = ends[S_IMPULSE]
-    end_state[5] = ends[S_IN_CONTACT]
-    end_state[6] = ends[S_ANVIL_DISP]
-    end_state[7] = ends[S_ANVIL_VELOCITY]
-    end_state[8] = ends[S_ANVIL_FORCE]
+    end_state[END_STRIKER_DISP] = y[cur]
+    end_state[END_STRIKER_VELOCITY] = ends[S_STRIKER_VELOCITY]
+    end_state[END_TOOL_DISP] = u[cur, 0]
+    end_state[END_CONTACT_FORCE] = ends[S_FORCE_BEFORE]
+    end_state[END_IMPULSE] = ends[S_IMPULSE]
+    end_state[END_IN_CONTACT] = ends[S_IN_CONTACT]
+    end_state[END_ANVIL_DISP] = ends[S_ANVIL_DISP]
+    end_state[END_ANVIL_VELOCITY] = ends[S_ANVIL_VELOCITY]
+    end_state[END_ANVIL_FORCE] = ends[S_ANVIL_FORCE]
     work, dissipated, crossings, contact_range, end_range = struck_end_step(
         t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
     )
-    far_state[0] = u[cur, n]
-    far_state[1] = ends[S_MEDIUM_FORCE]
+    far_state[WORK_DISP] = u[cur, n]
+    far_state[WORK_FORCE] = ends[S_MEDIUM_FORCE]
     for k in range(MEDIUM_STATE):
-        far_state[2 + k] = ends[MEDIUM_SLOTS[k]]
+        far_state[WORK_MEDIUM[k]] = ends[MEDIUM_SLOTS[k]]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
     flows = (work, dissipated, dissipated_far)
     if not (
-        abs(end_state[0]) < 1e300
-        and abs(end_state[2]) < 1e300
-        and abs(end_state[6]) < 1e300
-        and abs(far_state[0]) < 1e300
+        abs(end_state[END_STRIKER_DISP]) < 1e300
+        and abs(end_state[END_TOOL_DISP]) < 1e300
+        and abs(end_state[END_ANVIL_DISP]) < 1e300
+        and abs(far_state[WORK_DISP]) < 1e300
     ):
         return False, 0.0, 0.0, 0.0, 0.0, flows
-    y[new] = end_state[0]
-    u[new, 0] = end_state[2]
-    u[new, n] = far_state[0]
+    y[new] = end_state[END_STRIKER_DISP]
+    u[new, 0] = end_state[END_TOOL_DISP]
+    u[new, n] = far_state[WORK_DISP]
     for k in range(MEDIUM_STATE):
-        ends[MEDIUM_SLOTS[k]] = far_state[2 + k]
-    ends[S_STRIKER_VELOCITY] = end_state[1]
-    ends[S_IMPULSE] = end_state[4]
-    ends[S_ANVIL_DISP] = end_state[6]
-    ends[S_ANVIL_VELOCITY] = end_state[7]
-    ends[S_ANVIL_FORCE] = end_state[8]
-    velocity = end_state[1]
+        ends[MEDIUM_SLOTS[k]] = far_state[WORK_MEDIUM[k]]
+    ends[S_STRIKER_VELOCITY] = end_state[END_STRIKER_VELOCITY]
+    ends[S_IMPULSE] = end_state[END_IMPULSE]
+    ends[S_ANVIL_DISP] = end_state[END_ANVIL_DISP]
+    ends[S_ANVIL_VELOCITY] = end_state[END_ANVIL_VELOCITY]
+    ends[S_ANVIL_FORCE] = end_state[END_ANVIL_FORCE]
+    velocity = end_state[END_STRIKER_VELOCITY]
     if striker.elastic:
         striker_u[new, 0] = y[new]
         free_back_end(striker_u, layer, ends, striker, tau)
-        velocity = mean_velocity(end_state[4], contact, striker)
+        velocity = mean_velocity(end_state[END_IMPULSE], contact, striker)
     for k in range(crossings):
         track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
-    return True, velocity, end_state[3], end_state[8], far_state[1], flows
+    return True, velocity, end_state[END_CONTACT_FORCE], end_state[END_ANVIL_FORCE], far_state[WORK_FORCE], flows
 
 
 # `contract` lets LLVM fuse `a·b + c` into one multiply-add (one rounding instead of two) where the
@@ -440,7 +454,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(9), np.empty(6), np.empty((4, 3)))
+    scratch = (np.empty(STRUCK_END_STATE), np.empty(WORKING_END_STATE), np.empty((4, 3)))
     n_hist = 0
     n_field = 0
 

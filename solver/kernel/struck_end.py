@@ -11,6 +11,15 @@ from ..compiled import compiled
 from ..laws import FORCE_ABS_SINE, FORCE_PULSE
 from .bundles import (
     BACK_INCOMING,
+    END_ANVIL_DISP,
+    END_ANVIL_FORCE,
+    END_ANVIL_VELOCITY,
+    END_CONTACT_FORCE,
+    END_IMPULSE,
+    END_IN_CONTACT,
+    END_STRIKER_DISP,
+    END_STRIKER_VELOCITY,
+    END_TOOL_DISP,
     S_BACK_ENERGY,
     S_BACK_MEAN,
     S_BACK_MEAN_BEFORE,
@@ -349,7 +358,8 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     waves' rates `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
     `v(t) = mean + slope·(t − t0 − τ/2)`; split where R jumps or kinks.
 
-    `state` = (y, w, u_0, F1, I, in contact, y_a, w_a, F2) at t0 on entry, at t0 + τ on return:
+    `state` (its slots `END_…`) = (y, w, u_0, F1, I, in contact, y_a, w_a, F2) at t0 on entry, at
+    t0 + τ on return:
     w the striker's velocity (its face's when elastic), F1 the contact's force, I its impulse,
     y_a, w_a the anvil's displacement and velocity, F2 the force on the tool's end (F1 without an
     anvil). Returns the work of R and what the contacts' dampers dissipated over the step, the
@@ -367,9 +377,15 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     work = 0.0
     dissipated = 0.0
     count = 0
-    x = (state[0], state[1], state[6], state[7], state[2])
-    impulse = state[4]
-    in_contact = state[5] != 0.0
+    x = (
+        state[END_STRIKER_DISP],
+        state[END_STRIKER_VELOCITY],
+        state[END_ANVIL_DISP],
+        state[END_ANVIL_VELOCITY],
+        state[END_TOOL_DISP],
+    )
+    impulse = state[END_IMPULSE]
+    in_contact = state[END_IN_CONTACT] != 0.0
     v_start = v_mean - 0.5 * tau * v_slope
     face_start = face_mean - 0.5 * tau * face_slope
     # under the waves arriving now: the forces can jump at t0
@@ -450,8 +466,9 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
             e_max, te_max = f_end, t_a
         if f_end < e_min:
             e_min, te_min = f_end, t_a
-    state[0], state[1], state[2], state[3], state[4] = x[0], x[1], x[4], f, impulse
-    state[6], state[7], state[8] = x[2], x[3], f_end
+    state[END_STRIKER_DISP], state[END_STRIKER_VELOCITY], state[END_TOOL_DISP] = x[0], x[1], x[4]
+    state[END_CONTACT_FORCE], state[END_IMPULSE] = f, impulse
+    state[END_ANVIL_DISP], state[END_ANVIL_VELOCITY], state[END_ANVIL_FORCE] = x[2], x[3], f_end
     return work, dissipated, count, (f_max, t_max), (e_max, te_max, e_min, te_min)
 
 

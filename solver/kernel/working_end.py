@@ -15,6 +15,12 @@ from .bundles import (
     S_MEDIUM_SET,
     S_MEDIUM_SPENT,
     S_MEDIUM_SURFACE,
+    WORK_DEEPEST,
+    WORK_DISP,
+    WORK_FORCE,
+    WORK_SET,
+    WORK_SPENT,
+    WORK_SURFACE,
     boundary_weights,
 )
 from .struck_end import SDIRK_GAMMA, SDIRK_MONOTONE, substeps
@@ -36,7 +42,7 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
     count = substeps(c2 / z_total, tau, SDIRK_MONOTONE)
     span = tau / count
     g = gamma * span
-    u = state[0]
+    u = state[WORK_DISP]
     v_start = v_mean - 0.5 * tau * v_slope
     k2 = (2.0 * z * v_start - c2 * u) / z_total
     f_max = f_min = c2 * u + b2 * k2  # under the wave arriving now
@@ -57,8 +63,8 @@ def working_end_step(tau, state, v_mean, v_slope, medium):
             f_max, t_max = f, t_a + span
         if f < f_min:
             f_min, t_min = f, t_a + span
-    state[0] = u
-    state[1] = c2 * u + b2 * k2
+    state[WORK_DISP] = u
+    state[WORK_FORCE] = c2 * u + b2 * k2
     return dissipated, (f_max, t_max, f_min, t_min)
 
 
@@ -200,8 +206,8 @@ def yielding_end_step(tau, state, v_mean, v_slope, medium):
     count = substeps(stiffest / (z + medium.damping), tau, SDIRK_MONOTONE)
     span = tau / count
     g = gamma * span
-    u = state[0]
-    held = (state[2], state[3], state[4], state[5])
+    u = state[WORK_DISP]
+    held = (state[WORK_SET], state[WORK_DEEPEST], state[WORK_SURFACE], state[WORK_SPENT])
     v_start = v_mean - 0.5 * tau * v_slope
     _, _, f, _ = yielding_stage(u, 0.0, v_start, held, medium)  # under the wave arriving now
     f_max = f_min = f
@@ -220,8 +226,8 @@ def yielding_end_step(tau, state, v_mean, v_slope, medium):
             f_max, t_max = f, t_a + span
         if f < f_min:
             f_min, t_min = f, t_a + span
-    state[0], state[1] = u, f
-    state[2], state[3], state[4], state[5] = held
+    state[WORK_DISP], state[WORK_FORCE] = u, f
+    state[WORK_SET], state[WORK_DEEPEST], state[WORK_SURFACE], state[WORK_SPENT] = held
     return dissipated, (f_max, t_max, f_min, t_min)
 
 
