@@ -1,5 +1,5 @@
-"""The job page: `/` and its static files (HTML, JS and CSS without a build step; no resource from
-anywhere else). The plots are drawn by Plotly's cartesian bundle, kept here as it is published
+"""The job page: `/` and its static files (HTML, CSS and JS as ES modules, without a build step; no
+resource from anywhere else; docs/architecture.md lists the modules). The plots are drawn by Plotly's cartesian bundle, kept here as it is published
 (`npm pack plotly.js-cartesian-dist-min`, MIT, its licence beside it).
 
 Served without an API key: the page holds no data; it asks for a key and sends it in

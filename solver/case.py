@@ -18,20 +18,37 @@ from pydantic_core import InitErrorDetails, PydanticCustomError
 _M = TypeVar("_M", bound=BaseModel)
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
+
+
+# The job page builds its form from this schema (as /openapi.json publishes it). Beside each
+# field's title (its label), type, bounds and default, it reads these keys, which validate nothing:
+# `quantity`, its physical quantity (service/static/units.js gives its units); `symbol`, the
+# paper's; `choices`, a label for each value of a choice; `implied`, the value the solver takes
+# when the field is left out though the model's default is None.
+def _quantity(name: str) -> dict:
+    return {"json_schema_extra": {"quantity": name}}
+
+
 # Upper bounds wide enough for any percussive device, from a dental scaler to a pile hammer, and
 # narrow enough that no combination overflows the solver's arithmetic (fuzzing found where).
-Mass = Annotated[float, Field(gt=0, le=1e9)]
-Speed = Annotated[float, Field(ge=-1e6, le=1e6)]
-Length = Annotated[float, Field(gt=0, le=1e4)]
-Area = Annotated[float, Field(gt=0, le=1e4)]
-Modulus = Annotated[float, Field(ge=1e3, le=1e20)]  # up to far stiffer than steel: rigid-limit studies
-Density = Annotated[float, Field(ge=1e-3, le=1e6)]
-Stiffness = Annotated[float, Field(ge=0, le=1e20)]
-Damping = Annotated[float, Field(ge=0, le=1e15)]
-ForceAmplitude = Annotated[float, Field(ge=-1e12, le=1e12)]
-Frequency = Annotated[float, Field(gt=0, le=1e9)]
-Duration = Annotated[float, Field(gt=0, le=1e4)]
-Instant = Annotated[float, Field(ge=0, le=1e4)]
+Mass = Annotated[float, Field(gt=0, le=1e9, **_quantity("mass"))]
+Speed = Annotated[float, Field(ge=-1e6, le=1e6, **_quantity("speed"))]
+Length = Annotated[float, Field(gt=0, le=1e4, **_quantity("length"))]
+Area = Annotated[float, Field(gt=0, le=1e4, **_quantity("area"))]
+# up to far stiffer than steel: rigid-limit studies
+Modulus = Annotated[float, Field(ge=1e3, le=1e20, **_quantity("stress"))]
+Density = Annotated[float, Field(ge=1e-3, le=1e6, **_quantity("density"))]
+Stiffness = Annotated[float, Field(ge=0, le=1e20, **_quantity("stiffness"))]
+Damping = Annotated[float, Field(ge=0, le=1e15, **_quantity("damping"))]
+ForceAmplitude = Annotated[float, Field(ge=-1e12, le=1e12, **_quantity("force"))]
+Frequency = Annotated[float, Field(gt=0, le=1e9, **_quantity("rate"))]
+Duration = Annotated[float, Field(gt=0, le=1e4, **_quantity("time"))]
+Instant = Annotated[float, Field(ge=0, le=1e4, **_quantity("time"))]
+
+
+def _about(symbol: str | dict | None = None, **extra: Any) -> dict:
+    """A field's schema keys for the page: the paper's `symbol` and any other (see above)."""
+    return {"json_schema_extra": {"symbol": symbol, **extra} if symbol is not None else extra}
 
 
 # Every input model's: an unknown field, a number that is not finite, and a boolean or a string
@@ -61,7 +78,7 @@ def field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationE
 class Profile(_Model):
     """Piecewise-linear cross-section `S(x)`: stations `x` (m, from the struck end) and areas (m²)."""
 
-    x: list[float] = Field(min_length=2)
+    x: list[float] = Field(min_length=2, **_quantity("length"))
     area: list[Area] = Field(min_length=2)
 
     @field_validator("x")
@@ -96,10 +113,10 @@ class Tool(_Model):
     Give either a uniform `area` or a piecewise-linear `profile`.
     """
 
-    length: Length
-    youngs_modulus: Modulus
-    density: Density
-    area: Area | None = None
+    length: Length = Field(**_about("L"))
+    youngs_modulus: Modulus = Field(title="Young's modulus", **_about("E"))
+    density: Density = Field(**_about("ρ"))
+    area: Area | None = Field(None, **_about("S"))
     profile: Profile | None = None
 
     @model_validator(mode="after")
@@ -128,12 +145,12 @@ class Striker(_Model):
     (kg), or an elastic rod (a piston) of `length`, `youngs_modulus`, `density` and a uniform
     `area` or a `profile` (stations from its impact face, the end that meets the tool)."""
 
-    velocity: Speed
-    mass: Mass | None = None
+    velocity: Speed = Field(title="Impact velocity", **_about("W₁"))
+    mass: Mass | None = Field(None, **_about("m₁"))
     length: Length | None = None
-    youngs_modulus: Modulus | None = None
-    density: Density | None = None
-    area: Area | None = None
+    youngs_modulus: Modulus | None = Field(None, title="Young's modulus", **_about("E"))
+    density: Density | None = Field(None, **_about("ρ"))
+    area: Area | None = Field(None, **_about("S"))
     profile: Profile | None = None
 
     @model_validator(mode="after")
@@ -193,10 +210,10 @@ class Contact(_Model):
     The contact force on the tool is `G(δ)·δ + b1·δ'`; α = 0.5 is Hertz-like (c1 in N/m^1.5).
     """
 
-    stiffness: Annotated[Stiffness, Field(gt=0)]
-    exponent: float = Field(ge=0.0, le=0.5)
-    tension_stiffness: Stiffness = 0.0
-    damping: Damping = 0.0
+    stiffness: Annotated[Stiffness, Field(gt=0)] = Field(**_about("c₁", quantity="contact_stiffness"))
+    exponent: float = Field(ge=0.0, le=0.5, **_about("α", quantity="dimensionless"))
+    tension_stiffness: Stiffness = Field(0.0, title="Stiffness in tension", **_about("c₀"))
+    damping: Damping = Field(0.0, **_about("b₁"))
 
 
 class Anvil(_Model):
@@ -205,7 +222,7 @@ class Anvil(_Model):
     `contact` is then the striker's with the anvil."""
 
     mass: Mass
-    velocity: Speed = 0.0
+    velocity: Speed = Field(0.0, title="Velocity at impact")
     contact: Contact
 
 
@@ -233,13 +250,29 @@ class Medium(_Model):
       times `(1 + J·v)` with the `damping_factor` J (s/m); it does not pull.
     """
 
-    kind: Literal["linear", "bilinear", "smith"] = "linear"
-    stiffness: Stiffness | None = None
-    damping: Damping = 0.0
-    unloading_stiffness: Stiffness | None = None
-    ultimate_resistance: Annotated[float, Field(gt=0, le=1e12)] | None = None
-    quake: Annotated[float, Field(gt=0, le=1.0)] | None = None
-    damping_factor: Annotated[float, Field(ge=0, le=1e3)] = 0.0
+    # The page shows a medium's fields, and writes them, as its kind has them.
+    model_config = ConfigDict(json_schema_extra={"kind_fields": MEDIUM_FIELDS})
+
+    kind: Literal["linear", "bilinear", "smith"] = Field(
+        "linear",
+        **_about(
+            choices={
+                "linear": "linear: spring and damper",
+                "bilinear": "bilinear: rock (Lundberg)",
+                "smith": "Smith: soil at a pile's toe",
+            }
+        ),
+    )
+    stiffness: Stiffness | None = Field(None, **_about({"linear": "c₂", "bilinear": "k"}))
+    damping: Damping = Field(0.0, **_about("b₂"))
+    unloading_stiffness: Stiffness | None = Field(None, title="Unloading stiffness", **_about("kᵤ"))
+    ultimate_resistance: Annotated[float, Field(gt=0, le=1e12, **_quantity("force"))] | None = Field(
+        None, title="Ultimate resistance", **_about("Rᵤ")
+    )
+    quake: Annotated[float, Field(gt=0, le=1.0, **_quantity("length"))] | None = Field(None, **_about("q"))
+    damping_factor: Annotated[float, Field(ge=0, le=1e3, **_quantity("slowness"))] = Field(
+        0.0, title="Damping factor", **_about("J")
+    )
 
     @model_validator(mode="after")
     def _fields_of_kind(self) -> Medium:
@@ -277,32 +310,32 @@ class Medium(_Model):
 class Blows(_Model):
     """Blow after blow: `count` blows of `numerics.duration` each."""
 
-    count: Whole = Field(ge=1, le=1000, description="how many blows")
+    count: Whole = Field(ge=1, le=1000, description="how many blows", title="Number of blows", **_about(implied=1))
 
 
 class SineForce(_Model):
     """External force on the striker `R(t) = P·sin(ωt)`."""
 
-    kind: Literal["sine"]
-    amplitude: ForceAmplitude
-    omega: Frequency
+    kind: Literal["sine"] = Field(**_about(choices={"sine": "R = P·sin(ωt)"}))
+    amplitude: ForceAmplitude = Field(**_about("P"))
+    omega: Frequency = Field(title="Angular frequency", **_about("ω"))
 
 
 class AbsSineForce(_Model):
     """External force on the striker `R(t) = P·|sin(ωt)|`."""
 
-    kind: Literal["abs_sine"]
-    amplitude: ForceAmplitude
-    omega: Frequency
+    kind: Literal["abs_sine"] = Field(**_about(choices={"abs_sine": "R = P·|sin(ωt)|"}))
+    amplitude: ForceAmplitude = Field(**_about("P"))
+    omega: Frequency = Field(title="Angular frequency", **_about("ω"))
 
 
 class PulseForce(_Model):
     """External force on the striker `R(t) = P` for `t1 ≤ t ≤ t1 + Δt`, else 0."""
 
-    kind: Literal["pulse"]
-    amplitude: ForceAmplitude
-    start: Instant = 0.0
-    duration: Duration
+    kind: Literal["pulse"] = Field(**_about(choices={"pulse": "R = P for t₁ ≤ t ≤ t₁ + Δt"}))
+    amplitude: ForceAmplitude = Field(**_about("P"))
+    start: Instant = Field(0.0, **_about("t₁"))
+    duration: Duration = Field(**_about("Δt"))
 
 
 Force = Annotated[SineForce | AbsSineForce | PulseForce, Field(discriminator="kind")]
@@ -314,10 +347,19 @@ class Numerics(_Model):
     Giving `cells`, `time_step` or `scheme` runs that fixed grid instead (the paper's scheme unless
     another is named), its error estimated from two coarser companion runs."""
 
-    duration: Duration
-    time_step: Duration | None = Field(default=None, description="τ (s) of a fixed grid; default from the case itself")
+    duration: Duration = Field(title="Duration of the run", **_about("T"))
+    time_step: Duration | None = Field(
+        default=None,
+        description="τ (s) of a fixed grid; default from the case itself",
+        title="Time step",
+        **_about("τ"),
+    )
     cells: Whole | None = Field(  # the service limits are far lower than the bound
-        default=None, ge=1, le=2**31, description="N = L/h of a fixed grid; default 100 once a grid is asked"
+        default=None,
+        ge=1,
+        le=2**31,
+        description="N = L/h of a fixed grid; default 100 once a grid is asked",
+        **_about("N", implied=100),
     )
     tolerance: float | None = Field(
         default=None,
@@ -327,6 +369,7 @@ class Numerics(_Model):
         "contact force, maximum compressive and tensile stress, energy to the medium, "
         "rebound velocity, transfer efficiency); the solver chooses the grid and reports "
         "its error estimate. Default 0.01 when numerics gives no cells, time_step or scheme",
+        **_about(quantity="ratio", implied=0.01),
     )
     scheme: Literal["paper", "sigma", "explicit"] | None = Field(
         default=None,
@@ -335,26 +378,36 @@ class Numerics(_Model):
         "central differences (second order, Courant number a·τ/h ≤ 1; at 1, its default, "
         "exact along a uniform tool, with ends that integrate their own equations). "
         "Default 'paper' when a grid is given; chosen by the solver otherwise",
+        **_about(choices={"paper": "paper: weighted (8), γ", "sigma": "sigma: symmetric, σ", "explicit": "explicit"}),
     )
     gamma: float = Field(
         default=0.5,
         le=1.0,
         description="weight γ of the new time layer in the paper's scheme (8); 0.5 ≤ γ ≤ 1",
+        title="Weight of the new layer",
+        # the lower bound is _implicit_enough's, which names the reason
+        **_about("γ", quantity="dimensionless", minimum=0.5),
     )
     sigma: float = Field(
         default=0.25,
         le=1.0,
         description="weight σ of layers n±1 in the σ-scheme; 1/4 ≤ σ ≤ 1",
+        title="Weight of layers n±1",
+        **_about("σ", quantity="dimensionless", minimum=0.25),  # the lower bound is _sigma_stable's
     )
     end_masses: bool | None = Field(
         default=None,
         description="keep the half-cell mass at each end of the tool (second-order end conditions); "
         "default: yes for 'sigma' and 'explicit', no for 'paper' (its massless ends (9), (10))",
+        title="End masses",
+        **_about(choices={"true": "kept (second order)", "false": "massless ends"}),
     )
     model: Literal["rod", "lumped"] | None = Field(
         default=None,
         description="'rod': the tool as an elastic rod (8)–(13), the default; 'lumped': the two-mass "
         "model problem (21)–(25), its modelling error estimated as ε²",
+        title="Tool model",
+        **_about(choices={"rod": "elastic rod", "lumped": "two masses (21)–(25)"}),
     )
 
     @field_validator("gamma")
@@ -397,10 +450,18 @@ class Numerics(_Model):
 class Outputs(_Model):
     """What to keep beyond the summary: probe stations, full fields, and their sampling strides."""
 
-    probes: list[float] = Field(default_factory=list, description="stations x (m) for stress histories")
-    history_stride: Whole = Field(default=1, ge=1, description="keep every k-th step in the histories")
-    fields: bool = Field(default=False, description="keep displacement and stress along the tool")
-    field_stride: Whole = Field(default=10, ge=1, description="keep every k-th step in the fields")
+    probes: list[float] = Field(
+        default_factory=list, description="stations x (m) for stress histories", **_quantity("length")
+    )
+    history_stride: Whole = Field(
+        default=1, ge=1, description="keep every k-th step in the histories", title="History stride"
+    )
+    fields: bool = Field(
+        default=False, description="keep displacement and stress along the tool", title="Fields along the tool"
+    )
+    field_stride: Whole = Field(
+        default=10, ge=1, description="keep every k-th step in the fields", title="Field stride"
+    )
 
 
 class Case(_Model):

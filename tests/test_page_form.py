@@ -32,6 +32,16 @@ POWERS = {
 }
 
 
+def units(page: Page, function: str, *args) -> object:
+    """`function` of `args` run in the page with the names of its units module (service/static/units.js)
+    in scope: the module the page imported, as a module is only ever loaded once."""
+    return page.evaluate(
+        f"async (args) => {{ const {{ toSI, fromSI, shiftDecimal }} = await import('/static/units.js');"
+        f" return ({function})(args); }}",
+        list(args),
+    )
+
+
 def case_json(page: Page) -> dict:
     return json.loads(page.input_value("#case-json"))
 
@@ -65,10 +75,10 @@ def top(page: Page, selector: str) -> float:
 )
 def test_a_unit_converts_exactly(page, text, unit):
     # The double nearest the decimal typed, as Python reads "3.5e-3": no 3.5 * 0.001 = 0.0035000000000000005.
-    assert page.evaluate("([t, u]) => toSI(t, u)", [text, unit]) == float(Decimal(text).scaleb(POWERS[unit]))
+    assert units(page, "([t, u]) => toSI(t, u)", text, unit) == float(Decimal(text).scaleb(POWERS[unit]))
     # ... and shown back in the unit as the same digits.
-    assert page.evaluate("([t, u]) => fromSI(toSI(t, u), u)", [text, unit]) == page.evaluate(
-        "([t]) => shiftDecimal(t, 0)", [text]
+    assert units(page, "([t, u]) => fromSI(toSI(t, u), u)", text, unit) == units(
+        page, "([t]) => shiftDecimal(t, 0)", text
     )
 
 
@@ -276,6 +286,77 @@ def test_the_drawing_follows_the_case_and_never_breaks(page):
     expect(page.locator("#drawing .guess")).not_to_have_count(0)
     after = page.locator("#drawing").bounding_box()
     assert (after["width"], after["height"]) == (size["width"], size["height"])  # the same size whatever it draws
+
+
+def case_schema_fields(schemas: dict) -> dict[str, dict]:
+    """Every field of the Case schema by its path, each its schema (a `null` alternative dropped);
+    a union's fields (the force's kinds) are every variant's."""
+    fields = {}
+
+    def walk(node: dict, prefix: str) -> None:
+        for variant in variants(schemas, node):
+            for key, prop in variant["properties"].items():
+                options = [deref(schemas, o) for o in prop.get("anyOf", [prop]) if o.get("type") != "null"]
+                inner = {**options[0], **{k: v for k, v in prop.items() if k != "anyOf"}}
+                if "properties" in inner or "oneOf" in inner:
+                    walk(inner, f"{prefix}{key}.")
+                else:
+                    fields[f"{prefix}{key}"] = inner
+
+    walk(schemas["Case"], "")
+    return fields
+
+
+def deref(schemas: dict, node: dict) -> dict:
+    return schemas[node["$ref"].split("/")[-1]] if "$ref" in node else node
+
+
+def variants(schemas: dict, node: dict) -> list[dict]:
+    return [deref(schemas, variant) for variant in node.get("oneOf", [node])]
+
+
+def option_values(page: Page, select: str) -> list[str]:
+    return page.locator(select).locator("option").evaluate_all("els => els.map((o) => o.value)")
+
+
+# The case's fields edited in the case JSON only, without an input in the form: the shaft's
+# segments, until the form has a table of them.
+JSON_ONLY = {"shaft"}
+
+
+def test_the_forms_fields_are_the_case_schemas(page, stack):
+    """Every field of the case's schema, as /openapi.json publishes it, has its input in the form
+    (but those of JSON_ONLY), with the schema's title, default, kinds and bounds."""
+    schemas = stack.client.get("/openapi.json").json()["components"]["schemas"]
+    fields = case_schema_fields(schemas)
+    case_in_page(page, "fig3")
+    tables = page.locator("#case-fields .field.table").evaluate_all("els => els.map((el) => el.dataset.path)")
+    assert set(tables) == {"striker.profile", "tool.profile", "outputs.probes"}
+    for path, field in fields.items():
+        if path in JSON_ONLY or any(path == table or path.startswith(f"{table}.") for table in tables):
+            continue
+        if path.endswith(".kind"):  # a medium's or a force's kind: the choice that makes it
+            expect(page.locator(f'[data-mode="{path}"]')).to_have_count(1)
+            continue
+        row = page.locator(f'[data-path="{path}"]')
+        expect(row).to_have_count(1)
+        assert field["title"].lower() in row.locator("label.name").text_content().lower(), path
+        if type(field.get("default")) in (int, float):
+            expect(row.locator("input")).to_have_attribute("placeholder", f"{field['default']:g}")
+    # The kinds of a medium and of a force are the schema's.
+    assert option_values(page, "#f-medium-kind") == ["none", *schemas["Medium"]["properties"]["kind"]["enum"]]
+    force = schemas["Case"]["properties"]["force"]["anyOf"][0]
+    kinds = [variant["properties"]["kind"]["const"] for variant in variants(schemas, force)]
+    assert option_values(page, "#f-force-kind") == ["none", *kinds]
+    # The bounds shown are the schema's.
+    gamma, sigma = fields["numerics.gamma"], fields["numerics.sigma"]
+    expect(page.locator("#f-numerics-gamma-line")).to_have_text(
+        f"{gamma['minimum']:g} ≤ {gamma['symbol']} ≤ {gamma['maximum']:g}"
+    )
+    page.select_option("#f-numerics-scheme", '"sigma"')
+    expect(page.locator("#f-numerics-sigma-line")).to_have_text(
+        f"{sigma['minimum']:g} ≤ {sigma['symbol']} ≤ {sigma['maximum']:g}"
+    )
 
 
 def test_a_phone_shows_it_all_without_sideways_scrolling_or_jumps(browser, stack):

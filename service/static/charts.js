@@ -1,10 +1,12 @@
-"use strict";
 // A succeeded job's plots, drawn here with Plotly from the result's series (GET /v1/jobs/{id}/series):
 // zoom, pan and hover in the browser, PNG and SVG at full resolution, the CSV from the service.
-// The chart frame and its toolbar (chartFigure, drawChart) serve compare.js too.
-// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, save, download, shown).
+// The chart frame and its toolbar (chartFigure, drawChart) serve the comparison and the sweep too.
+// Plotly is the global of plotly-cartesian.min.js, a classic script loaded before the modules.
+import { describe, download, failure, getJSON } from "./api.js";
+import { $, card, h, save } from "./dom.js";
+import { inUnit, quantityOfSI, shownUnit } from "./units.js";
 
-const SCREEN_POINTS = 2000; // samples asked of a history for the screen; the service keeps the peaks
+export const SCREEN_POINTS = 2000; // samples asked of a history for the screen; the service keeps the peaks
 const FIELD_TIMES = 300; // frames and stations of the stress fields for the screen
 const FIELD_STATIONS = 400;
 const EXPORT_SIZE = { width: 1080, height: 600 }; // px of an exported image, the service's plots' own
@@ -16,35 +18,32 @@ const CHART_CONFIG = {
   modeBarButtonsToRemove: ["toImage", "select2d", "lasso2d"],
 };
 // Colour-blind-safe (Okabe–Ito, then Tol's), one a trace or a job; twelve, for the energy terms.
-const PALETTE = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#332288", "#7f7f7f",
+export const PALETTE = ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#332288", "#7f7f7f",
                  "#882255", "#44AA99", "#999933", "#AA4499"];
 // Stress: compression (< 0) blue, tension red, zero white (ColorBrewer RdBu).
 const DIVERGING = [[0, "#053061"], [0.1, "#2166ac"], [0.2, "#4393c3"], [0.3, "#92c5de"], [0.4, "#d1e5f0"],
   [0.5, "#f7f7f7"], [0.6, "#fddbc7"], [0.7, "#f4a582"], [0.8, "#d6604d"], [0.9, "#b2182b"], [1, "#67001f"]];
 
 // ---------------------------------------------------------------------------------------------
-// Units: the API's are SI; the screen's are an engineer's.
+// Units: the API's are SI; the screen's are an engineer's (units.js).
 
 // The service's plots' rule (solver/plots.py time_unit): µs below 2 ms, so a scale reads 0 … 2000 at worst.
-const timeUnit = (end) => (end < 2e-3 ? { scale: 1e6, unit: "µs" } : { scale: 1e3, unit: "ms" });
+const timeUnit = (end) => (end < 2e-3 ? "µs" : "ms");
 
-// {scale, unit} of an axis ({label, unit} in SI) whose largest value is `end`.
-function displayUnit(axis, end) {
-  switch (axis.unit) {
-    case "s": return timeUnit(end);
-    case "N": return { scale: 1e-3, unit: "kN" };
-    case "Pa": return { scale: 1e-6, unit: "MPa" };
-    // a place along the tool reads in metres, as the service's plots; a displacement in mm
-    case "m": return /along/.test(axis.label) ? { scale: 1, unit: "m" } : { scale: 1e3, unit: "mm" };
-    default: return { scale: 1, unit: axis.unit || "" };
-  }
+// The unit an axis ({label, unit} in SI) whose largest value is `end` is shown in.
+export function displayUnit(axis, end) {
+  const quantity = quantityOfSI(axis.unit);
+  if (quantity === "time") return timeUnit(end);
+  // a place along the tool reads in metres, as the service's plots; a displacement in mm
+  if (quantity === "length" && /along/.test(axis.label)) return axis.unit;
+  return quantity ? shownUnit(quantity) : axis.unit || "";
 }
 
 // Text from the service or the user, for Plotly, which reads a few HTML tags in its labels: as
 // text, never as markup.
-const plain = (text) => String(text).replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;");
+export const plain = (text) => String(text).replace(/&/g, "&amp;").replace(/</g, "&lt;").replace(/>/g, "&gt;");
 
-const axisTitle = (label, unit) => plain(unit ? `${label} (${unit})` : label);
+export const axisTitle = (label, unit) => plain(unit ? `${label} (${unit})` : label);
 
 // A value to 4 significant digits without trailing zeros or an exponent: "0.6 ms", "3.455 ms".
 const brief = (value) => String(+value.toPrecision(4));
@@ -60,9 +59,10 @@ function fitTitle(text, width) {
   return `${text.slice(0, at)}<br>${text.slice(at + 1)}`;
 }
 
-const scaled = (values, scale) => values.map((v) => (v === null ? null : v * scale));
+// SI values in `unit`.
+export const scaled = (values, unit) => values.map((v) => (v === null ? null : inUnit(v, unit)));
 
-function largest(arrays) {
+export function largest(arrays) {
   let top = -Infinity;
   for (const values of arrays) for (const v of values) if (v !== null && v > top) top = v;
   return top;
@@ -87,9 +87,6 @@ const caseName = (data) => (typeof data.case === "string" ? data.case : data.cas
 
 const plotArea = (figure) => figure.querySelector(".plot-area");
 
-// What went wrong, in words: the service's answer, or the browser's (a fetch, a drawing).
-const failure = (error) => (error instanceof ApiError ? describe(error) : error.message);
-
 function chartMessage(figure, text) {
   const line = figure.querySelector(".chart-message");
   line.textContent = text || "";
@@ -99,7 +96,7 @@ function chartMessage(figure, text) {
 // The frame of chart `name`, laid out before its data is fetched, its height set by its `size`
 // (charts.css: "short", "tall" or the usual), so that nothing moves when the data comes;
 // `controls` go under the plot.
-function chartFigure(name, title, { size = null, wide = false, controls = null } = {}) {
+export function chartFigure(name, title, { size = null, wide = false, controls = null } = {}) {
   let figure;
   const tool = (action, text, label) => h("button", {
     type: "button", class: "chart-tool", "data-action": action, "aria-label": label, title: label, disabled: true,
@@ -123,7 +120,7 @@ function chartFigure(name, title, { size = null, wide = false, controls = null }
 }
 
 // The chart's frame says, in words, why it has no chart.
-function chartUnavailable(figure, reason) {
+export function chartUnavailable(figure, reason) {
   const area = plotArea(figure);
   area.classList.remove("loading");
   area.classList.add("unavailable");
@@ -182,7 +179,7 @@ function purgeDetached() {
 // Draws (or redraws) `chart` in `figure`. `chart`: {data, build(data) → {traces, layout},
 // load(full) → data at full resolution, for export, file: the exports' name without its extension,
 // csv() → {blob, name}}.
-async function drawChart(figure, chart) {
+export async function drawChart(figure, chart) {
   figure.chart = chart;
   const area = plotArea(figure);
   let traces, layout;
@@ -300,7 +297,7 @@ async function exportImage(figure, format) {
 }
 
 // CSV text of `rows` (arrays) under `header`; a cell with a comma or a quote is quoted.
-function csvText(header, rows) {
+export function csvText(header, rows) {
   const cell = (v) => (v === null || v === undefined ? "" : /[",\n]/.test(String(v)) ? `"${String(v).replace(/"/g, '""')}"` : String(v));
   return [header, ...rows].map((row) => row.map(cell).join(",")).join("\n") + "\n";
 }
@@ -314,9 +311,9 @@ function lineTraces(data, options = () => ({})) {
   const xUnit = displayUnit(data.x, largest(data.series.map((s) => s.x)));
   const yUnit = displayUnit(data.y, 0);
   const traces = data.series.map((s, i) => ({
-    type: "scatter", mode: "lines", name: plain(s.label), x: scaled(s.x, xUnit.scale), y: scaled(s.y, yUnit.scale),
+    type: "scatter", mode: "lines", name: plain(s.label), x: scaled(s.x, xUnit), y: scaled(s.y, yUnit),
     line: { color: PALETTE[i % PALETTE.length], width: 1.4 },
-    hovertemplate: `%{y:.4g} ${yUnit.unit} at %{x:.4g} ${xUnit.unit}<extra>${plain(s.label)}</extra>`,
+    hovertemplate: `%{y:.4g} ${yUnit} at %{x:.4g} ${xUnit}<extra>${plain(s.label)}</extra>`,
     ...options(s, i),
   }));
   return { traces, xUnit, yUnit };
@@ -325,8 +322,8 @@ function lineTraces(data, options = () => ({})) {
 function lineLayout(data, xUnit, yUnit, traces, more = {}) {
   return {
     showlegend: traces.length > 1,
-    xaxis: { title: { text: axisTitle(data.x.label, xUnit.unit) } },
-    yaxis: { title: { text: axisTitle(data.y.label, yUnit.unit) } },
+    xaxis: { title: { text: axisTitle(data.x.label, xUnit) } },
+    yaxis: { title: { text: axisTitle(data.y.label, yUnit) } },
     ...more,
   };
 }
@@ -354,7 +351,7 @@ function buildEnergy(data) {
     };
   });
   const layout = lineLayout(ordered, xUnit, yUnit, traces, { hovermode: terms > 1 ? "x unified" : "closest" });
-  layout.xaxis.unifiedhovertitle = { text: `t = %{x:.4g} ${xUnit.unit}` };
+  layout.xaxis.unifiedhovertitle = { text: `t = %{x:.4g} ${xUnit}` };
   return { traces, layout };
 }
 
@@ -364,11 +361,11 @@ function buildForcePenetration(data, summary) {
   const permanent = summary.medium_penetration && summary.medium_penetration.permanent;
   const shapes = [], annotations = [];
   if (typeof permanent === "number") {
-    const x = permanent * xUnit.scale;
+    const x = inUnit(permanent, xUnit);
     shapes.push({ type: "line", xref: "x", yref: "paper", x0: x, x1: x, y0: 0, y1: 1,
                   line: { color: "#b42318", width: 1, dash: "dash" } });
     annotations.push({ xref: "x", yref: "paper", x, y: 1, yanchor: "top", xanchor: "right", showarrow: false,
-                       text: `permanent ${brief(x)} ${xUnit.unit}`, font: { size: 11, color: "#b42318" } });
+                       text: `permanent ${brief(x)} ${xUnit}`, font: { size: 11, color: "#b42318" } });
   }
   return { traces, layout: lineLayout(data, xUnit, yUnit, traces, { shapes, annotations }) };
 }
@@ -376,22 +373,26 @@ function buildForcePenetration(data, summary) {
 // The fields' frame times in display units.
 const fieldTimeUnit = (fields) => timeUnit(fields.times[fields.times.length - 1] || 0);
 
+// The fields' stress and stations: the stress in its shown unit, the stations (along the tool) in metres.
+const STRESS = shownUnit("stress");
+const STATIONS = "m";
+
 // Stress along the tool at frame `chart.frame`, on a stress scale fixed over every frame, so that
 // the slider moves the curve, not the axis.
 function buildStressAlong(fields, frame) {
   const t = fieldTimeUnit(fields);
-  const bound = 1.05 * (largestMagnitude(fields.stress) * 1e-6 || 1);
-  const time = `${brief(fields.times[frame] * t.scale)} ${t.unit}`;
+  const bound = 1.05 * (inUnit(largestMagnitude(fields.stress), STRESS) || 1);
+  const time = `${brief(inUnit(fields.times[frame], t))} ${t}`;
   return {
     traces: [{
-      type: "scatter", mode: "lines", name: `t = ${time}`, x: fields.stations, y: scaled(fields.stress[frame], 1e-6),
+      type: "scatter", mode: "lines", name: `t = ${time}`, x: fields.stations, y: scaled(fields.stress[frame], STRESS),
       line: { color: PALETTE[0], width: 1.6 },
-      hovertemplate: `%{y:.4g} MPa at x = %{x:.4g} m<extra>t = ${time}</extra>`,
+      hovertemplate: `%{y:.4g} ${STRESS} at x = %{x:.4g} ${STATIONS}<extra>t = ${time}</extra>`,
     }],
     layout: {
       showlegend: false,
-      xaxis: { title: { text: axisTitle(fields.x.label, "m") } },
-      yaxis: { title: { text: "stress σ (MPa)" }, range: [-bound, bound], zeroline: true, zerolinecolor: "#98a2b3" },
+      xaxis: { title: { text: axisTitle(fields.x.label, STATIONS) } },
+      yaxis: { title: { text: `stress σ (${STRESS})` }, range: [-bound, bound], zeroline: true, zerolinecolor: "#98a2b3" },
       annotations: [{ xref: "paper", yref: "paper", x: 1, y: 1, xanchor: "right", yanchor: "top", showarrow: false,
                       text: `t = ${time}`, font: { size: 12 } }],
     },
@@ -401,45 +402,46 @@ function buildStressAlong(fields, frame) {
 // σ(x, t) over the tool and the run: time across, x up, zero white; the slider's time marked.
 function buildSpacetime(fields, frame) {
   const t = fieldTimeUnit(fields);
-  const bound = largestMagnitude(fields.stress) * 1e-6 || 1;
+  const bound = inUnit(largestMagnitude(fields.stress), STRESS) || 1;
   // z is a row a station: the transpose of the API's row a time.
-  const z = fields.stations.map((_, j) => fields.stress.map((row) => (row[j] === null ? null : row[j] * 1e-6)));
-  const at = fields.times[frame] * t.scale;
+  const z = fields.stations.map((_, j) => fields.stress.map((row) => (row[j] === null ? null : inUnit(row[j], STRESS))));
+  const at = inUnit(fields.times[frame], t);
   return {
     traces: [{
-      type: "heatmap", x: scaled(fields.times, t.scale), y: fields.stations, z, zmin: -bound, zmax: bound, zmid: 0,
-      colorscale: DIVERGING, colorbar: { title: { text: "σ (MPa)", side: "top" }, thickness: 12, outlinewidth: 0 },
-      hovertemplate: `σ = %{z:.4g} MPa<br>x = %{y:.4g} m, t = %{x:.4g} ${t.unit}<extra></extra>`,
+      type: "heatmap", x: scaled(fields.times, t), y: fields.stations, z, zmin: -bound, zmax: bound, zmid: 0,
+      colorscale: DIVERGING, colorbar: { title: { text: `σ (${STRESS})`, side: "top" }, thickness: 12, outlinewidth: 0 },
+      hovertemplate: `σ = %{z:.4g} ${STRESS}<br>x = %{y:.4g} ${STATIONS}, t = %{x:.4g} ${t}<extra></extra>`,
     }],
     layout: {
-      xaxis: { title: { text: axisTitle("time t", t.unit) }, showgrid: false },
-      yaxis: { title: { text: axisTitle(fields.x.label, "m") }, showgrid: false },
+      xaxis: { title: { text: axisTitle("time t", t) }, showgrid: false },
+      yaxis: { title: { text: axisTitle(fields.x.label, STATIONS) }, showgrid: false },
       shapes: [{ type: "line", xref: "x", yref: "paper", x0: at, x1: at, y0: 0, y1: 1,
                  line: { color: "#1d2430", width: 1, dash: "dot" } }],
     },
   };
 }
 
-// The blows table from the summary: peak force, energy to the medium and set, blow by blow.
+// The blows table from the summary: peak force, energy to the medium and set, blow by blow:
+// [key, label, quantity].
 const BLOW_BARS = [
-  ["peak_contact_force", "peak contact force", "kN", 1e-3],
-  ["to_medium", "energy to the medium", "J", 1],
-  ["set", "set", "mm", 1e3],
+  ["peak_contact_force", "peak contact force", "force"],
+  ["to_medium", "energy to the medium", "energy"],
+  ["set", "set", "length"],
 ];
 
 function buildBlows(blows) {
   const number = blows.map((_, i) => i + 1);
-  const traces = BLOW_BARS.map(([key, label, unit, scale], k) => ({
-    type: "bar", name: label, x: number, y: blows.map((b) => b[key] * scale),
+  const traces = BLOW_BARS.map(([key, label, quantity], k) => ({
+    type: "bar", name: label, x: number, y: scaled(blows.map((b) => b[key]), shownUnit(quantity)),
     xaxis: `x${k ? k + 1 : ""}`, yaxis: `y${k ? k + 1 : ""}`, marker: { color: PALETTE[k] },
-    hovertemplate: `${label} %{y:.4g} ${unit}, blow %{x}<extra></extra>`,
+    hovertemplate: `${label} %{y:.4g} ${shownUnit(quantity)}, blow %{x}<extra></extra>`,
   }));
   const layout = { showlegend: false, grid: { rows: 1, columns: 3, pattern: "independent", xgap: 0.28 },
                    margin: { l: 44, r: 8, t: 24, b: 40 }, annotations: [] };
-  BLOW_BARS.forEach(([, label, unit], k) => {
+  BLOW_BARS.forEach(([, label, quantity], k) => {
     const n = k ? k + 1 : "";
     layout[`xaxis${n}`] = { title: { text: "blow" }, dtick: 1 };
-    layout[`yaxis${n}`] = { title: { text: unit } };
+    layout[`yaxis${n}`] = { title: { text: shownUnit(quantity) } };
     layout.annotations.push({ xref: `x${n} domain`, yref: `y${n} domain`, x: 0.5, y: 1, yanchor: "bottom",
                               showarrow: false, text: label, font: { size: 11 } });
   });
@@ -470,17 +472,17 @@ const JOB_CHARTS = [
   ["energy", "energy", null, { size: "tall", wide: true }], // its many terms' legend needs the width
 ];
 
-async function showCharts(view, summary) {
+export async function showCharts(view, summary) {
   const box = $("plots");
   let listed;
   try {
     ({ series: listed } = await getJSON(`/v1/jobs/${view.id}/series`));
   } catch (error) {
     const reason = error.status === 404 ? "this service does not serve the result's series" : describe(error);
-    if (view === shown) box.replaceChildren(h("p", { class: "muted" }, `No plots: ${reason}.`));
+    if (!view.signal.aborted) box.replaceChildren(h("p", { class: "muted" }, `No plots: ${reason}.`));
     return;
   }
-  if (view !== shown) return;
+  if (view.signal.aborted) return;
   const series = Object.fromEntries(listed.map((s) => [s.name, s]));
   const figures = {};
   for (const [name, source, title, options] of JOB_CHARTS) {
@@ -519,10 +521,10 @@ async function drawSeries(view, figure, listed, path, build) {
   try {
     data = await getJSON(path(false));
   } catch (error) {
-    if (view === shown) chartUnavailable(figure, `Not drawn: ${describe(error)}`);
+    if (!view.signal.aborted) chartUnavailable(figure, `Not drawn: ${describe(error)}`);
     return;
   }
-  if (view !== shown) return;
+  if (view.signal.aborted) return;
   const stem = fileStem(caseName(data), view.id, listed.name);
   await drawChart(figure, {
     data, build, file: stem,
@@ -546,10 +548,10 @@ async function drawFields(view, figures, listed, summary) {
   try {
     fields = await getJSON(seriesPath(view.id, "fields", fieldPoints(false)));
   } catch (error) {
-    if (view === shown) for (const f of [along, map]) chartUnavailable(f, `Not drawn: ${describe(error)}`);
+    if (!view.signal.aborted) for (const f of [along, map]) chartUnavailable(f, `Not drawn: ${describe(error)}`);
     return;
   }
-  if (view !== shown) return;
+  if (view.signal.aborted) return;
   if (!fields.times.length) {
     for (const f of [along, map]) chartUnavailable(f, "the result has no frames of the stress fields");
     return;
@@ -560,7 +562,7 @@ async function drawFields(view, figures, listed, summary) {
   const t = fieldTimeUnit(fields);
   const input = along.querySelector(".time-slider");
   const output = along.querySelector(".time-value");
-  const label = (i) => `t = ${brief(fields.times[i] * t.scale)} ${t.unit}`;
+  const label = (i) => `t = ${brief(inUnit(fields.times[i], t))} ${t}`;
   Object.assign(input, { max: fields.times.length - 1, value: frame, disabled: false });
   input.setAttribute("aria-valuetext", label(frame));
   output.textContent = label(frame);
@@ -579,7 +581,7 @@ async function drawFields(view, figures, listed, summary) {
     input.setAttribute("aria-valuetext", label(alongChart.frame));
     output.textContent = label(alongChart.frame);
     drawChart(along, alongChart);
-    const x = fields.times[alongChart.frame] * t.scale;
+    const x = inUnit(fields.times[alongChart.frame], t);
     Plotly.relayout(plotArea(map), { "shapes[0].x0": x, "shapes[0].x1": x });
   });
   await Promise.all([drawChart(along, alongChart), drawChart(map, mapChart)]);

@@ -1,24 +1,29 @@
-"use strict";
 // Two to eight finished jobs side by side: their contact force and probe stresses overlaid, their
 // summaries in one table with what differs from the first (the reference) highlighted, and the
-// case fields that differ. The charts are charts.js's (chartFigure, drawChart).
-// Uses page.js's helpers (h, $, api, getJSON, describe, fmt, card, table, showView, openJob), its
-// COMPARE_MIN and COMPARE_MAX, the picker's bounds, and PULSE, the quantities of the pulse table.
+// case fields that differ.
+import { describe, failure, getJSON } from "./api.js";
+import {
+  axisTitle, chartFigure, chartUnavailable, csvText, displayUnit, drawChart, largest, PALETTE, plain, scaled,
+  SCREEN_POINTS,
+} from "./charts.js";
+import { $, card, fmt, h, table } from "./dom.js";
+import { openJob } from "./job.js";
+import { COMPARE_MAX, COMPARE_MIN } from "./jobs.js";
+import { PULSE, pulseValue } from "./summary.js";
+import { shownUnit } from "./units.js";
+import { showView } from "./view.js";
 
 const AGREEMENT = 0.005; // relative difference taken as real when neither job estimates its error
-
-let comparing = null; // the comparison on view; one opened later replaces it, and the first stops drawing
 
 const shortId = (id) => id.slice(0, 6);
 const jobLabel = (job) => `${(job.record && job.record.name) || "(unnamed)"} · ${shortId(job.id)}`;
 
-async function openComparison(ids) {
-  const token = {};
-  comparing = token;
+export async function openComparison(ids) {
   ids = [...new Set(ids.filter(Boolean))];
-  showView("comparison", `#compare=${ids.join(",")}`);
+  // One opened later replaces this one, which then stops drawing.
+  const signal = showView("comparison", `#compare=${ids.join(",")}`);
   const box = $("comparison");
-  const live = () => comparing === token && !box.hidden;
+  const live = () => !signal.aborted;
   if (ids.length < COMPARE_MIN || ids.length > COMPARE_MAX) {
     box.replaceChildren(h("h2", {}, "Comparison"), h("p", { class: "banner error" },
       `Pick between ${COMPARE_MIN} and ${COMPARE_MAX} jobs to compare; ${ids.length} ${ids.length === 1 ? "was" : "were"} picked.`));
@@ -123,14 +128,14 @@ function overlay(jobs, all, pick) {
   const yUnit = displayUnit(first.y, 0);
   return {
     traces: drawn.map(([job, line]) => ({
-      type: "scatter", mode: "lines", name: plain(jobLabel(job)), x: scaled(line.x, xUnit.scale),
-      y: scaled(line.y, yUnit.scale), line: { color: job.colour, width: 1.4 },
-      hovertemplate: `%{y:.4g} ${yUnit.unit} at %{x:.4g} ${xUnit.unit}<extra>${plain(jobLabel(job))}</extra>`,
+      type: "scatter", mode: "lines", name: plain(jobLabel(job)), x: scaled(line.x, xUnit),
+      y: scaled(line.y, yUnit), line: { color: job.colour, width: 1.4 },
+      hovertemplate: `%{y:.4g} ${yUnit} at %{x:.4g} ${xUnit}<extra>${plain(jobLabel(job))}</extra>`,
     })),
     layout: {
       showlegend: true,
-      xaxis: { title: { text: axisTitle(first.x.label, xUnit.unit) } },
-      yaxis: { title: { text: axisTitle(first.y.label, yUnit.unit) } },
+      xaxis: { title: { text: axisTitle(first.x.label, xUnit) } },
+      yaxis: { title: { text: axisTitle(first.y.label, yUnit) } },
     },
     drawn,
   };
@@ -233,14 +238,14 @@ function summaryTable(jobs) {
   const [reference] = jobs;
   const rows = PULSE.filter((q) => jobs.some((job) => pulseValue(q, job.summary) !== null))
     .map((q) => {
-      const { label, quantity, unit } = q;
+      const { label, key, quantity } = q;
       const base = pulseValue(q, reference.summary);
-      return h("tr", { "data-quantity": quantity },
-        h("th", {}, label, h("span", { class: "unit" }, unit)),
+      return h("tr", { "data-quantity": key },
+        h("th", {}, label, h("span", { class: "unit" }, shownUnit(quantity))),
         jobs.map((job, i) => {
           const v = pulseValue(q, job.summary);
           const diff = i === 0 ? { differs: false, text: "" }
-            : difference(v, base, [estimated(job.summary, quantity), estimated(reference.summary, quantity)]);
+            : difference(v, base, [estimated(job.summary, key), estimated(reference.summary, key)]);
           return h("td", { class: diff.differs ? "num value differs" : "num value", "data-job": job.id,
                            title: diff.differs ? "differs from the reference by more than the estimated errors" : null },
             h("span", { class: "number" }, fmt(v)), diff.text ? h("span", { class: "diff" }, diff.text) : null);

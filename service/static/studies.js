@@ -1,6 +1,11 @@
-"use strict";
 // Calibrations and optimisations on the page: their forms (over the case in the editor) and a
-// finished study's answer in the job view. Uses page.js's helpers (h, $, api, fmt, card, ...).
+// finished study's answer in the job view (a study is a job: the job view polls it).
+import { describe, getJSON } from "./api.js";
+import { $, card, fmt, h, save, showProblems, table, typed } from "./dom.js";
+import { editedCase, loadCase, send } from "./editor.js";
+import { showImage, showJobError } from "./job.js";
+import { pulseCard, warningsBanner } from "./summary.js";
+import { shown, shownUnit } from "./units.js";
 
 // The rows each form starts with: [field, low, high]; a limit's is [quantity, "max" or "min", value].
 const STARTING_ROWS = {
@@ -92,8 +97,10 @@ async function chooseRecord() {
     const count = record.values.length;
     const [first, last] = record.time ? [record.time[0], record.time.at(-1)]
       : [record.time_start || 0, (record.time_start || 0) + (count - 1) / record.sample_rate];
-    const span = Number.isFinite(first) && Number.isFinite(last) ? ` over ${us(first)}–${us(last)} µs` : "";
-    const rate = record.sample_rate ? ` at ${fmt(record.sample_rate / 1e6)} MHz` : "";
+    const span = Number.isFinite(first) && Number.isFinite(last)
+      ? ` over ${fmt(shown(first, "time"))}–${fmt(shown(last, "time"))} ${shownUnit("time")}` : "";
+    const rate = record.sample_rate
+      ? ` at ${fmt(shown(record.sample_rate, "frequency"))} ${shownUnit("frequency")}` : "";
     const where = record.quantity === "stress" ? ` at x = ${fmt(record.x)} m` : "";
     info.textContent = `${file.name}: ${count} samples of ${record.quantity}${where}${rate}${span}.`;
   } catch (problems) {
@@ -141,15 +148,15 @@ async function submitOptimization(event) {
 
 const num = (text, className = "num") => h("td", { class: className }, text);
 
-async function showStudy(view, kind) {
+export async function showStudy(view, kind) {
   let study;
   try {
     study = await getJSON(`/v1/${kind}s/${view.id}`);
   } catch (error) {
-    if (view === shown) showJobError(`The ${kind} could not be loaded: ${describe(error)}`);
+    if (!view.signal.aborted) showJobError(`The ${kind} could not be loaded: ${describe(error)}`);
     return;
   }
-  if (view !== shown) return;
+  if (view.signal.aborted) return;
   const title = kind === "calibration" ? "The record against the fitted model" : "Every run of the objective";
   const plot = { name: kind, title, links: { png: study.links.plot_png, svg: study.links.plot_svg } };
   const frame = h("div", { class: "frame loading" });
@@ -236,11 +243,11 @@ function historyCsv(history, paths, quantities) {
   return `${lines.join("\n")}\n`;
 }
 
-document.addEventListener("DOMContentLoaded", () => {
+export function startStudies() {
   for (const [tableId, starting] of Object.entries(STARTING_ROWS)) starting.forEach((row) => addRow(tableId, row));
   document.querySelectorAll("[data-add]").forEach((button) =>
     button.addEventListener("click", () => addRow(button.dataset.add).querySelector("input").focus()));
   $("record-file").addEventListener("change", chooseRecord);
   $("calibration-form").addEventListener("submit", submitCalibration);
   $("optimization-form").addEventListener("submit", submitOptimization);
-});
+}

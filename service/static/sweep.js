@@ -1,27 +1,37 @@
-"use strict";
 // Sweeps on the page: the form that starts one over the case in the editor, and the sweep's view
 // (its progress, a sortable table a row per variant, a summary quantity against a swept field).
-// Uses page.js's helpers (h, $, api, getJSON, fmt, send, showView, ...) and charts.js's chart.
+import { api, describe } from "./api.js";
+import { axisTitle, chartFigure, csvText, drawChart, PALETTE, plain } from "./charts.js";
+import { $, card, fmt, h, typed } from "./dom.js";
+import { editedCase, send } from "./editor.js";
+import { openJob } from "./job.js";
+import { refreshJobs } from "./jobs.js";
+import { poll } from "./poll.js";
+import { shown, shownUnit } from "./units.js";
+import { showView } from "./view.js";
 
 const SWEEP_POLL_MS = 500;
 const SWEEP_START = [["striker.velocity", "5, 7.5, 10"]];
 
-// The table's columns (the API's names) as [label, unit, factor from SI to the unit shown].
+// The table's columns (the API's names) as [label, quantity]; a count has none.
 const SWEEP_COLUMNS = {
-  co_impact_time: ["Co-impact time", "µs", 1e6],
-  peak_contact_force: ["Peak contact force", "kN", 1e-3],
-  max_compressive_stress: ["Max compressive stress", "MPa", 1e-6],
-  max_tensile_stress: ["Max tensile stress", "MPa", 1e-6],
-  striker_rebound_velocity: ["Rebound velocity", "m/s", 1],
-  energy_to_medium: ["Energy to the medium", "J", 1],
-  transfer_efficiency: ["Transfer efficiency", "%", 100],
-  max_penetration: ["Deepest penetration", "mm", 1e3],
-  permanent_penetration: ["Permanent penetration", "mm", 1e3],
-  last_blow_set: ["Set of the last blow", "mm", 1e3],
-  contacts: ["Contacts", "", 1],
-  estimated_error: ["Estimated error", "%", 100],
-  warnings: ["Warnings", "", 1],
+  co_impact_time: ["Co-impact time", "time"],
+  peak_contact_force: ["Peak contact force", "force"],
+  max_compressive_stress: ["Max compressive stress", "stress"],
+  max_tensile_stress: ["Max tensile stress", "stress"],
+  striker_rebound_velocity: ["Rebound velocity", "speed"],
+  energy_to_medium: ["Energy to the medium", "energy"],
+  transfer_efficiency: ["Transfer efficiency", "ratio"],
+  max_penetration: ["Deepest penetration", "length"],
+  permanent_penetration: ["Permanent penetration", "length"],
+  last_blow_set: ["Set of the last blow", "length"],
+  contacts: ["Contacts", null],
+  estimated_error: ["Estimated error", "ratio"],
+  warnings: ["Warnings", null],
 };
+const columnUnit = (column) => (SWEEP_COLUMNS[column][1] ? shownUnit(SWEEP_COLUMNS[column][1]) : "");
+// A column's value in its unit.
+const columnValue = (column, value) => (SWEEP_COLUMNS[column][1] ? shown(value, SWEEP_COLUMNS[column][1]) : value);
 
 // ---------------------------------------------------------------------------------------------
 // The form: a row per field, its values as a list or as from:to:count.
@@ -98,13 +108,10 @@ async function submitSweep(event) {
 // ---------------------------------------------------------------------------------------------
 // A sweep on view, polled until every variant has finished.
 
-let sweepShown = null; // {id, timer, sort: {column, descending}, x, y, answer}
-
-function openSweep(id) {
-  if (sweepShown) clearTimeout(sweepShown.timer);
-  showView("sweep-view", `#sweep=${id}`);
-  const view = { id, timer: null, sort: null, x: null, y: "peak_contact_force", answer: null };
-  sweepShown = view;
+// `view`: {id, sort: {column, descending}, x, y, answer}.
+export async function openSweep(id) {
+  const signal = showView("sweep-view", `#sweep=${id}`);
+  const view = { id, sort: null, x: null, y: "peak_contact_force", answer: null };
   const box = $("sweep-view");
   // Laid out before the first answer, so that nothing moves when it comes.
   box.replaceChildren(
@@ -120,24 +127,12 @@ function openSweep(id) {
         h("label", {}, "against ", h("select", { class: "sweep-x", onchange: (e) => { view.x = e.target.value; drawSweep(view); } }))),
     })),
     card("Variants", h("div", { class: "scroll sweep-table" })));
-  pollSweep(view);
-}
-
-async function pollSweep(view) {
-  let answer;
-  try {
-    answer = await getJSON(`/v1/sweeps/${view.id}`);
-  } catch (error) {
-    if (view !== sweepShown) return;
-    sweepError(describe(error));
-    if (!(error instanceof ApiError) || error.status >= 500) view.timer = setTimeout(() => pollSweep(view), 4 * SWEEP_POLL_MS);
-    return;
-  }
-  if (view !== sweepShown || $("sweep-view").hidden) return;
-  view.answer = answer;
-  renderSweep(view);
-  if (answer.finished) refreshJobs();
-  else view.timer = setTimeout(() => pollSweep(view), SWEEP_POLL_MS);
+  const finished = await poll(`/v1/sweeps/${id}`, {
+    signal, every: SWEEP_POLL_MS, done: (answer) => answer.finished,
+    update: (answer) => { view.answer = answer; renderSweep(view); },
+    failed: (error) => sweepError(describe(error)),
+  });
+  if (finished) refreshJobs();
 }
 
 function sweepError(message) {
@@ -194,8 +189,8 @@ const valueText = (value) => (typeof value === "number" ? String(+value.toPrecis
 
 const columnText = (column, value) => {
   if (value === null || value === undefined) return "—";
-  const [, , factor] = SWEEP_COLUMNS[column];
-  return factor === 1 && Number.isInteger(value) ? String(value) : fmt(value * factor);
+  const inUnit = columnValue(column, value);
+  return inUnit === value && Number.isInteger(value) ? String(value) : fmt(inUnit);
 };
 
 function sweepRows(view) {
@@ -225,7 +220,7 @@ function sweepTable(view, shownColumns) {
       } }, label, h("span", { class: "arrow", "aria-hidden": "true" }, sorted ? (view.sort.descending ? " ▼" : " ▲") : "")));
   };
   const head = [h("th", {}, "#"), ...answer.parameters.map((p) => sortButton(p, p)), sortButton("status", "status"),
-    ...shownColumns.map((c) => sortButton(c, `${SWEEP_COLUMNS[c][0]}${SWEEP_COLUMNS[c][1] ? ` (${SWEEP_COLUMNS[c][1]})` : ""}`))];
+    ...shownColumns.map((c) => sortButton(c, `${SWEEP_COLUMNS[c][0]}${columnUnit(c) ? ` (${columnUnit(c)})` : ""}`))];
   return h("table", { class: "sweep" },
     h("thead", {}, h("tr", {}, head)),
     h("tbody", {}, sweepRows(view).map((row) => h("tr", { "data-job": row.job, class: row.status },
@@ -238,14 +233,15 @@ function sweepTable(view, shownColumns) {
 
 // The chosen quantity against the chosen field: a line per combination of the other fields' values.
 function sweepTraces({ answer, x, y }) {
-  const [label, unit, factor] = SWEEP_COLUMNS[y];
+  const [label] = SWEEP_COLUMNS[y];
+  const unit = columnUnit(y);
   const others = answer.parameters.filter((p) => p !== x);
   const lines = new Map();
   for (const row of answer.rows) {
     if (row[y] === null || row[y] === undefined) continue;
     const name = others.map((p) => `${p} = ${valueText(row.values[p])}`).join(", ") || label;
     if (!lines.has(name)) lines.set(name, []);
-    lines.get(name).push([row.values[x], row[y] * factor]);
+    lines.get(name).push([row.values[x], columnValue(y, row[y])]);
   }
   const traces = [...lines].map(([name, points], i) => {
     points.sort((a, b) => a[0] - b[0]);
@@ -274,8 +270,8 @@ function drawSweep(view) {
     csv: async () => sweepCsv(view) });
 }
 
-document.addEventListener("DOMContentLoaded", () => {
+export function startSweeps() {
   SWEEP_START.forEach(addSweepRow);
   $("add-sweep-field").addEventListener("click", () => addSweepRow().querySelector("input").focus());
   $("sweep-form").addEventListener("submit", submitSweep);
-});
+}
