@@ -198,6 +198,9 @@ def numba_run(s: Setup) -> dict[str, float]:
         field_stride=0,
         striker_u=no_fields,
         striker_stress=no_fields,
+        shaft_share=np.empty((0, s.n + 1)),
+        shaft_history=np.empty((0, 0)),
+        shaft_field=no_fields,
     )
     contact, medium = end_conditions(case, s.grid)  # as simulate_rod makes them for each run
     anvil = anvil_on(case, s.grid, contact)
@@ -213,6 +216,7 @@ def numba_run(s: Setup) -> dict[str, float]:
         anvil,
         medium,
         force_law(case.force),
+        K.no_shaft(),
         state,
         observed,
         recorders,

@@ -307,6 +307,31 @@ class Medium(_Model):
         return self.stiffness
 
 
+class ShaftSegment(_Model):
+    """Soil on the tool's side from `from` to `to` (m from the struck end): Smith's law as at the
+    toe (`medium.kind = 'smith'`), made two-sided (the soil slips both ways), its
+    `ultimate_resistance` spread evenly over the segment's length and acting at each section
+    against that section's displacement and velocity."""
+
+    model_config = ConfigDict(**INPUT, validate_by_alias=True, validate_by_name=False, serialize_by_alias=True)
+
+    start: Annotated[float, Field(ge=0, le=1e4, **_quantity("length"))] = Field(alias="from", title="From")
+    end: Annotated[float, Field(gt=0, le=1e4, **_quantity("length"))] = Field(alias="to", title="To")
+    ultimate_resistance: Annotated[float, Field(gt=0, le=1e12, **_quantity("force"))] = Field(
+        title="Ultimate resistance", **_about("Rᵤ")
+    )
+    quake: Annotated[float, Field(gt=0, le=1.0, **_quantity("length"))] = Field(**_about("q"))
+    damping_factor: Annotated[float, Field(ge=0, le=1e3, **_quantity("slowness"))] = Field(
+        0.0, title="Damping factor", **_about("J")
+    )
+
+    @model_validator(mode="after")
+    def _ordered(self) -> ShaftSegment:
+        if self.end <= self.start:
+            raise field_error("ShaftSegment", ("to",), f"must be greater than from = {self.start} m", self.end)
+        return self
+
+
 class Blows(_Model):
     """Blow after blow: `count` blows of `numerics.duration` each."""
 
@@ -475,6 +500,7 @@ class Case(_Model):
     contact: Contact
     anvil: Anvil | None = None
     medium: Medium | None = None
+    shaft: list[ShaftSegment] | None = Field(None, min_length=1)
     force: Force | None = None
     blows: Blows | None = None
     numerics: Numerics
@@ -489,6 +515,28 @@ class Case(_Model):
                     ("outputs", "probes", i),
                     f"must lie on the tool, 0 ≤ x ≤ tool.length = {self.tool.length} m",
                     x,
+                )
+        return self
+
+    @model_validator(mode="after")
+    def _shaft_on_tool(self) -> Case:
+        """Segments lie on the tool and do not overlap."""
+        for i, segment in enumerate(self.shaft or []):
+            if segment.end > self.tool.length:
+                raise field_error(
+                    "Case",
+                    ("shaft", i, "to"),
+                    f"must lie on the tool, ≤ tool.length = {self.tool.length} m",
+                    segment.end,
+                )
+        ordered = sorted(enumerate(self.shaft or []), key=lambda item: item[1].start)
+        for (_, before), (i, segment) in zip(ordered, ordered[1:]):
+            if segment.start < before.end:
+                raise field_error(
+                    "Case",
+                    ("shaft", i, "from"),
+                    f"overlaps the segment from {before.start} m to {before.end} m: segments do not overlap",
+                    segment.start,
                 )
         return self
 
@@ -517,6 +565,8 @@ class Case(_Model):
             fields.append("medium.kind")
         if self.blows is not None and self.blows.count > 1:
             fields.append("blows.count")
+        if self.shaft:
+            fields.append("shaft")
         return fields
 
 

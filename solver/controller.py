@@ -14,7 +14,16 @@ from . import layout as L
 from .blows import BlowLog
 from .case import Case, Force, Medium
 from .errors import Cancelled, NumericalFailure
-from .grid import Grid, ResolvedNumerics, make_grid, resolve_numerics, striker_grid, striker_mass, wave_speed
+from .grid import (
+    Grid,
+    ResolvedNumerics,
+    make_grid,
+    resolve_numerics,
+    shaft_nodes,
+    striker_grid,
+    striker_mass,
+    wave_speed,
+)
 from .laws import FORCE_KINDS
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
 from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows, launch_energy
@@ -73,6 +82,8 @@ def history_paths(case: Case) -> dict[str, int]:
         paths.update(ANVIL_PATHS)
     if case.blows is not None and case.blows.count > 1:
         paths.update(BLOW_PATHS)
+    if case.shaft:
+        paths["energy/to_shaft"] = L.H_TO_SHAFT
     return paths
 
 
@@ -170,6 +181,40 @@ def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
             impedance=contact.impedance,
         ),
     )
+
+
+def shaft_on(case: Case, grid: Grid, tau: float) -> K.Shaft:
+    """The soil along the tool's side as the kernel takes it, node by node (`grid.shaft_nodes`)."""
+    if not case.shaft:
+        return K.no_shaft()
+    resistance, stiffness, damping_factor = shaft_nodes(case.shaft, grid)
+    loaded = np.flatnonzero(resistance)
+    mass = grid.node_area * grid.density * grid.h
+    return K.Shaft(
+        present=True,
+        first=int(loaded[0]),
+        last=int(loaded[-1]),
+        resistance=resistance,
+        stiffness=stiffness,
+        damping_factor=damping_factor,
+        inv_mass=np.divide(tau * tau, mass, out=np.zeros_like(mass), where=mass > 0),
+    )
+
+
+def shaft_shares(case: Case, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """Node i's share of segment k's force (segments × nodes), and each node's length of shaft
+    (m), which turns its force into the resistance per metre (N/m)."""
+    segments = case.shaft or []
+    each = np.array([shaft_nodes([segment], grid)[0] for segment in segments]).reshape(len(segments), grid.cells + 1)
+    total = each.sum(axis=0)
+    share = np.divide(each, total, out=np.zeros_like(each), where=total > 0)
+    length = np.full(grid.cells + 1, grid.h)
+    length[[0, -1]] = 0.0
+    if grid.cells > 2:
+        length[[1, -2]] = 1.5 * grid.h  # they carry the ends' half cells
+    else:
+        length[1] = 2.0 * grid.h
+    return share, length
 
 
 def tool_on(grid: Grid) -> K.Tool:
@@ -272,6 +317,7 @@ def simulate_rod(
     anvil = anvil_on(case, grid, contact)
     rows = K.factor_tool_rows(tool, rod, weights, medium)
     force = force_law(case.force)
+    shaft = shaft_on(case, grid, tau)
 
     out = case.outputs
     probe_node, probe_weight = _probe_nodes(grid, out.probes)
@@ -309,6 +355,14 @@ def simulate_rod(
             recorder.append(f"fields/{prefix}x", x)
             recorder.create(f"fields/{prefix}displacement", (total_frames, len(x)))
             recorder.create(f"fields/{prefix}stress", (total_frames, len(x)))
+    # the shaft's force on each segment, and its resistance along the tool
+    shaft_share, shaft_length = shaft_shares(case, grid)
+    segment_paths = [f"shaft/segment_{k}/force" for k in range(len(shaft_share))]
+    for path in segment_paths:
+        recorder.create(path, (total_rows,))
+    shaft_field = bool(case.shaft) and out.fields
+    if shaft_field:
+        recorder.create("fields/shaft_resistance", (total_frames, n + 1))
     # Gathered during the run, so that the summary never needs the whole history (given only
     # these rows, it keeps them all).
     summary_rows = force_history_rows(total_rows)
@@ -335,9 +389,26 @@ def simulate_rod(
             field_stride=field_stride,
             striker_u=np.empty((frames, striker_nodes)),
             striker_stress=np.empty((frames, striker_nodes)),
+            shaft_share=shaft_share,
+            shaft_history=np.empty((len(shaft_share), kept_rows)),
+            shaft_field=np.zeros((frames if shaft_field else 0, n + 1)),
         )
         status, n_hist, n_field = K.advance(
-            first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders
+            first,
+            last,
+            tool,
+            rows,
+            rod,
+            weights,
+            contact,
+            striker,
+            anvil,
+            medium,
+            force,
+            shaft,
+            state,
+            observed,
+            recorders,
         )
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
@@ -345,6 +416,8 @@ def simulate_rod(
         for path, column in paths.items():
             recorder.append(path, history[column, :n_hist])
         recorder.append("probes/stress", recorders.probes[:n_hist])
+        for k, path in enumerate(segment_paths):
+            recorder.append(path, recorders.shaft_history[k, :n_hist])
         low, high = np.searchsorted(summary_rows, (row, row + n_hist))
         summary_table.append(history[summary_columns].take(summary_rows[low:high] - row, axis=1))
         row += n_hist
@@ -359,6 +432,14 @@ def simulate_rod(
                 displacement, stress = layers[prefix]
                 recorder.append(f"fields/{prefix}displacement", displacement[:n_field])
                 recorder.append(f"fields/{prefix}stress", stress[:n_field])
+            if shaft_field:
+                resistance = np.divide(
+                    recorders.shaft_field[:n_field],
+                    shaft_length,
+                    out=np.zeros((n_field, n + 1)),
+                    where=shaft_length > 0,
+                )
+                recorder.append("fields/shaft_resistance", resistance)
         first = last + 1
         if last == boundary and blow < blows - 1:
             ended = state.energy[0].copy()

@@ -393,6 +393,29 @@ def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     )
 
 
+def shaft_nodes(segments: list, grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The soil along the tool's side (`Case.shaft`'s segments) node by node on `grid`: each
+    interior node's ultimate resistance r_i (N), stiffness k_i (N/m) and damping factor J_i (s/m).
+
+    Each segment's resistance is spread evenly over its length, and a node takes what lies within
+    its half cells, `[x_i − h/2, x_i + h/2]`; nodes 1 and N − 1 take the ends' half cells too (the
+    ends keep their own equations). k_i sums each share over its quake; J_i is the shares' mean."""
+    n, h = grid.cells, grid.h
+    left = np.maximum(grid.x - 0.5 * h, 0.0)
+    right = np.minimum(grid.x + 0.5 * h, grid.x[-1])
+    left[1], right[n - 1] = 0.0, grid.x[-1]
+    resistance, stiffness, damped = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
+    for segment in segments:
+        share = np.clip(np.minimum(right, segment.end) - np.maximum(left, segment.start), 0.0, None)
+        share[[0, n]] = 0.0
+        r = segment.ultimate_resistance * share / (segment.end - segment.start)
+        resistance += r
+        stiffness += r / segment.quake
+        damped += r * segment.damping_factor
+    damping_factor = np.divide(damped, resistance, out=np.zeros(n + 1), where=resistance > 0)
+    return resistance, stiffness, damping_factor
+
+
 # The coarsest grid of a ladder resolves the contact's time scale (`time_scale`) by this many
 # steps at a tolerance of 1e-2, and by √(1e-2/tol) times as many at another.
 FIRST_POINTS = 4.0

@@ -50,6 +50,7 @@ _UNITS = {
     "energy": "J",
     "x": "m",
     "stress": "Pa",
+    "resistance": "N/m",  # along the tool, per metre
 }
 
 

@@ -14,7 +14,8 @@ H_STRIKER_KINETIC, H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_
 H_MEDIUM_PLASTIC, H_PERMANENT_PENETRATION, H_STRIKER_STRAIN = 17, 18, 19
 H_ANVIL_DISP, H_ANVIL_VEL, H_ANVIL_FORCE, H_ANVIL_KINETIC = 20, 21, 22, 23  # its force on the tool
 H_LAUNCHED, H_WITHDRAWN = 24, 25  # blow after blow: `E_LAUNCHED`, `E_WITHDRAWN` so far
-HISTORY_COLUMNS = 26
+H_TO_SHAFT = 26  # `E_TO_SHAFT` so far
+HISTORY_COLUMNS = 27
 
 # Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
@@ -41,7 +42,8 @@ E_STRIKER_STRAIN = 9  # an elastic striker's
 # when withdrawn
 E_LAUNCHED, E_WITHDRAWN = 10, 11
 E_ANVIL_KINETIC = 12
-ENERGY_SLOTS = 13
+E_TO_SHAFT = 13  # the net work done on the soil along the tool's side (`shaft`)
+ENERGY_SLOTS = 14
 
 
 def new_extremes() -> np.ndarray:

@@ -17,12 +17,14 @@ ProgressCallback = Callable[[float], None]
 CancelCheck = Callable[[], bool]
 FIELD_NAMES = ("x", "time", "displacement", "stress")  # stored as fields/<name>
 STRIKER_FIELD_NAMES = ("striker_x", "striker_displacement", "striker_stress")  # an elastic one's
+SHAFT_FIELD_NAMES = ("shaft_resistance",)  # a shaft's
 
 
 @dataclass
 class Fields:
-    """Displacement and stress along the tool at the sampled times, and along an elastic striker
-    (its x from its impact face; None for a lumped one)."""
+    """Displacement and stress along the tool at the sampled times, along an elastic striker (its x
+    from its impact face; None for a lumped one), and the shaft's resistance along the tool (None
+    without a shaft)."""
 
     x: np.ndarray
     time: np.ndarray
@@ -31,6 +33,7 @@ class Fields:
     striker_x: np.ndarray | None = None
     striker_displacement: np.ndarray | None = None  # (samples, N_s + 1)
     striker_stress: np.ndarray | None = None  # (samples, N_s + 1)
+    shaft_resistance: np.ndarray | None = None  # (samples, N + 1), N/m: the shaft's force per metre
 
 
 @dataclass
@@ -61,7 +64,7 @@ class Result:
         fields = (
             Fields(
                 *(history.pop(f"fields/{k}") for k in FIELD_NAMES),
-                *(history.pop(f"fields/{k}", None) for k in STRIKER_FIELD_NAMES),
+                *(history.pop(f"fields/{k}", None) for k in STRIKER_FIELD_NAMES + SHAFT_FIELD_NAMES),
             )
             if "fields/x" in history
             else None
@@ -84,7 +87,7 @@ class Result:
             arrays.update(
                 {
                     f"fields/{k}": getattr(self.fields, k)
-                    for k in FIELD_NAMES + STRIKER_FIELD_NAMES
+                    for k in FIELD_NAMES + STRIKER_FIELD_NAMES + SHAFT_FIELD_NAMES
                     if getattr(self.fields, k) is not None
                 }
             )

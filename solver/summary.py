@@ -48,7 +48,8 @@ class Energy(_Part):
     initial: float = Field(description="the striker's (and an anvil's) kinetic energy at impact (every blow's), J")
     external_work: float = Field(description="work of the external force, J")
     to_medium: float = Field(description="net work on the medium: stored, dissipated and plastic, J")
-    transfer_efficiency: float = Field(description="to_medium over the energy supplied, 1")
+    to_shaft: float = Field(description="net work on the soil along the tool's side: stored, slipped and damped, J")
+    transfer_efficiency: float = Field(description="to_medium and to_shaft over the energy supplied, 1")
     dissipated_contact: float = Field(description="by the contact's damper b1 (and the anvil's contact's), J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
     numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
@@ -199,7 +200,8 @@ def build_summary(
     dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
     withdrawn = energy[L.E_WITHDRAWN]
-    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium - withdrawn
+    shaft = energy[L.E_TO_SHAFT]
+    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium - withdrawn - shaft
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     medium = to_medium(energy)
@@ -232,7 +234,8 @@ def build_summary(
             "initial": float(initial),
             "external_work": float(external),
             "to_medium": medium,
-            "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
+            "to_shaft": float(shaft),
+            "transfer_efficiency": float((medium + shaft) / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
             "numerical": float(numerical),

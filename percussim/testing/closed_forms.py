@@ -373,3 +373,37 @@ class Hopkinson:
             "half_width_length": cls.C * (fall - rise) / 2.0,
             "impulse_length": cls.C * impulse / plateau / 2.0,
         }
+
+
+# --- Soil along the tool's side (`shaft`) -------------------------------------------------------
+
+
+def shaft_rigid_mode(stiffness_per_length: float, density: float, area: float) -> float:
+    """ω0 = √(k′/(ρA)) (rad/s): a free uniform rod on elastic shaft springs of k′ (N/m per m).
+    Its mass-weighted mean displacement obeys ρAL·Ü = −k′L·U once nothing else acts on it, so it
+    rings at ω0 whatever its elastic waves do."""
+    return math.sqrt(stiffness_per_length / (density * area))
+
+
+def free_pile_on_springs(frequency_hz: float = 50.0, cells: int = 50) -> dict:
+    """A 10-m steel rod, free at its toe, on shaft springs that ring its rigid mode at
+    `frequency_hz`, struck by a 10-kg ram at 5 m/s: the springs (quake 2.5 mm) never yield."""
+    area, density, length, quake = 0.01, 7850.0, 10.0, 0.0025
+    stiffness_per_length = (2.0 * math.pi * frequency_hz) ** 2 * density * area
+    return {
+        "name": "free pile on shaft springs",
+        "striker": {"mass": 10.0, "velocity": 5.0},
+        "tool": {"length": length, "youngs_modulus": 2.1e11, "density": density, "area": area},
+        "contact": {"stiffness": 1e8, "exponent": 0.0},
+        "shaft": [
+            {
+                "from": 0.0,
+                "to": length,
+                "ultimate_resistance": stiffness_per_length * length * quake,
+                "quake": quake,
+                "damping_factor": 0.0,
+            }
+        ],
+        "numerics": {"duration": 0.05, "scheme": "explicit", "cells": cells},
+        "outputs": {"fields": True, "field_stride": 1},
+    }

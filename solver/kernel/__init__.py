@@ -100,6 +100,8 @@ from .bundles import (
     S_IN_CONTACT,
     S_MEDIUM_SET,
     SEGMENTS,
+    SHAFT_FORCE,
+    SHAFT_SET,
     STATUS_NON_FINITE,
     STATUS_OK,
     Anvil,
@@ -109,6 +111,7 @@ from .bundles import (
     Observed,
     Recorders,
     Rod,
+    Shaft,
     State,
     Striker,
     Tool,
@@ -119,6 +122,7 @@ from .bundles import (
     new_state,
 )
 from .rows import factor_tool_rows, segment_layout, substitute_toward_working_end, sweep_toward_struck_end
+from .shaft import no_shaft
 from .step import advance, start_blow
 from .struck_end import struck_end_step
 
@@ -147,6 +151,8 @@ __all__ = [
     "Recorders",
     "Rod",
     "SEGMENTS",
+    "SHAFT_FORCE",
+    "SHAFT_SET",
     "STATUS_NON_FINITE",
     "STATUS_OK",
     "S_CONTACT_START",
@@ -154,6 +160,7 @@ __all__ = [
     "S_FORCE_BEFORE_THAT",
     "S_IN_CONTACT",
     "S_MEDIUM_SET",
+    "Shaft",
     "State",
     "Striker",
     "Tool",
@@ -173,6 +180,7 @@ __all__ = [
     "first_node",
     "new_observed",
     "new_state",
+    "no_shaft",
     "segment_layout",
     "start_blow",
     "struck_end_step",

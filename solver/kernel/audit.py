@@ -22,6 +22,7 @@ from ..layout import (
     E_MEDIUM_POTENTIAL,
     E_STRIKER_KINETIC,
     E_STRIKER_STRAIN,
+    E_TO_SHAFT,
     E_TOOL_KINETIC,
     E_TOOL_STRAIN,
     E_WITHDRAWN,
@@ -127,7 +128,7 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
     the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
     `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
-    u, y, ends, energy, _ = state
+    u, y, ends, energy = state.u, state.y, state.ends, state.energy
     new, cur, old, ref = layer
     delta = y[new] - u[new, 0]
     n, tau = step.n, rod.time_step
@@ -161,6 +162,7 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
         + medium_pot
         + energy[0, E_DISSIPATED_CONTACT]
         + energy[0, E_DISSIPATED_MEDIUM]
+        + energy[0, E_TO_SHAFT]
         - step.initial_energy
         - energy[0, E_EXTERNAL_WORK]
     )
@@ -173,7 +175,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
     tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
     compares them at m − ½."""
-    u, y, ends, energy, striker_u = state
+    u, y, ends, energy, striker_u = state.u, state.y, state.ends, state.energy, state.striker
     new, cur, _, _ = layer
     n = step.n
     work, dissipated, dissipated_far = flows
@@ -199,6 +201,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     balance = (
         energy[0, E_TOOL_KINETIC]
         + energy[0, E_TOOL_STRAIN]
+        + energy[0, E_TO_SHAFT]  # at m − ½, as the tool's
         - step.initial_energy
         - step.anvil_energy
         + energy[0, E_WITHDRAWN]

@@ -113,21 +113,31 @@ Anvil = namedtuple("Anvil", "present mass velocity contact")
 """A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
 impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end
 impedance); the case's `Contact` is then the striker's with the anvil."""
-State = namedtuple("State", "u y ends energy striker")
+Shaft = namedtuple("Shaft", "present first last resistance stiffness damping_factor inv_mass")
+"""The soil along the tool's side (when `present`), node by node from `first` to `last` (interior
+nodes): each node's ultimate resistance r_i (N), its stiffness r_i/q_i (N/m), Smith's damping
+factor J_i (s/m) and τ²/m_i, m_i the node's mass (`shaft.py`)."""
+State = namedtuple("State", "u y ends energy striker shaft")
 """What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
-the one before) and an elastic striker's layers (3 × (N_s+1); its node 0 is `y`)."""
+the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`) and the shaft's
+state along the tool (2 × (N+1): `SHAFT_SET`, each node's permanent displacement against its
+soil, and `SHAFT_FORCE`, the soil's force on it at the last layer stepped)."""
+SHAFT_SET, SHAFT_FORCE = 0, 1
 Observed = namedtuple("Observed", "extremes contacts")
 """What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
 intervals (start, end; one row each, those beyond its rows counted only)."""
 Recorders = namedtuple(
     "Recorders",
-    "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress",
+    "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress "
+    "shaft_share shaft_history shaft_field",
 )
 """Where a call records its layers: every `history_stride`-th to `history` (a column each) and
 `probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
 with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each)
-and an elastic striker's to `striker_u`/`striker_stress`; strides ≤ 0 keep nothing."""
+and an elastic striker's to `striker_u`/`striker_stress`; strides ≤ 0 keep nothing. The shaft's
+force on each of its segments goes to `shaft_history` (a row a segment), node i's share of
+segment k being `shaft_share[k, i]`, and its force on each node to `shaft_field`."""
 
 # Within a step
 Layers = namedtuple("Layers", "new cur old ref")
@@ -165,6 +175,7 @@ def new_state(cells: int, striker_cells: int = 0) -> State:
         ends=np.zeros(END_SLOTS),
         energy=np.zeros((2, ENERGY_SLOTS)),
         striker=np.zeros((3, striker_cells + 1)),
+        shaft=np.zeros((2, cells + 1)),
     )
 
 

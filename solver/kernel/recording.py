@@ -19,6 +19,7 @@ from ..layout import (
     E_MEDIUM_POTENTIAL,
     E_STRIKER_KINETIC,
     E_STRIKER_STRAIN,
+    E_TO_SHAFT,
     E_TOOL_KINETIC,
     E_TOOL_STRAIN,
     E_WITHDRAWN,
@@ -44,6 +45,7 @@ from ..layout import (
     H_STRIKER_VEL,
     H_STRUCK_END,
     H_TIME,
+    H_TO_SHAFT,
     H_TOOL_KINETIC,
     H_TOOL_STRAIN,
     H_WITHDRAWN,
@@ -235,7 +237,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
     them; none yet for layer 0, whose energy is all the striker's)."""
     history = recorders.history
-    u, y, _, energy, _ = state
+    u, y, energy = state.u, state.y, state.energy
     rec, t_rec = recorded.row, recorded.time
     history[H_TIME, column] = t_rec
     history[H_STRIKER_DISP, column] = y[rec]
@@ -258,6 +260,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     history[H_ANVIL_KINETIC, column] = energy[0, E_ANVIL_KINETIC]
     history[H_LAUNCHED, column] = energy[0, E_LAUNCHED]
     history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
+    history[H_TO_SHAFT, column] = energy[0, E_TO_SHAFT]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
         for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL, H_MEDIUM_PLASTIC):

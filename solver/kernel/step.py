@@ -80,6 +80,7 @@ from .recording import (
     track_stress_extremes,
 )
 from .rows import back_substitute, explicit_interior, right_hand_sides, segment_layout, sweep
+from .shaft import record_shaft, shaft_on_rows
 from .struck_end import free_back_end, incoming_wave, mean_velocity, solve_struck_end, struck_end_step, struck_forces
 from .working_end import fresh_rock, medium_state, working_end_force, working_end_row, working_end_step
 
@@ -183,7 +184,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     strikes (the struck end, or the anvil, which stays where it is and starts again at its own
     velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there.
     Rock meets the blow fresh (`fresh_rock`)."""
-    u, y, ends, energy, _ = state
+    u, y, ends, energy = state.u, state.y, state.ends, state.energy
     if medium.kind == MEDIUM_BILINEAR:
         rock = fresh_rock(u[m % 3, u.shape[1] - 1], medium_state(ends), medium)
         for k in range(MEDIUM_STATE):
@@ -226,7 +227,7 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, s
     """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
     from the first instant), an anvil at 0 between them moving at its own velocity; and layer −1
     (row 2) one step before. Returns layer 0 as recorded."""
-    u, y, ends, energy, striker_u = state
+    u, ends, energy = state.u, state.ends, state.energy
     striker_velocity = contact.striker_velocity
     for i in range(step.n + 1):
         u[layer.new, i] = 0.0
@@ -269,7 +270,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     the tool's struck end (the anvil's, or the contact's), the medium's, and `(work of R,
     dissipated by the contacts, by the medium)` over the step. `scratch`: room for the struck
     end's and the working end's states and the events."""
-    u, y, ends, _, striker_u = state
+    u, y, ends, striker_u = state.u, state.y, state.ends, state.striker
     new, cur, _, _ = layer
     n, tau = step.n, rod.time_step
     end_state, far_state, events = scratch
@@ -402,7 +403,21 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
 
 @compiled(inline="always")
 def record_layer(
-    state, observed, recorders, recorded, interior, m_rec, n_hist, n_field, tool, rod, striker, anvil, force, step
+    state,
+    observed,
+    recorders,
+    recorded,
+    interior,
+    m_rec,
+    n_hist,
+    n_field,
+    tool,
+    rod,
+    striker,
+    anvil,
+    force,
+    shaft,
+    step,
 ):
     """The recorded layer's extremes, and its history, probes and fields when their strides take
     it: returns the rows of history and of fields written so far."""
@@ -410,25 +425,31 @@ def record_layer(
     track_stress_extremes(extremes, u, recorded, interior, rod, step)
     extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
     track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
+    column = frame = -1
     if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
         record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
         record_probes(recorders, n_hist, u, recorded, step)
-        n_hist += 1
+        column, n_hist = n_hist, n_hist + 1
     if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
         record_fields(recorders, n_field, state, recorded, striker, step)
-        n_field += 1
+        frame, n_field = n_field, n_field + 1
+    if column >= 0 or frame >= 0:
+        record_shaft(recorders, column, frame, state, recorded.row, shaft, rod.time_step)
     return n_hist, n_field
 
 
 @compiled(fastmath={"contract"})
-def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, state, observed, recorders):
+def advance(
+    first, last, tool, rows, rod, weights, contact, striker, anvil, medium, force, shaft, state, observed, recorders
+):
     """Compute layers `first … last` (inclusive; layer 0 is the initial state).
 
     The `Tool` with its rows factored (`ToolRows`), the `Rod`'s constants and the scheme's
     `Weights`; the ends: the `Contact` at the struck end, the `Striker` when it is a rod, the
-    `Medium` (at the working end), and R(t) on the striker (`ForceLaw`). The `State` carries the layers from call to
-    call, the `Observed` extremes and contacts accumulate, and the `Recorders` take the layers
-    this call records, from the first of each buffer.
+    `Medium` (at the working end), and R(t) on the striker (`ForceLaw`); the `Shaft`, the soil along
+    the tool's side. The `State` carries the layers from call to call, the `Observed` extremes and
+    contacts accumulate, and the `Recorders` take the layers this call records, from the first of
+    each buffer.
 
     The interior operator weights layers n+1, n, n−1 by `weights.new`, `1 − new − old`,
     `weights.old`. `weights.centered` centres the boundary terms on layer n (springs
@@ -447,7 +468,9 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
     Returns `(status, layers of history written, rows of fields written)`; on a non-finite value
     it stops with `STATUS_NON_FINITE` and the time in `extremes[X_FAILED_TIME]`.
     """
-    tool, rows, striker, state, observed, recorders = uncounted((tool, rows, striker, state, observed, recorders))
+    tool, rows, striker, shaft, state, observed, recorders = uncounted(
+        (tool, rows, striker, shaft, state, observed, recorders)
+    )
     step = step_constants(tool, rod, weights, contact, anvil)
     u, energy, striker_u = state.u, state.energy, state.striker
     extremes = observed.extremes
@@ -472,6 +495,8 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
             if not weights.impedance_ends:
                 working_end_row(u, layer, rows, rod, weights, medium, step)
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
+            # the explicit scheme's interior rows are final here (none has a shaft otherwise)
+            shaft_on_rows(u, layer, shaft, state.shaft, energy, tau)
             if striker.elastic:
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
             if weights.impedance_ends:
@@ -500,6 +525,7 @@ def advance(first, last, tool, rows, rod, weights, contact, striker, anvil, medi
                 striker,
                 anvil,
                 force,
+                shaft,
                 step,
             )
     return STATUS_OK, n_hist, n_field

@@ -482,7 +482,7 @@ def solve_struck_end(state, layer, overlaps, link, r_n, contact, rod, weights, s
     R(t_n) = `r_n` is explicit in row (11). Returns `(y, u_0, F)` of the new layer, F the force the
     scheme applies in the step (centred on layer n, or on the new layer for the paper's).
     """
-    u, y, ends, _, _ = state
+    u, y, ends = state.u, state.y, state.ends
     _, cur, old, _ = layer
     delta_cur, delta_old, delta_ref = overlaps.cur, overlaps.old, overlaps.ref
     p_1, q_1 = link
