@@ -2,9 +2,9 @@
 
 A package of modules, each with one job: `bundles` (what a step takes and carries, by name),
 `rows` (the tool's rows and their sweep), `contact` (the contact law and R(t)), `struck_end` and
-`working_end` (what the tool touches: the striker, an anvil, the media), `audit` (the energy),
-`recording` (the extremes, contacts, histories, probes and fields) and `step` (`advance`: the
-phases of a step in order). This module names what the controller, the tests and the benches
+`working_end` (what the tool touches: the striker, an anvil, the media), `shaft` (the soil along
+the tool's side, a term along the tool), `audit` (the energy), `recording` (the extremes,
+contacts, histories, probes and fields) and `step` (`advance`: the phases of a step in order). This module names what the controller, the tests and the benches
 use.
 
 Unknowns of layer n+1 are `[y, u_0, …, u_N]` (model.md). The rows `u_1 … u_N` never change from
