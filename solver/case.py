@@ -208,12 +208,17 @@ class Contact(_Model):
     """Striker–tool contact (7): `G(δ) = c1·δ^α` for δ ≥ 0, `c0` for δ < 0; damper `b1`.
 
     The contact force on the tool is `G(δ)·δ + b1·δ'`; α = 0.5 is Hertz-like (c1 in N/m^1.5).
+    A cushion (`restitution` e < 1) loads along that law and unloads along one of the same power,
+    stiffer, from the deepest overlap: continuous there, it gives back e² of what it stored.
     """
 
     stiffness: Annotated[Stiffness, Field(gt=0)] = Field(**_about("c₁", quantity="contact_stiffness"))
     exponent: float = Field(ge=0.0, le=0.5, **_about("α", quantity="dimensionless"))
     tension_stiffness: Stiffness = Field(0.0, title="Stiffness in tension", **_about("c₀"))
     damping: Damping = Field(0.0, **_about("b₁"))
+    restitution: float = Field(
+        1.0, gt=0.0, le=1.0, title="Coefficient of restitution", **_about("e", quantity="dimensionless")
+    )
 
 
 class Anvil(_Model):
@@ -567,6 +572,10 @@ class Case(_Model):
             fields.append("blows.count")
         if self.shaft:
             fields.append("shaft")
+        if self.contact.restitution < 1.0:
+            fields.append("contact.restitution")
+        if self.anvil is not None and self.anvil.contact.restitution < 1.0:
+            fields.append("anvil.contact.restitution")
         return fields
 
 

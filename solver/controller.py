@@ -124,6 +124,8 @@ def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
         tension_stiffness=c.tension_stiffness,
         damping=c.damping,
         impedance=impedance * grid.end_area[0],
+        restitution=c.restitution,
+        deepest=0.0,
     )
     if m is None:
         m = Medium(stiffness=0.0)
@@ -179,6 +181,8 @@ def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
             tension_stiffness=c.tension_stiffness,
             damping=c.damping,
             impedance=contact.impedance,
+            restitution=c.restitution,
+            deepest=0.0,
         ),
     )
 

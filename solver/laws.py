@@ -26,28 +26,46 @@ def external_force(t, kind, amplitude, omega, start, duration):
     return 0.0
 
 
-def contact_law(delta, stiffness, exponent, tension_stiffness):
+def contact_law(delta, stiffness, exponent, tension_stiffness, restitution=1.0, deepest=0.0):
     """`(Φ'(δ), Φ(δ))`: the spring force G(δ)·δ of (7), `c1·δ^(α+1)` in contact and `c0·δ` in
     separation, and the energy Φ the contact stores, `c1·δ^(α+2)/(α+2)` or `c0·δ²/2`; one power
-    for both, as on a small grid the contact solve is a large part of a step."""
+    for both, as on a small grid the contact solve is a large part of a step.
+
+    A cushion (`restitution` e < 1) pressed to `deepest` δ_m unloads below it along
+    `c1·((δ − δ_p)/e²)^(α+1)`, δ_p = (1 − e²)·δ_m: the same power, stiffer, continuous at δ_m and
+    0 at δ_p. It gives back e² of the `c1·δ_m^(α+2)/(α+2)` the loading stored; the rest is
+    `cushion_loss`. Φ is then what unloading from δ would give back."""
     if delta >= 0.0:
+        share = 1.0  # of the squeeze's energy the contact gives back
+        if restitution < 1.0 and delta <= deepest:
+            share = restitution * restitution
+            delta = max(0.0, (delta - deepest * (1.0 - share)) / share)
         force = stiffness * delta ** (exponent + 1.0)
-        return force, force * delta / (exponent + 2.0)
+        return force, share * force * delta / (exponent + 2.0)
     return tension_stiffness * delta, 0.5 * tension_stiffness * delta * delta
 
 
-def contact_spring(delta, stiffness, exponent, tension_stiffness):
-    """`(Φ'(δ), Φ''(δ))`: the spring force G(δ)·δ and its stiffness; the common exponents without
-    a power."""
+def contact_spring(delta, stiffness, exponent, tension_stiffness, restitution=1.0, deepest=0.0):
+    """`(Φ'(δ), Φ''(δ))`: the spring force G(δ)·δ and its stiffness (a cushion's unloading as
+    `contact_law`'s); the common exponents without a power."""
     if delta >= 0.0:
+        scale = 1.0  # dδ'/dδ of the squeeze δ' the law is read at
+        if restitution < 1.0 and delta <= deepest:
+            scale = 1.0 / (restitution * restitution)
+            delta = max(0.0, (delta - deepest * (1.0 - restitution * restitution)) * scale)
         if exponent == 0.0:
-            return stiffness * delta, stiffness
+            return stiffness * delta, stiffness * scale
         if exponent == 0.5:
             root = math.sqrt(delta)
-            return stiffness * delta * root, 1.5 * stiffness * root
+            return stiffness * delta * root, 1.5 * stiffness * root * scale
         power = delta**exponent
-        return stiffness * delta * power, (exponent + 1.0) * stiffness * power
+        return stiffness * delta * power, (exponent + 1.0) * stiffness * power * scale
     return tension_stiffness * delta, tension_stiffness
+
+
+def cushion_loss(stiffness, exponent, restitution, deepest):
+    """What a cushion pressed to `deepest` δ_m has lost (`contact_law`): `(1 − e²)·c1·δ_m^(α+2)/(α+2)`."""
+    return (1.0 - restitution * restitution) * stiffness * deepest ** (exponent + 2.0) / (exponent + 2.0)
 
 
 def pressed_branch(delta, stiffness, exponent):

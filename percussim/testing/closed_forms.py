@@ -407,3 +407,26 @@ def free_pile_on_springs(frequency_hz: float = 50.0, cells: int = 50) -> dict:
         "numerics": {"duration": 0.05, "scheme": "explicit", "cells": cells},
         "outputs": {"fields": True, "field_stride": 1},
     }
+
+
+# --- A cushion (`contact.restitution`) ------------------------------------------------------------
+
+
+def cushion_on_a_wall(restitution: float, exponent: float = 0.0, numerics: dict | None = None) -> dict:
+    """A 100-kg ram at 2 m/s on a cushion against a near-rigid wall (a 1-m² tool 1000× stiffer
+    than steel on a 1e14-N/m medium): the cushion alone sets the contact."""
+    return {
+        "name": f"cushion e = {restitution}",
+        "striker": {"mass": 100.0, "velocity": 2.0},
+        "tool": {"length": 1.0, "youngs_modulus": 2e14, "density": 7850.0, "area": 1.0},
+        "contact": {"stiffness": 1e8 if exponent == 0.0 else 1e11, "exponent": exponent, "restitution": restitution},
+        "medium": {"kind": "linear", "stiffness": 1e14},
+        "numerics": numerics or {"duration": 0.01},
+    }
+
+
+def cushion_rebound(mass: float, stiffness: float, velocity: float, restitution: float) -> tuple[float, float]:
+    """A linear cushion of stiffness k and restitution e struck by a mass m at v against a rigid
+    wall: the rebound velocity −e·v and the contact time (π/2)·√(m/k)·(1 + e) (a quarter period
+    loading at k, a quarter unloading at k/e²)."""
+    return -restitution * velocity, 0.5 * math.pi * math.sqrt(mass / stiffness) * (1.0 + restitution)

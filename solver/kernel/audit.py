@@ -28,8 +28,15 @@ from ..layout import (
     E_WITHDRAWN,
     X_ENERGY_EXCESS,
 )
-from .bundles import S_ANVIL_DISP, S_ANVIL_VELOCITY, S_BACK_ENERGY, S_POTENTIAL_BEFORE
-from .contact import contact_law
+from .bundles import (
+    S_ANVIL_CONTACT_DEEPEST,
+    S_ANVIL_DISP,
+    S_ANVIL_VELOCITY,
+    S_BACK_ENERGY,
+    S_CONTACT_DEEPEST,
+    S_POTENTIAL_BEFORE,
+)
+from .contact import contact_law, pressed_to
 from .working_end import medium_energy, medium_state
 
 
@@ -182,10 +189,13 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     if anvil.present:
         anvil_at = ends[S_ANVIL_DISP]
         velocity_a = ends[S_ANVIL_VELOCITY]
-        potential = contact_law(y[new] - anvil_at, contact)[1] + contact_law(anvil_at - u[new, 0], anvil.contact)[1]
+        potential = (
+            contact_law(y[new] - anvil_at, pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
+            + contact_law(anvil_at - u[new, 0], pressed_to(anvil.contact, ends[S_ANVIL_CONTACT_DEEPEST]))[1]
+        )
         energy[0, E_ANVIL_KINETIC] = 0.5 * anvil.mass * velocity_a * velocity_a
     else:
-        potential = contact_law(y[new] - u[new, 0], contact)[1]
+        potential = contact_law(y[new] - u[new, 0], pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
     stored, plastic = medium_energy(u[new, n], medium_state(ends), medium)
     tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h

@@ -42,7 +42,9 @@ S_IMPULSE = 27
 S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at layer m − ½
 # An anvil: its displacement and velocity, and its force on the tool's end, at layer m − 1
 S_ANVIL_DISP, S_ANVIL_VELOCITY, S_ANVIL_FORCE = 29, 30, 31
-END_SLOTS = 32
+# The deepest overlap a cushion was pressed to in this contact: the striker's, the anvil's
+S_CONTACT_DEEPEST, S_ANVIL_CONTACT_DEEPEST = 32, 33
+END_SLOTS = 34
 # The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
 INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
 FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end
@@ -53,7 +55,7 @@ BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE)  # at its back end
 # fills it from the layer and the slots, the ends advance it, the new layer takes it back).
 # The struck end's (`struck_end_step`): the striker's displacement and velocity, the tool's end,
 # the contact force, the striker's impulse, whether in contact, the anvil's displacement, velocity
-# and force on the tool.
+# and force on the tool, and the contacts' deepest overlaps (a cushion's).
 (
     END_STRIKER_DISP,
     END_STRIKER_VELOCITY,
@@ -64,8 +66,10 @@ BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE)  # at its back end
     END_ANVIL_DISP,
     END_ANVIL_VELOCITY,
     END_ANVIL_FORCE,
-) = range(9)
-STRUCK_END_STATE = 9
+    END_CONTACT_DEEPEST,
+    END_ANVIL_CONTACT_DEEPEST,
+) = range(11)
+STRUCK_END_STATE = 11
 # The working end's (`working_end_step`): its displacement u_N, the medium's force F_m, then the
 # medium's state in `medium_state`'s order.
 WORK_DISP, WORK_FORCE, WORK_SET, WORK_DEEPEST, WORK_SURFACE, WORK_SPENT = range(6)
@@ -94,10 +98,14 @@ Weights = namedtuple("Weights", "new old centered end_masses impedance_ends")
 (γ and 0 for the paper's, σ and σ for the σ-scheme, 0 and 0 explicit; layer n has the rest),
 whether the boundary terms are centred on layer n, whether the ends carry their half-cell masses,
 and whether each end integrates its own equations (the explicit scheme at Courant number 1)."""
-Contact = namedtuple("Contact", "striker_mass striker_velocity stiffness exponent tension_stiffness damping impedance")
+Contact = namedtuple(
+    "Contact",
+    "striker_mass striker_velocity stiffness exponent tension_stiffness damping impedance restitution deepest",
+)
 """The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
-contact and `c0·δ` in separation (c1, α, c0), its damper (b1), and the impedance ρ·a·S of the
-tool's end cell (N·s/m)."""
+contact and `c0·δ` in separation (c1, α, c0), its damper (b1), the impedance ρ·a·S of the
+tool's end cell (N·s/m), and a cushion's restitution e (1: none) with the deepest overlap it was
+pressed to (`laws.unloading`; 0 as built, the struck end's state in a step)."""
 Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness ultimate_resistance damping_factor")
 """The working end: the medium's `MEDIUM_…` kind, its loading stiffness (c2, rock's k, or soil's
 R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading

@@ -8,10 +8,12 @@ import math
 
 from .. import laws
 from ..compiled import compiled
+from .bundles import Contact
 
 _external_force = compiled(inline="always")(laws.external_force)
 _contact_law = compiled(inline="always")(laws.contact_law)
 _contact_spring = compiled(inline="always")(laws.contact_spring)
+_cushion_loss = compiled(inline="always")(laws.cushion_loss)
 
 
 @compiled(inline="always")
@@ -23,13 +25,39 @@ def external_force(t, force):
 @compiled(inline="always")
 def contact_law(delta, contact):
     """`(Φ'(δ), Φ(δ))` of the `Contact` (`laws.contact_law`)."""
-    return _contact_law(delta, contact.stiffness, contact.exponent, contact.tension_stiffness)
+    return _contact_law(
+        delta, contact.stiffness, contact.exponent, contact.tension_stiffness, contact.restitution, contact.deepest
+    )
 
 
 @compiled(inline="always")
 def contact_spring(delta, contact):
     """`(Φ'(δ), Φ''(δ))` of the `Contact` (`laws.contact_spring`)."""
-    return _contact_spring(delta, contact.stiffness, contact.exponent, contact.tension_stiffness)
+    return _contact_spring(
+        delta, contact.stiffness, contact.exponent, contact.tension_stiffness, contact.restitution, contact.deepest
+    )
+
+
+@compiled(inline="always")
+def pressed_to(contact, deepest):
+    """The `Contact` as a cushion pressed to its `deepest` overlap so far (`laws.unloading`)."""
+    return Contact(
+        striker_mass=contact.striker_mass,
+        striker_velocity=contact.striker_velocity,
+        stiffness=contact.stiffness,
+        exponent=contact.exponent,
+        tension_stiffness=contact.tension_stiffness,
+        damping=contact.damping,
+        impedance=contact.impedance,
+        restitution=contact.restitution,
+        deepest=deepest,
+    )
+
+
+@compiled(inline="always")
+def cushion_loss(contact, deepest):
+    """What the `Contact` pressed to `deepest` has lost (`laws.cushion_loss`)."""
+    return _cushion_loss(contact.stiffness, contact.exponent, contact.restitution, deepest)
 
 
 @compiled(inline="always")

@@ -24,9 +24,11 @@ from ..layout import (
 from .audit import audit_impedance_energy, audit_scheme_energy, track_energy_excess
 from .bundles import (
     BACK_INCOMING,
+    END_ANVIL_CONTACT_DEEPEST,
     END_ANVIL_DISP,
     END_ANVIL_FORCE,
     END_ANVIL_VELOCITY,
+    END_CONTACT_DEEPEST,
     END_CONTACT_FORCE,
     END_IMPULSE,
     END_IN_CONTACT,
@@ -39,6 +41,7 @@ from .bundles import (
     MEDIUM_BILINEAR,
     MEDIUM_SLOTS,
     MEDIUM_STATE,
+    S_ANVIL_CONTACT_DEEPEST,
     S_ANVIL_DISP,
     S_ANVIL_FORCE,
     S_ANVIL_VELOCITY,
@@ -47,6 +50,7 @@ from .bundles import (
     S_BACK_MEAN_BEFORE,
     S_BACK_SLOPE,
     S_BACK_SLOPE_BEFORE,
+    S_CONTACT_DEEPEST,
     S_CONTACT_START,
     S_FORCE_BEFORE,
     S_IMPULSE,
@@ -68,7 +72,7 @@ from .bundles import (
     StepConstants,
     boundary_weights,
 )
-from .contact import contact_law, external_force
+from .contact import contact_law, external_force, pressed_to
 from .recording import (
     record_fields,
     record_history,
@@ -192,7 +196,8 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     row, row_before = m % 3, (m - 1) % 3
     t = m * tau
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
-    potential = contact_law(y[row] - struck, contact)[1]
+    potential = contact_law(y[row] - struck, pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
+    ends[S_CONTACT_DEEPEST] = 0.0  # the new striker meets its cushion unpressed
     energy[0, E_WITHDRAWN] += (
         energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN] + potential + energy[0, E_ANVIL_KINETIC]
     )
@@ -288,6 +293,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     end_state[END_ANVIL_DISP] = ends[S_ANVIL_DISP]
     end_state[END_ANVIL_VELOCITY] = ends[S_ANVIL_VELOCITY]
     end_state[END_ANVIL_FORCE] = ends[S_ANVIL_FORCE]
+    end_state[END_CONTACT_DEEPEST] = ends[S_CONTACT_DEEPEST]
+    end_state[END_ANVIL_CONTACT_DEEPEST] = ends[S_ANVIL_CONTACT_DEEPEST]
     work, dissipated, crossings, contact_range, end_range = struck_end_step(
         t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
     )
@@ -315,6 +322,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     ends[S_ANVIL_DISP] = end_state[END_ANVIL_DISP]
     ends[S_ANVIL_VELOCITY] = end_state[END_ANVIL_VELOCITY]
     ends[S_ANVIL_FORCE] = end_state[END_ANVIL_FORCE]
+    ends[S_CONTACT_DEEPEST] = end_state[END_CONTACT_DEEPEST]
+    ends[S_ANVIL_CONTACT_DEEPEST] = end_state[END_ANVIL_CONTACT_DEEPEST]
     velocity = end_state[END_STRIKER_VELOCITY]
     if striker.elastic:
         striker_u[new, 0] = y[new]

@@ -11,9 +11,11 @@ from ..compiled import compiled
 from ..laws import FORCE_ABS_SINE, FORCE_PULSE
 from .bundles import (
     BACK_INCOMING,
+    END_ANVIL_CONTACT_DEEPEST,
     END_ANVIL_DISP,
     END_ANVIL_FORCE,
     END_ANVIL_VELOCITY,
+    END_CONTACT_DEEPEST,
     END_CONTACT_FORCE,
     END_IMPULSE,
     END_IN_CONTACT,
@@ -27,8 +29,17 @@ from .bundles import (
     S_BACK_SLOPE_BEFORE,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
+    Anvil,
 )
-from .contact import bracketed_newton_step, contact_spring, external_force, quotient_force, solve_overlap
+from .contact import (
+    bracketed_newton_step,
+    contact_spring,
+    cushion_loss,
+    external_force,
+    pressed_to,
+    quotient_force,
+    solve_overlap,
+)
 
 # --- Ends that integrate their own equations (the explicit scheme at Courant number 1) -----------
 #
@@ -352,17 +363,42 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     return max(count, min(ANVIL_SUBSTEPS, substeps(math.sqrt(omega2), span, ANVIL_PHASE)))
 
 
+@compiled(inline="always")
+def pressed_bodies(contact, anvil, deep1, deep2):
+    """The striker's contact and the anvil (with its contact) as cushions pressed to `deep1` and
+    `deep2`."""
+    pressed = Anvil(
+        present=anvil.present, mass=anvil.mass, velocity=anvil.velocity, contact=pressed_to(anvil.contact, deep2)
+    )
+    return pressed_to(contact, deep1), pressed
+
+
+@compiled(inline="always")
+def deepened(contact, deepest, overlap):
+    """A cushion's deepest overlap after a substep that ended at `overlap`, and what it lost in
+    it (`cushion_loss`: only while it is pressed deeper). Once its faces part (δ < 0) it has
+    recovered: the next contact loads it afresh."""
+    if contact.restitution == 1.0:
+        return deepest, 0.0  # no cushion: nothing to remember
+    if overlap < 0.0:
+        return 0.0, 0.0
+    if overlap > deepest:
+        return overlap, cushion_loss(contact, overlap) - cushion_loss(contact, deepest)
+    return deepest, 0.0
+
+
 @compiled()
 def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, events):
     """Advance the striker, the anvil and the struck end over [t0, t0 + τ] under the incoming
     waves' rates `waves` = (mean, slope) at the struck end and at an elastic striker's face, each
     `v(t) = mean + slope·(t − t0 − τ/2)`; split where R jumps or kinks.
 
-    `state` (its slots `END_…`) = (y, w, u_0, F1, I, in contact, y_a, w_a, F2) at t0 on entry, at
-    t0 + τ on return:
+    `state` (its slots `END_…`) = (y, w, u_0, F1, I, in contact, y_a, w_a, F2, δ1_m, δ2_m) at t0
+    on entry, at t0 + τ on return:
     w the striker's velocity (its face's when elastic), F1 the contact's force, I its impulse,
     y_a, w_a the anvil's displacement and velocity, F2 the force on the tool's end (F1 without an
-    anvil). Returns the work of R and what the contacts' dampers dissipated over the step, the
+    anvil), δ1_m and δ2_m the deepest overlaps of the contacts (a cushion's, `laws.unloading`).
+    Returns the work of R and what the contacts' dampers and cushions dissipated over the step, the
     number of changes of sign of δ1 (the contact's overlap), each written to `events` (time,
     striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
     striker's velocity is its mean, its momentum over its mass), `(largest F1, its time)` and
@@ -386,6 +422,9 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     )
     impulse = state[END_IMPULSE]
     in_contact = state[END_IN_CONTACT] != 0.0
+    # a cushion's laws as pressed so far: held over a substep, deepened after it
+    deep1, deep2 = state[END_CONTACT_DEEPEST], state[END_ANVIL_CONTACT_DEEPEST]
+    contact, anvil = pressed_bodies(contact, anvil, deep1, deep2)
     v_start = v_mean - 0.5 * tau * v_slope
     face_start = face_mean - 0.5 * tau * face_slope
     # under the waves arriving now: the forces can jump at t0
@@ -432,9 +471,11 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         # and rates. Faces that come to rest together (equal impedances) graze, δ ≈ 0 within
         # rounding, with no force: the contact ends as δ falls to the rounding's size, and a new
         # one starts only at twice that, so that rounding neither prolongs it nor starts others.
+        # A cushion's faces part where its force ends, at its set δ_p = (1 − e²)·δ_m.
         edge = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
         if not in_contact:
             edge *= 2.0
+        edge += (1.0 - contact.restitution * contact.restitution) * deep1
         if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
             k_a = body_rates(
@@ -459,6 +500,13 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
             events[count, 2] = 1.0 if in_contact else -1.0
             count += 1
         x, f, f_end, impulse, overlaps = x2, f2, e2, impulse_b, (d2, a2)
+        # the overlaps as the state gives them (the audit reads them so), not the stages' roots
+        deeper1, lost1 = deepened(contact, deep1, x[0] - (x[2] if anvil.present else x[4]))
+        deeper2, lost2 = deepened(anvil.contact, deep2, x[2] - x[4])
+        dissipated += lost1 + lost2
+        if deeper1 != deep1 or deeper2 != deep2:
+            deep1, deep2 = deeper1, deeper2
+            contact, anvil = pressed_bodies(contact, anvil, deep1, deep2)
         t_a = t_b
         if f > f_max:
             f_max, t_max = f, t_a
@@ -469,6 +517,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     state[END_STRIKER_DISP], state[END_STRIKER_VELOCITY], state[END_TOOL_DISP] = x[0], x[1], x[4]
     state[END_CONTACT_FORCE], state[END_IMPULSE] = f, impulse
     state[END_ANVIL_DISP], state[END_ANVIL_VELOCITY], state[END_ANVIL_FORCE] = x[2], x[3], f_end
+    state[END_CONTACT_DEEPEST], state[END_ANVIL_CONTACT_DEEPEST] = deep1, deep2
     return work, dissipated, count, (f_max, t_max), (e_max, te_max, e_min, te_min)
 
 
