@@ -195,12 +195,33 @@ class Estimate:
         return {**{name: e.error for name, e in self.errors.items()}, "worst": self.worst}
 
 
-ESTIMATED = HEADLINE + ("energy.transfer_efficiency",)
+ESTIMATED = HEADLINE + ("energy.transfer_efficiency", "set", "blow_count")
+SET_FRACTION = 0.01  # of the deepest penetration: below it a set is refusal, its relative error moot
 
 
 def estimated_values(summary: dict) -> dict[str, float | None]:
-    """The quantities an error is estimated for: the headline ones and the transfer efficiency."""
-    return {**headline(summary), "energy.transfer_efficiency": summary["energy"]["transfer_efficiency"]}
+    """The quantities an error is estimated for: the headline ones, the transfer efficiency, and
+    where the medium yields the set and the blow count."""
+    return {
+        **headline(summary),
+        "energy.transfer_efficiency": summary["energy"]["transfer_efficiency"],
+        "set": summary["set"],
+        "blow_count": summary["blow_count"],
+    }
+
+
+def set_left_out(summary: dict) -> str | None:
+    """Why a run's set (and blow count) has no meaningful relative error, if it has none."""
+    found = summary["set"]
+    if found is None:
+        return "the medium does not yield" if summary["medium_penetration"] else "no medium"
+    deepest = summary["medium_penetration"]["max"]
+    if found <= SET_FRACTION * deepest:
+        return (
+            f"the set, {found * 1e3:.3g} mm, is under {100 * SET_FRACTION:g}% of the deepest penetration "
+            f"({deepest * 1e3:.3g} mm): refusal"
+        )
+    return None
 
 
 def not_estimated(summary: dict, impact_velocity: float, has_medium: bool) -> dict[str, str]:
@@ -211,6 +232,9 @@ def not_estimated(summary: dict, impact_velocity: float, has_medium: bool) -> di
     )
     if "energy.to_medium" in skip:
         skip["energy.transfer_efficiency"] = skip["energy.to_medium"]
+    reason = set_left_out(summary)
+    if reason:
+        skip["set"] = skip["blow_count"] = reason
     return skip
 
 

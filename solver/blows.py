@@ -14,7 +14,14 @@ from . import layout as L
 from .summary import to_medium
 
 # Each extreme with the slots that go with it (where, when)
-_LARGEST = (L.X_PEAK_FORCE, L.X_MAX_COMPRESSION, L.X_MAX_TENSION, L.X_MAX_PENETRATION, L.X_ENERGY_EXCESS)
+_LARGEST = (
+    L.X_PEAK_FORCE,
+    L.X_MAX_COMPRESSION,
+    L.X_MAX_TENSION,
+    L.X_MAX_PENETRATION,
+    L.X_ENERGY_EXCESS,
+    L.X_MAX_TRANSFERRED,
+)
 _WITH = {
     L.X_PEAK_FORCE: (L.X_PEAK_FORCE_TIME,),
     L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
@@ -51,6 +58,7 @@ class BlowLog:
                     "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
                     "permanent_penetration": float(permanent_penetration),
                     "set": float(permanent_penetration - self._set),
+                    "transferred": float(x[L.X_MAX_TRANSFERRED]),
                 },
                 "extremes": x.copy(),
                 "contacts": observed.contacts[: min(count, len(observed.contacts))].copy(),

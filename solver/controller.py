@@ -49,6 +49,7 @@ HISTORY_PATHS = {
     "energy/tool_strain": L.H_TOOL_STRAIN,
     "energy/contact_potential": L.H_CONTACT_POTENTIAL,
     "energy/medium_potential": L.H_MEDIUM_POTENTIAL,
+    "tool/transferred_energy": L.H_TRANSFERRED,
 }
 # A medium that yields adds these.
 YIELDING_PATHS = {

@@ -15,7 +15,8 @@ H_MEDIUM_PLASTIC, H_PERMANENT_PENETRATION, H_STRIKER_STRAIN = 17, 18, 19
 H_ANVIL_DISP, H_ANVIL_VEL, H_ANVIL_FORCE, H_ANVIL_KINETIC = 20, 21, 22, 23  # its force on the tool
 H_LAUNCHED, H_WITHDRAWN = 24, 25  # blow after blow: `E_LAUNCHED`, `E_WITHDRAWN` so far
 H_TO_SHAFT = 26  # `E_TO_SHAFT` so far
-HISTORY_COLUMNS = 27
+H_TRANSFERRED = 27  # the work done on the tool through its struck end in this blow
+HISTORY_COLUMNS = 28
 
 # Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1
@@ -30,7 +31,8 @@ X_ENERGY_EXCESS = 11  # max over time of (stored + dissipated − input): > 0 me
 X_FAILED_TIME = 12
 X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resolved by
 X_MAX_PENETRATION = 14  # the working end's deepest penetration into the medium
-EXTREME_SLOTS = 15
+X_MAX_TRANSFERRED = 15  # the most work done on the tool through its struck end (EMX)
+EXTREME_SLOTS = 16
 
 # Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
 # and dissipation, and the stored terms

@@ -290,6 +290,8 @@ def history_table(case: Case, p: Parameters, time: np.ndarray, s: np.ndarray) ->
         L.H_TOOL_STRAIN: np.zeros_like(time),
         L.H_CONTACT_POTENTIAL: contact_potential(delta, p),
         L.H_MEDIUM_POTENTIAL: 0.5 * p.c2 * s[X2] ** 2,
+        # the work through the struck end is all the rigid tool holds and gave the medium
+        L.H_TRANSFERRED: 0.5 * p.m2 * s[V2] ** 2 + 0.5 * p.c2 * s[X2] ** 2 + s[DISSIPATED_MEDIUM],
     }
     return {path: np.array(columns[col], dtype=float) for path, col in HISTORY_PATHS.items()}
 
@@ -419,6 +421,7 @@ def simulate_lumped(
     initial = 0.5 * p.m1 * case.striker.velocity**2
     extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak), energy_excess(history, initial))
     extremes[L.X_MAX_PENETRATION] = np.max(history["tool/working_end_displacement"])
+    extremes[L.X_MAX_TRANSFERRED] = np.max(history["tool/transferred_energy"])
     summary = build_summary(
         case=case,
         numerics=num,

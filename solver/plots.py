@@ -318,6 +318,7 @@ ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked (thos
     "contact_potential": "contact potential",
     "medium_potential": "medium potential",
     "medium_plastic": "medium plastic (permanent penetration)",  # a medium that yields
+    "to_shaft": "soil along the tool's side (stored, slipped, damped)",  # a shaft's
     "anvil_kinetic": "anvil kinetic",
     "striker_withdrawn": "withdrawn with the striker between blows",
     "dissipated_contact": "dissipated in the contact",

@@ -49,6 +49,10 @@ class Energy(_Part):
     external_work: float = Field(description="work of the external force, J")
     to_medium: float = Field(description="net work on the medium: stored, dissipated and plastic, J")
     to_shaft: float = Field(description="net work on the soil along the tool's side: stored, slipped and damped, J")
+    transferred: float = Field(
+        description="the largest work done on the tool through its struck end, ∫F·v dt (a pile driving analyser's "
+        "EMX), J; with blows, the largest blow's"
+    )
     transfer_efficiency: float = Field(description="to_medium and to_shaft over the energy supplied, 1")
     dissipated_contact: float = Field(description="by the contact's damper b1 (and the anvil's contact's), J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
@@ -81,6 +85,7 @@ class Blow(_Part):
     transfer_efficiency: float = Field(description="to_medium over the blow's striker energy and external work, 1")
     permanent_penetration: float = Field(description="the medium's, at the blow's end, m")
     set: float = Field(description="the permanent penetration this blow added, m")
+    transferred: float = Field(description="the blow's largest work through the tool's struck end (EMX), J")
 
 
 class ForceHistory(_Part):
@@ -114,6 +119,12 @@ class Summary(_Part):
         description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)"
     )
     medium_penetration: Penetration | None = Field(description="null without a medium")
+    set: float | None = Field(
+        description="the working end's permanent penetration in the last blow, m; null for a medium that does not yield"
+    )
+    blow_count: float | None = Field(
+        description="1/set, blows per metre; null where the medium does not yield, or at refusal (set ≤ 0)"
+    )
     energy: Energy
     force_history: ForceHistory
     blows: list[Blow] | None = Field(description="one entry per blow; null when the case has no `blows`")
@@ -158,6 +169,16 @@ def launch_energy(case: Case) -> float:
     return 0.5 * striker_mass(case.striker) * case.striker.velocity**2 + (
         0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0
     )
+
+
+def refusal(last_set: float | None) -> list[str]:
+    """The warning a blow that sets the working end no deeper calls for."""
+    if last_set is None or last_set > 0.0:
+        return []
+    return [
+        f"refusal: the last blow set the working end {last_set * 1e3:.3g} mm deeper (set ≤ 0), so blow_count "
+        "is not defined: the blow does not overcome the medium's resistance"
+    ]
 
 
 def build_summary(
@@ -206,6 +227,8 @@ def build_summary(
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     medium = to_medium(energy)
     supplied = initial + external
+    yields = case.medium is not None and case.medium.kind != "linear"
+    last_set = (blows[-1]["set"] if blows else float(permanent_penetration)) if yields else None
 
     return {
         "name": case.name,
@@ -230,11 +253,14 @@ def build_summary(
         "medium_penetration": None
         if case.medium is None
         else {"max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},
+        "set": last_set,
+        "blow_count": 1.0 / last_set if last_set is not None and last_set > 0.0 else None,
         "energy": {
             "initial": float(initial),
             "external_work": float(external),
             "to_medium": medium,
             "to_shaft": float(shaft),
+            "transferred": float(extremes[L.X_MAX_TRANSFERRED]),
             "transfer_efficiency": float((medium + shaft) / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
@@ -245,7 +271,7 @@ def build_summary(
         },
         "force_history": _downsample(history),
         "blows": blows,
-        "warnings": list(extra_warnings or []),
+        "warnings": list(extra_warnings or []) + refusal(last_set),
     }
 
 

@@ -44,7 +44,10 @@ S_BACK_ENERGY = 28  # the energy of the waves beyond the striker's last node, at
 S_ANVIL_DISP, S_ANVIL_VELOCITY, S_ANVIL_FORCE = 29, 30, 31
 # The deepest overlap a cushion was pressed to in this contact: the striker's, the anvil's
 S_CONTACT_DEEPEST, S_ANVIL_CONTACT_DEEPEST = 32, 33
-END_SLOTS = 34
+# The work done on the tool through its struck end in this blow, and its end force and
+# displacement at the layer recorded last (`track_transferred`)
+S_TRANSFERRED, S_TRANSFER_FORCE, S_TRANSFER_DISP = 34, 35, 36
+END_SLOTS = 37
 # The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
 INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
 FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end

@@ -48,11 +48,13 @@ from ..layout import (
     H_TO_SHAFT,
     H_TOOL_KINETIC,
     H_TOOL_STRAIN,
+    H_TRANSFERRED,
     H_WITHDRAWN,
     H_WORKING_END,
     TENSION,
     X_CO_IMPACT,
     X_CONTACTS,
+    X_MAX_TRANSFERRED,
     X_MIN_CONTACT_STEPS,
     X_PEAK_FORCE,
     X_PEAK_FORCE_TIME,
@@ -72,6 +74,9 @@ from .bundles import (
     S_MEDIUM_FORCE_BEFORE,
     S_MEDIUM_FORCE_EARLIER,
     S_MEDIUM_SET,
+    S_TRANSFER_DISP,
+    S_TRANSFER_FORCE,
+    S_TRANSFERRED,
 )
 from .contact import crossing, external_force
 
@@ -233,6 +238,20 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
 
 
 @compiled(inline="always")
+def track_transferred(extremes, ends, recorded, u, m_rec, tool):
+    """The work done on the tool through its struck end, ∫F·u_0' dt over this blow (trapezoidal
+    over the recorded layers, F the force on the end, compression +), and its largest value so
+    far: a pile driving analyser's EMX."""
+    force = -recorded.struck_end_stress * tool.struck_end_area
+    at = u[recorded.row, 0]
+    if m_rec > 0:
+        ends[S_TRANSFERRED] += 0.5 * (force + ends[S_TRANSFER_FORCE]) * (at - ends[S_TRANSFER_DISP])
+        extremes[X_MAX_TRANSFERRED] = max(extremes[X_MAX_TRANSFERRED], ends[S_TRANSFERRED])
+    ends[S_TRANSFER_FORCE] = force
+    ends[S_TRANSFER_DISP] = at
+
+
+@compiled(inline="always")
 def record_history(recorders, column, state, recorded, m_rec, force, anvil, step):
     """The recorded layer into `column` of the history (its energy terms as `energy[0]` holds
     them; none yet for layer 0, whose energy is all the striker's)."""
@@ -261,6 +280,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     history[H_LAUNCHED, column] = energy[0, E_LAUNCHED]
     history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
     history[H_TO_SHAFT, column] = energy[0, E_TO_SHAFT]
+    history[H_TRANSFERRED, column] = state.ends[S_TRANSFERRED]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
         for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL, H_MEDIUM_PLASTIC):

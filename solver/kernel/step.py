@@ -59,6 +59,7 @@ from .bundles import (
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
     S_STRIKER_VELOCITY,
+    S_TRANSFERRED,
     STATUS_NON_FINITE,
     STATUS_OK,
     STRUCK_END_STATE,
@@ -82,6 +83,7 @@ from .recording import (
     track_ends_between_layers,
     track_overlap,
     track_stress_extremes,
+    track_transferred,
 )
 from .rows import back_substitute, explicit_interior, right_hand_sides, segment_layout, sweep
 from .shaft import record_shaft, shaft_on_rows
@@ -198,6 +200,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
     potential = contact_law(y[row] - struck, pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
     ends[S_CONTACT_DEEPEST] = 0.0  # the new striker meets its cushion unpressed
+    ends[S_TRANSFERRED] = 0.0  # each blow's transferred energy its own
     energy[0, E_WITHDRAWN] += (
         energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN] + potential + energy[0, E_ANVIL_KINETIC]
     )
@@ -434,6 +437,7 @@ def record_layer(
     track_stress_extremes(extremes, u, recorded, interior, rod, step)
     extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
     track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
+    track_transferred(extremes, ends, recorded, u, m_rec, tool)
     column = frame = -1
     if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
         record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
