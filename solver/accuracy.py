@@ -260,7 +260,7 @@ def from_runs(case: Case, runs: list[tuple[ResolvedNumerics, dict]], formal_orde
         [case.tool.length / n.cells for n, _ in runs],
         [s for _, s in runs],
         formal_order,
-        case.striker.velocity,
+        case.impact_velocity,
         case.medium is not None,
     )
 
@@ -268,7 +268,7 @@ def from_runs(case: Case, runs: list[tuple[ResolvedNumerics, dict]], formal_orde
 def modelled(case: Case, summary: dict, error: float) -> Estimate:
     """A model's own error, `error` on every quantity the run does not leave out (the lumped
     model's ε², which no grid reduces)."""
-    skip = not_estimated(summary, case.striker.velocity, case.medium is not None)
+    skip = not_estimated(summary, case.impact_velocity, case.medium is not None)
     return Estimate({name: QuantityError(error, None, False) for name in ESTIMATED if name not in skip}, skip, True)
 
 

@@ -8,6 +8,7 @@ field path instead of being silently ignored. `parse_case` turns pydantic's erro
 from __future__ import annotations
 
 import json
+import math
 import os
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
@@ -16,6 +17,7 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationEr
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
 _M = TypeVar("_M", bound=BaseModel)
+STANDARD_GRAVITY = 9.81  # m/s², a falling ram's g where the case gives no gravity
 Positive = Annotated[float, Field(gt=0)]
 NonNegative = Annotated[float, Field(ge=0)]
 
@@ -141,17 +143,55 @@ def _check_shape(rod: Tool | Striker, name: str) -> None:
 
 
 class Striker(_Model):
-    """The striker at its pre-impact velocity `W1` (m/s, + toward the tool): lumped, of mass `m1`
-    (kg), or an elastic rod (a piston) of `length`, `youngs_modulus`, `density` and a uniform
-    `area` or a `profile` (stations from its impact face, the end that meets the tool)."""
+    """The striker at its pre-impact velocity `W1` (m/s, + toward the tool), or a ram falling its
+    `stroke` (m), which strikes at `√(2·g·efficiency·stroke)` (efficiency 1 when not given):
+    lumped, of mass `m1` (kg), or an elastic rod (a piston) of `length`, `youngs_modulus`,
+    `density` and a uniform `area` or a `profile` (stations from its impact face, the end that
+    meets the tool)."""
 
-    velocity: Speed = Field(title="Impact velocity", **_about("W₁"))
+    velocity: Speed | None = Field(None, title="Impact velocity", **_about("W₁"))
+    stroke: Annotated[float, Field(gt=0, le=1e3, **_quantity("length"))] | None = Field(
+        None, title="Stroke (a falling ram)", **_about("h")
+    )
+    efficiency: Annotated[float, Field(gt=0.0, le=1.0)] | None = Field(
+        None, title="Efficiency of the fall", **_about("η", quantity="dimensionless", implied=1.0)
+    )
     mass: Mass | None = Field(None, **_about("m₁"))
     length: Length | None = None
     youngs_modulus: Modulus | None = Field(None, title="Young's modulus", **_about("E"))
     density: Density | None = Field(None, **_about("ρ"))
     area: Area | None = Field(None, **_about("S"))
     profile: Profile | None = None
+
+    @model_validator(mode="after")
+    def _velocity_or_stroke(self) -> Striker:
+        if self.velocity is not None and self.stroke is not None:
+            raise field_error(
+                "Striker",
+                ("stroke",),
+                f"cannot be given with striker.velocity = {self.velocity} m/s: a falling ram strikes at "
+                "√(2·g·efficiency·stroke); give striker.velocity or striker.stroke",
+                self.stroke,
+            )
+        if self.velocity is None and self.stroke is None:
+            raise field_error(
+                "Striker", ("velocity",), "is required, unless the striker is a ram falling its striker.stroke", None
+            )
+        if self.stroke is None and self.efficiency is not None:
+            raise field_error(
+                "Striker",
+                ("efficiency",),
+                "belongs to a falling ram (striker.stroke), not a given velocity",
+                self.efficiency,
+            )
+        return self
+
+    def impact_velocity(self, gravity: float = STANDARD_GRAVITY) -> float:
+        """W1: the velocity given, or a falling ram's `√(2·g·efficiency·stroke)` (m/s)."""
+        if self.velocity is not None:
+            return self.velocity
+        efficiency = 1.0 if self.efficiency is None else self.efficiency
+        return math.sqrt(2.0 * gravity * efficiency * self.stroke)
 
     @model_validator(mode="after")
     def _lumped_or_rod(self) -> Striker:
@@ -556,6 +596,11 @@ class Case(_Model):
                 self.force.kind,
             )
         return self
+
+    @property
+    def impact_velocity(self) -> float:
+        """W1 (m/s): the striker's given velocity, or its fall's."""
+        return self.striker.impact_velocity()
 
     @property
     def beyond_paper(self) -> list[str]:

@@ -464,7 +464,7 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
             pulse,
             0.0,
             end_areas[0],
-            case.striker.velocity,
+            case.impact_velocity,
             0.0,
         ]
     )
@@ -491,7 +491,7 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
         max_tensile_stress_x=float(obs[O_TENSION_X]),
         to_medium=float(to_medium),
         external_work=float(obs[O_EXTERNAL_WORK]),
-        initial=0.5 * case.striker.mass * case.striker.velocity**2,
+        initial=0.5 * case.striker.mass * case.impact_velocity**2,
         contacts=contacts,
         history={
             name: history[k, :kept].copy() for k, name in enumerate(("time", "contact", "medium", "striker_velocity"))

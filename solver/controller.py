@@ -119,7 +119,7 @@ def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
     impedance = grid.density * wave_speed(case.tool)
     contact = K.Contact(
         striker_mass=striker_mass(case.striker),
-        striker_velocity=case.striker.velocity,
+        striker_velocity=case.impact_velocity,
         stiffness=c.stiffness,
         exponent=c.exponent,
         tension_stiffness=c.tension_stiffness,

@@ -97,7 +97,7 @@ def rigid_wall_depth(case: Case) -> float | None:
     """The contact's deepest compression δ against a rigid wall (m): from the impact velocity, or
     with none from the external force; None when neither acts."""
     c1, p = case.contact.stiffness, 1.0 + case.contact.exponent  # p: the force's exponent
-    w1 = abs(case.striker.velocity)
+    w1 = abs(case.impact_velocity)
     if w1 > 0:
         return ((p + 1.0) * striker_mass(case.striker) * w1 * w1 / (2.0 * c1)) ** (1.0 / (p + 1.0))  # inf, not an error
     if case.force is not None and case.force.amplitude != 0:
@@ -483,7 +483,7 @@ def first_cells(case: Case, tol: float) -> int:
             [
                 FieldError(
                     field="striker",
-                    message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.striker.velocity:.3g} "
+                    message=f"the contact of a {striker_mass(case.striker):.3g}-kg striker at {case.impact_velocity:.3g} "
                     "m/s lasts no time that a grid can resolve: give values of a real striker",
                 )
             ]

@@ -182,7 +182,7 @@ def absolute_tolerance(case: Case, p: Parameters, t_end: float) -> np.ndarray:
     displacements, W1 and the velocity R can add for the velocities, their kinetic energy), so
     states that start at zero are resolved relative to their scale."""
     push = abs(case.force.amplitude) * t_end / p.m1 if case.force else 0.0
-    speed = (abs(case.striker.velocity) + push) or 1.0  # nothing moves: any scale will do
+    speed = (abs(case.impact_velocity) + push) or 1.0  # nothing moves: any scale will do
     depth = speed * min(t_end, contact_time_estimate(case))
     energy = 0.5 * p.m1 * speed * speed
     return RTOL * np.array([depth, speed, depth, speed, energy, energy, energy])
@@ -193,7 +193,7 @@ def segments(case: Case, p: Parameters, t_end: float) -> Iterator[Segment]:
     from scipy.integrate import solve_ivp
 
     state = np.zeros(STATES)
-    state[V1] = case.striker.velocity
+    state[V1] = case.impact_velocity
     # δ(0) = 0 is contact in (7); a striker moving away leaves at once (a zero-length segment).
     t, contact = 0.0, True
     atol = absolute_tolerance(case, p, t_end)
@@ -418,7 +418,7 @@ def simulate_lumped(
             raise Cancelled(f"cancelled at t = {seg.t1:.6g} s")
 
     history = history_table(case, p, time, samples)
-    initial = 0.5 * p.m1 * case.striker.velocity**2
+    initial = 0.5 * p.m1 * case.impact_velocity**2
     extremes = fill_extremes(log, peak, stress_extremes(case, p, history, peak), energy_excess(history, initial))
     extremes[L.X_MAX_PENETRATION] = np.max(history["tool/working_end_displacement"])
     extremes[L.X_MAX_TRANSFERRED] = np.max(history["tool/transferred_energy"])

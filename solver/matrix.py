@@ -137,7 +137,7 @@ def reference_left_out(case: Case, reference: Reference) -> dict[str, str]:
     """The headline quantities the reference has no meaningful relative error for."""
     return left_out(
         reference.headline(),
-        case.striker.velocity,
+        case.impact_velocity,
         reference.initial + max(reference.external_work, 0.0),
         case.medium is not None,
     )

@@ -166,7 +166,7 @@ def to_medium(energy: np.ndarray) -> float:
 def launch_energy(case: Case) -> float:
     """What one launch brings (J): the striker's kinetic energy at impact, and an anvil's."""
     anvil = case.anvil
-    return 0.5 * striker_mass(case.striker) * case.striker.velocity**2 + (
+    return 0.5 * striker_mass(case.striker) * case.impact_velocity**2 + (
         0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0
     )
 
