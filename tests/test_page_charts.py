@@ -70,7 +70,9 @@ def test_a_jobs_charts_zoom_hover_slide_and_export(page, stack):
     expect(page.locator("[data-chart=force] .xtitle")).to_have_text("time t (ms)")  # a 4-ms run
     expect(page.locator("[data-chart=force] .ytitle")).to_have_text("force (kN)")
 
-    # Hover on the peak: its value with its unit.
+    # Hover on the peak: its value with its unit (the chart brought into view first, as drawing
+    # the charts below it scrolled the page past it).
+    page.locator("[data-chart=force]").scroll_into_view_if_needed()
     box = plot_box(page, "force")
     at = page.evaluate("""() => {
         const el = document.querySelector('[data-chart=force] .plot-area'), y = el.data[0].y;
