@@ -20,6 +20,7 @@ from .grid import (
     make_grid,
     resolve_numerics,
     shaft_nodes,
+    shaft_spans,
     striker_grid,
     striker_mass,
     wave_speed,
@@ -196,7 +197,6 @@ def shaft_on(case: Case, grid: Grid, tau: float) -> K.Shaft:
     loaded = np.flatnonzero(resistance)
     mass = grid.node_area * grid.density * grid.h
     return K.Shaft(
-        present=True,
         first=int(loaded[0]),
         last=int(loaded[-1]),
         resistance=resistance,
@@ -213,13 +213,8 @@ def shaft_shares(case: Case, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     each = np.array([shaft_nodes([segment], grid)[0] for segment in segments]).reshape(len(segments), grid.cells + 1)
     total = each.sum(axis=0)
     share = np.divide(each, total, out=np.zeros_like(each), where=total > 0)
-    length = np.full(grid.cells + 1, grid.h)
-    length[[0, -1]] = 0.0
-    if grid.cells > 2:
-        length[[1, -2]] = 1.5 * grid.h  # they carry the ends' half cells
-    else:
-        length[1] = 2.0 * grid.h
-    return share, length
+    left, right = shaft_spans(grid)
+    return share, right - left
 
 
 def tool_on(grid: Grid) -> K.Tool:

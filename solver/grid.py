@@ -393,21 +393,29 @@ def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     )
 
 
+def shaft_spans(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
+    """The stretch of shaft each node carries, `[left_i, right_i]` (m): its half cells
+    `[x_i − h/2, x_i + h/2]`, nodes 1 and N − 1 the ends' half cells too, the ends none (they keep
+    their own equations)."""
+    h, length = grid.h, grid.x[-1]
+    left = np.maximum(grid.x - 0.5 * h, 0.0)
+    right = np.minimum(grid.x + 0.5 * h, length)
+    left[1], right[-2] = 0.0, length
+    left[[0, -1]] = right[[0, -1]]
+    return left, right
+
+
 def shaft_nodes(segments: list, grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The soil along the tool's side (`Case.shaft`'s segments) node by node on `grid`: each
     interior node's ultimate resistance r_i (N), stiffness k_i (N/m) and damping factor J_i (s/m).
 
     Each segment's resistance is spread evenly over its length, and a node takes what lies within
-    its half cells, `[x_i − h/2, x_i + h/2]`; nodes 1 and N − 1 take the ends' half cells too (the
-    ends keep their own equations). k_i sums each share over its quake; J_i is the shares' mean."""
-    n, h = grid.cells, grid.h
-    left = np.maximum(grid.x - 0.5 * h, 0.0)
-    right = np.minimum(grid.x + 0.5 * h, grid.x[-1])
-    left[1], right[n - 1] = 0.0, grid.x[-1]
+    its stretch (`shaft_spans`). k_i sums each share over its quake; J_i is the shares' mean."""
+    n = grid.cells
+    left, right = shaft_spans(grid)
     resistance, stiffness, damped = np.zeros(n + 1), np.zeros(n + 1), np.zeros(n + 1)
     for segment in segments:
         share = np.clip(np.minimum(right, segment.end) - np.maximum(left, segment.start), 0.0, None)
-        share[[0, n]] = 0.0
         r = segment.ultimate_resistance * share / (segment.end - segment.start)
         resistance += r
         stiffness += r / segment.quake

@@ -108,7 +108,7 @@ Contact = namedtuple(
 """The struck end: the striker (m1, W1 at impact), the contact's spring `Φ'(δ) = c1·δ^(α+1)` in
 contact and `c0·δ` in separation (c1, α, c0), its damper (b1), the impedance ρ·a·S of the
 tool's end cell (N·s/m), and a cushion's restitution e (1: none) with the deepest overlap it was
-pressed to (`laws.unloading`; 0 as built, the struck end's state in a step)."""
+pressed to (`laws.contact_law`; 0 as built, the struck end's state in a step)."""
 Medium = namedtuple("Medium", "kind stiffness damping impedance unloading_stiffness ultimate_resistance damping_factor")
 """The working end: the medium's `MEDIUM_…` kind, its loading stiffness (c2, rock's k, or soil's
 R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, rock's unloading
@@ -124,17 +124,15 @@ Anvil = namedtuple("Anvil", "present mass velocity contact")
 """A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
 impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end
 impedance); the case's `Contact` is then the striker's with the anvil."""
-Shaft = namedtuple("Shaft", "present first last resistance stiffness damping_factor inv_mass")
-"""The soil along the tool's side (when `present`), node by node from `first` to `last` (interior
-nodes): each node's ultimate resistance r_i (N), its stiffness r_i/q_i (N/m), Smith's damping
+Shaft = namedtuple("Shaft", "first last resistance stiffness damping_factor inv_mass")
+"""The soil along the tool's side, node by node from `first` to `last` (interior nodes; none when
+`last` < `first`): each node's ultimate resistance r_i (N), its stiffness r_i/q_i (N/m), Smith's damping
 factor J_i (s/m) and τ²/m_i, m_i the node's mass (`shaft.py`)."""
-State = namedtuple("State", "u y ends energy striker shaft")
+State = namedtuple("State", "u y ends energy striker shaft_sets")
 """What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
 the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`) and the shaft's
-state along the tool (2 × (N+1): `SHAFT_SET`, each node's permanent displacement against its
-soil, and `SHAFT_FORCE`, the soil's force on it at the last layer stepped)."""
-SHAFT_SET, SHAFT_FORCE = 0, 1
+sets along the tool (N+1: each node's permanent displacement against its soil)."""
 Observed = namedtuple("Observed", "extremes contacts")
 """What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
 intervals (start, end; one row each, those beyond its rows counted only)."""
@@ -186,7 +184,7 @@ def new_state(cells: int, striker_cells: int = 0) -> State:
         ends=np.zeros(END_SLOTS),
         energy=np.zeros((2, ENERGY_SLOTS)),
         striker=np.zeros((3, striker_cells + 1)),
-        shaft=np.zeros((2, cells + 1)),
+        shaft_sets=np.zeros(cells + 1),
     )
 
 

@@ -40,7 +40,7 @@ def contact_spring(delta, contact):
 
 @compiled(inline="always")
 def pressed_to(contact, deepest):
-    """The `Contact` as a cushion pressed to its `deepest` overlap so far (`laws.unloading`)."""
+    """The `Contact` as a cushion pressed to its `deepest` overlap so far (`laws.contact_law`)."""
     return Contact(
         striker_mass=contact.striker_mass,
         striker_velocity=contact.striker_velocity,

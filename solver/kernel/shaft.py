@@ -17,8 +17,8 @@ push the sawtooth mode past its stability limit at Courant number 1 (the tool th
 within a few thousand steps); at the mean of n ± 1 it stores `k/4·((u^{n+1})² + (u^n)²)`, and
 the step stays stable at any stiffness. Its work over the step, `F_i·(u^{n+1} − u^{n−1})/2`, is
 the term the scheme's energy identity takes, so the audit closes with it (`E_TO_SHAFT`: what the
-soil took, stored, slipped and damped). The shares of the end half-cells are carried by the nodes next to them, which keeps
-the ends' own equations as they are.
+soil took, stored, slipped and damped). The shares of the end half-cells are carried by the nodes
+next to them, which keeps the ends' own equations as they are.
 """
 
 from __future__ import annotations
@@ -27,28 +27,26 @@ import numpy as np
 
 from ..compiled import compiled
 from ..layout import E_TO_SHAFT
-from .bundles import SHAFT_FORCE, SHAFT_SET, Shaft
+from .bundles import Shaft
 
 
 def no_shaft() -> Shaft:
     """A tool with no soil on its side."""
     empty = np.zeros(0)
-    return Shaft(
-        present=False, first=1, last=0, resistance=empty, stiffness=empty, damping_factor=empty, inv_mass=empty
-    )
+    return Shaft(first=1, last=0, resistance=empty, stiffness=empty, damping_factor=empty, inv_mass=empty)
 
 
 @compiled(inline="always")
-def shaft_on_rows(u, layer, shaft, soil, energy, tau):
+def shaft_on_rows(u, layer, shaft, sets, energy, tau):
     """The soil's force on each interior node of layer n in the explicit rows of row `new` of `u`
-    (which hold the new layer without it), each node's set `soil[SHAFT_SET]` moved where it slips
-    and its force kept in `soil[SHAFT_FORCE]`; its work over the step added to `E_TO_SHAFT`."""
+    (which hold the new layer without it), each node's set `sets[i]` moved where it slips; its
+    work over the step added to `E_TO_SHAFT`."""
     new, cur, old, _ = layer
     half_rate = 0.5 / tau
     work = 0.0
     for i in range(shaft.first, shaft.last + 1):
         r, k, c = shaft.resistance[i], shaft.stiffness[i], shaft.inv_mass[i]
-        before, set_ = u[old, i], soil[SHAFT_SET, i]
+        before, set_ = u[old, i], sets[i]
         # the damper's factor J·|F_s| at layer n; its rate, centred, is the new layer's
         damper = shaft.damping_factor[i] * min(r, abs(k * (u[cur, i] - set_))) * c * half_rate
         # u^{n+1} = A − c·(F_s + d·(u^{n+1} − u^{n−1})/(2τ)), A the row without the soil, F_s at
@@ -59,20 +57,19 @@ def shaft_on_rows(u, layer, shaft, soil, energy, tau):
         if abs(static) > r:
             static = r if static > 0.0 else -r
             after = (u[new, i] - c * static + damper * before) / (1.0 + damper)
-            soil[SHAFT_SET, i] = 0.5 * (after + before) - static / k
+            sets[i] = 0.5 * (after + before) - static / k
         force = static + damper / c * (after - before)
         u[new, i] = after
-        soil[SHAFT_FORCE, i] = force
         work += force * 0.5 * (after - before)
     energy[0, E_TO_SHAFT] += work
 
 
 @compiled(inline="always")
-def shaft_force_at(u, row, before, i, shaft, soil, tau):
+def shaft_force_at(u, row, before, i, shaft, sets, tau):
     """The soil's force on node i at the layer in `row` of `u` (`before`: the row of the layer
     before it), as recorded: F_s there, its damper at the rate from the layer before."""
     r, k = shaft.resistance[i], shaft.stiffness[i]
-    static = max(-r, min(r, k * (u[row, i] - soil[SHAFT_SET, i])))
+    static = max(-r, min(r, k * (u[row, i] - sets[i])))
     return static + shaft.damping_factor[i] * abs(static) * (u[row, i] - u[before, i]) / tau
 
 
@@ -80,14 +77,14 @@ def shaft_force_at(u, row, before, i, shaft, soil, tau):
 def record_shaft(recorders, column, frame, state, row, shaft, tau):
     """The soil's force on each segment into `column` of `shaft_history` (when ≥ 0) and on each
     node into row `frame` of `shaft_field` (when ≥ 0), of the layer in `row`."""
-    u, soil = state.u, state.shaft
+    u, sets = state.u, state.shaft_sets
     before = (row + 2) % 3
     share = recorders.shaft_share
     if column >= 0:
         for k in range(share.shape[0]):
             recorders.shaft_history[k, column] = 0.0
     for i in range(shaft.first, shaft.last + 1):
-        force = shaft_force_at(u, row, before, i, shaft, soil, tau)
+        force = shaft_force_at(u, row, before, i, shaft, sets, tau)
         if column >= 0:
             for k in range(share.shape[0]):
                 recorders.shaft_history[k, column] += share[k, i] * force

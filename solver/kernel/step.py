@@ -509,7 +509,7 @@ def advance(
                 working_end_row(u, layer, rows, rod, weights, medium, step)
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
             # the explicit scheme's interior rows are final here (none has a shaft otherwise)
-            shaft_on_rows(u, layer, shaft, state.shaft, energy, tau)
+            shaft_on_rows(u, layer, shaft, state.shaft_sets, energy, tau)
             if striker.elastic:
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
             if weights.impedance_ends:

@@ -397,7 +397,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     on entry, at t0 + τ on return:
     w the striker's velocity (its face's when elastic), F1 the contact's force, I its impulse,
     y_a, w_a the anvil's displacement and velocity, F2 the force on the tool's end (F1 without an
-    anvil), δ1_m and δ2_m the deepest overlaps of the contacts (a cushion's, `laws.unloading`).
+    anvil), δ1_m and δ2_m the deepest overlaps of the contacts (a cushion's, `laws.contact_law`).
     Returns the work of R and what the contacts' dampers and cushions dissipated over the step, the
     number of changes of sign of δ1 (the contact's overlap), each written to `events` (time,
     striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
