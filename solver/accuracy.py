@@ -56,8 +56,8 @@ def left_out(
     """The headline quantities without a meaningful relative error, each with the reason."""
     reasons = {}
     if values["co_impact_time"] is None:
-        reasons["co_impact_time"] = "the first contact lasts the whole run"
-        reasons["striker_rebound_velocity"] = "the striker never leaves the tool during the run"
+        reasons["co_impact_time"] = "the first contact lasts the whole run (or a history drives the struck end)"
+        reasons["striker_rebound_velocity"] = "the striker never leaves the tool during the run (or there is none)"
     elif abs(values["striker_rebound_velocity"]) < REBOUND_FRACTION * abs(impact_velocity):
         reasons["striker_rebound_velocity"] = (
             f"the striker leaves at {values['striker_rebound_velocity']:.3g} m/s, under "

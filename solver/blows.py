@@ -32,11 +32,11 @@ _WITH = {
 class BlowLog:
     """Each blow's observations, in order (`start` one, `finish` it)."""
 
-    def __init__(self, launch_energy: float):
+    def __init__(self, launch_energy: float, set_at_rest: float = 0.0):
         self.launch_energy = launch_energy
         self.blows: list[dict] = []
         self._start: np.ndarray | None = None
-        self._set = 0.0
+        self._set = set_at_rest  # the medium's permanent penetration before the first blow
 
     def start(self, energy: np.ndarray) -> None:
         """A blow starts with the energy terms `energy` (after its striker's launch)."""

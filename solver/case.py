@@ -13,6 +13,7 @@ import os
 from pathlib import Path
 from typing import Annotated, Any, Literal, TypeVar
 
+import numpy as np
 from pydantic import BaseModel, BeforeValidator, ConfigDict, Field, ValidationError, field_validator, model_validator
 from pydantic_core import InitErrorDetails, PydanticCustomError
 
@@ -77,6 +78,15 @@ def field_error(model: str, loc: tuple, message: str, value: Any) -> ValidationE
     return ValidationError.from_exception_data(model, [detail])
 
 
+def increasing(values: list[float], message: str) -> list[float]:
+    """`values` if each is greater than the one before; else the error `message` (its {i}, {j},
+    {a}, {b}: the first pair out of order, by index and value)."""
+    for i in range(1, len(values)):
+        if values[i] <= values[i - 1]:
+            raise PydanticCustomError("value_error", message, {"i": i, "j": i - 1, "a": values[i - 1], "b": values[i]})
+    return values
+
+
 class Profile(_Model):
     """Piecewise-linear cross-section `S(x)`: stations `x` (m, from the struck end) and areas (m²)."""
 
@@ -88,14 +98,7 @@ class Profile(_Model):
     def _increasing(cls, x: list[float]) -> list[float]:
         if x[0] != 0.0:
             raise PydanticCustomError("value_error", "x[0] must be 0 (the struck end, or a striker's impact face)")
-        for i in range(1, len(x)):
-            if x[i] <= x[i - 1]:
-                raise PydanticCustomError(
-                    "value_error",
-                    "must be strictly increasing: x[{i}] = {b} is not greater than x[{j}] = {a}",
-                    {"i": i, "j": i - 1, "a": x[i - 1], "b": x[i]},
-                )
-        return x
+        return increasing(x, "must be strictly increasing: x[{i}] = {b} is not greater than x[{j}] = {a}")
 
     @model_validator(mode="after")
     def _same_length(self) -> Profile:
@@ -258,6 +261,76 @@ class Contact(_Model):
     damping: Damping = Field(0.0, **_about("b₁"))
     restitution: float = Field(
         1.0, gt=0.0, le=1.0, title="Coefficient of restitution", **_about("e", quantity="dimensionless")
+    )
+
+
+class Signal(_Model):
+    """A history given at instants (a measured one): `time` (s, increasing) and its `values`,
+    linear between them."""
+
+    time: list[Annotated[float, Field(ge=-1e4, le=1e4)]] = Field(
+        min_length=2, max_length=1_000_000, **_quantity("time")
+    )
+    values: list[Annotated[float, Field(ge=-1e12, le=1e12)]] = Field(min_length=2, max_length=1_000_000)
+
+    @field_validator("time")
+    @classmethod
+    def _increasing(cls, time: list[float]) -> list[float]:
+        return increasing(time, "must increase: time[{i}] = {b} s is not after time[{j}] = {a} s")
+
+    @model_validator(mode="after")
+    def _same_length(self) -> Signal:
+        if len(self.values) != len(self.time):
+            raise field_error(
+                "Signal",
+                ("values",),
+                f"must have one value per instant: {len(self.values)} values for {len(self.time)} instants",
+                len(self.values),
+            )
+        return self
+
+    def width(self) -> float:
+        """The time (s) the history spends at or above half its largest magnitude: its pulse's
+        length, the time scale a grid must resolve."""
+        t, v = np.asarray(self.time), np.abs(np.asarray(self.values))
+        if not v.max() > 0.0:
+            return float(t[-1] - t[0])
+        above = np.flatnonzero(v >= 0.5 * v.max())
+        return float(max(t[above[-1]] - t[above[0]], np.min(np.diff(t))))
+
+
+class StruckEnd(_Model):
+    """The struck end driven by a given history instead of a striker, as a measured signal would
+    be: its `force` (N, compression positive) or its `velocity` (m/s, toward the working end
+    positive); from the history's end on, the end is free."""
+
+    force: Signal | None = None
+    velocity: Signal | None = None
+
+    @model_validator(mode="after")
+    def _one_history(self) -> StruckEnd:
+        if (self.force is None) == (self.velocity is None):
+            raise field_error(
+                "StruckEnd",
+                ("force",),
+                "give the struck end's force or its velocity (one of them)",
+                None,
+            )
+        return self
+
+    @property
+    def driver(self) -> tuple[str, Signal]:
+        """The quantity the struck end is driven by ('force' or 'velocity') and its history."""
+        return ("force", self.force) if self.force is not None else ("velocity", self.velocity)
+
+
+class Gravity(_Model):
+    """Weight along the tool, from the struck end toward the working end (a vertical pile: 9.81):
+    the tool, the anvil and the striker have weight, and the run starts from the tool and the
+    anvil at rest on the soil (`shaft` and `medium`) under it."""
+
+    acceleration: Annotated[float, Field(gt=0.0, le=1e3)] = Field(
+        title="Acceleration of gravity", **_about("g", quantity="acceleration")
     )
 
 
@@ -540,16 +613,47 @@ class Case(_Model):
 
     name: str = "case"
     description: str | None = None
-    striker: Striker
+    striker: Striker | None = None
     tool: Tool
-    contact: Contact
+    contact: Contact | None = None
+    struck_end: StruckEnd | None = None
     anvil: Anvil | None = None
     medium: Medium | None = None
     shaft: list[ShaftSegment] | None = Field(None, min_length=1)
+    gravity: Gravity | None = None
     force: Force | None = None
     blows: Blows | None = None
     numerics: Numerics
     outputs: Outputs = Field(default_factory=Outputs)
+
+    @model_validator(mode="after")
+    def _struck_by_a_striker_or_a_history(self) -> Case:
+        """A striker and its contact strike the tool, or a given history drives its struck end
+        (`struck_end`), which then leaves no striker, contact, anvil or R(t) to act."""
+        if self.struck_end is None:
+            for name in ("striker", "contact"):
+                if getattr(self, name) is None:
+                    raise field_error(
+                        "Case", (name,), "is required, unless a history drives the struck end (struck_end)", None
+                    )
+            return self
+        if self.striker is not None:
+            raise field_error(
+                "Case",
+                ("struck_end",),
+                "cannot be given with a striker: a history drives the struck end instead of a striker; "
+                "leave striker and contact out, or struck_end",
+                self.struck_end.driver[0],
+            )
+        for name in ("contact", "anvil", "force"):
+            if getattr(self, name) is not None:
+                raise field_error(
+                    "Case",
+                    (name,),
+                    "has nothing to act on: a history drives the struck end (struck_end), with no striker",
+                    None,
+                )
+        return self
 
     @model_validator(mode="after")
     def _probes_on_tool(self) -> Case:
@@ -586,8 +690,35 @@ class Case(_Model):
         return self
 
     @model_validator(mode="after")
+    def _gravity_supported(self) -> Case:
+        """Under gravity the tool and the anvil must rest on the soil: a medium that holds any
+        load (linear, rock), or a shaft and Smith toe whose ultimate resistances exceed their weight."""
+        if self.gravity is None:
+            return self
+        from .grid import tool_mass  # grid reads the case's models
+
+        g = self.gravity.acceleration
+        weight = (tool_mass(self.tool) + (self.anvil.mass if self.anvil else 0.0)) * g
+        medium = self.medium
+        if medium is not None and medium.kind != "smith" and medium.loading_stiffness > 0:
+            return self
+        capacity = sum(s.ultimate_resistance for s in self.shaft or []) + (
+            medium.ultimate_resistance if medium is not None and medium.kind == "smith" else 0.0
+        )
+        if weight >= capacity:
+            raise field_error(
+                "Case",
+                ("gravity",),
+                f"the tool{' and the anvil' if self.anvil else ''} weigh {weight:.6g} N, more than the soil "
+                f"holds ({capacity:.6g} N: the shaft's and the toe's ultimate resistances): nothing would "
+                "stop the fall; give the medium or the shaft more resistance, or leave gravity out",
+                self.gravity.acceleration,
+            )
+        return self
+
+    @model_validator(mode="after")
     def _force_on_a_lumped_striker(self) -> Case:
-        if self.force is not None and self.striker.elastic:
+        if self.force is not None and self.elastic_striker:
             raise field_error(
                 "Case",
                 ("force",),
@@ -599,15 +730,27 @@ class Case(_Model):
 
     @property
     def impact_velocity(self) -> float:
-        """W1 (m/s): the striker's given velocity, or its fall's."""
-        return self.striker.impact_velocity()
+        """W1 (m/s): the striker's given velocity, or its fall's (under the case's gravity); 0
+        with no striker (a history drives the struck end)."""
+        if self.striker is None:
+            return 0.0
+        if self.gravity is None:
+            return self.striker.impact_velocity()
+        return self.striker.impact_velocity(self.gravity.acceleration)
+
+    @property
+    def elastic_striker(self) -> bool:
+        """Whether an elastic striker (a rod) strikes the tool."""
+        return self.striker is not None and self.striker.elastic
 
     @property
     def beyond_paper(self) -> list[str]:
         """The fields that ask for more than the paper's model (a lumped striker, no anvil, a
         linear medium, one blow), which only the ends that integrate their own equations take."""
         fields = []
-        if self.striker.elastic:
+        if self.struck_end is not None:
+            fields.append("struck_end")
+        if self.elastic_striker:
             fields.append("striker.length")
         if self.anvil is not None:
             fields.append("anvil")
@@ -617,7 +760,9 @@ class Case(_Model):
             fields.append("blows.count")
         if self.shaft:
             fields.append("shaft")
-        if self.contact.restitution < 1.0:
+        if self.gravity is not None:
+            fields.append("gravity")
+        if self.contact is not None and self.contact.restitution < 1.0:
             fields.append("contact.restitution")
         if self.anvil is not None and self.anvil.contact.restitution < 1.0:
             fields.append("anvil.contact.restitution")

@@ -12,12 +12,13 @@ import numpy as np
 from . import kernel as K
 from . import layout as L
 from .blows import BlowLog
-from .case import Case, Force, Medium
+from .case import Case, Contact, Force, Medium
 from .errors import Cancelled, NumericalFailure
 from .grid import (
     Grid,
     ResolvedNumerics,
     make_grid,
+    node_weights,
     resolve_numerics,
     shaft_nodes,
     shaft_spans,
@@ -26,6 +27,7 @@ from .grid import (
     wave_speed,
 )
 from .laws import FORCE_KINDS
+from .rest import at_rest
 from .result import CancelCheck, MemoryRecorder, ProgressCallback, Recorder, Result
 from .summary import FORCE_HISTORY, MAX_CONTACTS, build_summary, force_history_rows, launch_energy
 
@@ -52,6 +54,15 @@ HISTORY_PATHS = {
     "energy/medium_potential": L.H_MEDIUM_POTENTIAL,
     "tool/transferred_energy": L.H_TRANSFERRED,
 }
+# What a striker has: none when a history drives the struck end.
+STRIKER_PATHS = (
+    "striker/displacement",
+    "striker/velocity",
+    "contact/overlap",
+    "external/force",
+    "energy/striker_kinetic",
+    "energy/contact_potential",
+)
 # A medium that yields adds these.
 YIELDING_PATHS = {
     "medium/penetration": L.H_WORKING_END,
@@ -76,9 +87,12 @@ BLOW_PATHS = {"energy/launched": L.H_LAUNCHED, "energy/striker_withdrawn": L.H_W
 def history_paths(case: Case) -> dict[str, int]:
     """The history columns a case keeps, by HDF5 path: only what its model has."""
     paths = dict(HISTORY_PATHS)
+    if case.struck_end is not None:  # no striker: "contact/force" is the force on the struck end
+        for path in STRIKER_PATHS:
+            del paths[path]
     if case.medium is not None and case.medium.kind != "linear":
         paths.update(YIELDING_PATHS)
-    if case.striker.elastic:
+    if case.elastic_striker:
         paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
     if case.anvil is not None:
         paths.update(ANVIL_PATHS)
@@ -114,12 +128,17 @@ def force_law(f: Force | None) -> K.ForceLaw:
 MEDIUM_KINDS = {"linear": K.MEDIUM_LINEAR, "bilinear": K.MEDIUM_BILINEAR, "smith": K.MEDIUM_SMITH}
 
 
+DRIVEN_CONTACT = Contact(stiffness=1.0, exponent=0.0)
+
+
 def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
-    """The striker and contact, and the medium, with the impedances of the tool's end cells."""
-    c, m = case.contact, case.medium
+    """The striker and contact, and the medium, with the impedances of the tool's end cells. With
+    a history driving the struck end the contact is a still, massless stand-in (`DRIVEN_CONTACT`)
+    that only carries the end's impedance."""
+    c, m = case.contact or DRIVEN_CONTACT, case.medium
     impedance = grid.density * wave_speed(case.tool)
     contact = K.Contact(
-        striker_mass=striker_mass(case.striker),
+        striker_mass=striker_mass(case.striker) if case.striker else 1.0,
         striker_velocity=case.impact_velocity,
         stiffness=c.stiffness,
         exponent=c.exponent,
@@ -143,24 +162,47 @@ def end_conditions(case: Case, grid: Grid) -> tuple[K.Contact, K.Medium]:
     return contact, medium
 
 
+DRIVERS = {"force": K.DRIVEN_BY_FORCE, "velocity": K.DRIVEN_BY_VELOCITY}
+
+
 def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K.Striker:
     """The striker as the kernel takes it: an elastic one on its grid at Courant number 1; a lumped
-    one as `elastic = False` (its mass is the `Contact`'s; the tool's bundles fill the rest)."""
-    striker = case.striker
-    if not striker.elastic:
+    one as `elastic = False` (its mass is the `Contact`'s; the tool's bundles fill the rest); a
+    history driving the struck end as the `driver` of a still, massless lumped one."""
+    striker, g = case.striker, acceleration(case)
+    driven = {"driver": K.NOT_DRIVEN, "signal_time": np.zeros(0), "signal_values": np.zeros(0)}
+    if case.struck_end is not None:
+        kind, signal = case.struck_end.driver
+        driven = {
+            "driver": DRIVERS[kind],
+            "signal_time": np.asarray(signal.time, float),
+            "signal_values": np.asarray(signal.values, float),
+        }
+    if striker is None or not striker.elastic:
+        mass = striker.mass if striker is not None else 1.0
         return K.Striker(
-            elastic=False, tool=tool, rod=rod, impedance=1.0, back_impedance=1.0, mass=striker.mass, back_delay=0.0
+            elastic=False,
+            tool=tool,
+            rod=rod,
+            impedance=1.0,
+            back_impedance=1.0,
+            mass=mass,
+            back_delay=0.0,
+            weight=mass * g if striker is not None else 0.0,
+            **driven,
         )
     grid, back_delay = striker_grid(striker, num.time_step)
     impedance = grid.density * wave_speed(striker.rod())
     return K.Striker(
         elastic=True,
-        tool=tool_on(grid),
+        tool=tool_on(grid, gravity_on(grid, num.time_step, g)),
         rod=rod_on(grid, num.time_step, 1.0),
         impedance=impedance * grid.end_area[0],
         back_impedance=impedance * grid.end_area[1],
         mass=striker_mass(striker),
         back_delay=back_delay,
+        weight=0.0,
+        **driven,
     )
 
 
@@ -169,7 +211,7 @@ def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
     `contact`, the striker's, fills an absent anvil's place)."""
     anvil = case.anvil
     if anvil is None:
-        return K.Anvil(present=False, mass=1.0, velocity=0.0, contact=contact)
+        return K.Anvil(present=False, mass=1.0, velocity=0.0, contact=contact, weight=0.0)
     c = anvil.contact
     return K.Anvil(
         present=True,
@@ -186,6 +228,26 @@ def anvil_on(case: Case, grid: Grid, contact: K.Contact) -> K.Anvil:
             restitution=c.restitution,
             deepest=0.0,
         ),
+        weight=anvil.mass * acceleration(case),
+    )
+
+
+def acceleration(case: Case) -> float:
+    """g (m/s²) of the case's gravity, 0 without it."""
+    return case.gravity.acceleration if case.gravity is not None else 0.0
+
+
+def gravity_on(grid: Grid, tau: float, g: float) -> K.Gravity:
+    """The weight of a rod's nodes on its grid under g, as the kernel takes it (`grid.node_weights`)."""
+    if g == 0.0:
+        return K.no_gravity()
+    weight = node_weights(grid, g)
+    mass = grid.node_area * grid.density * grid.h
+    return K.Gravity(
+        first=1,
+        last=grid.cells - 1,
+        lift=np.divide(tau * tau * weight, mass, out=np.zeros_like(mass), where=mass > 0),
+        weight=weight,
     )
 
 
@@ -217,9 +279,11 @@ def shaft_shares(case: Case, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     return share, right - left
 
 
-def tool_on(grid: Grid) -> K.Tool:
-    """The tool on its grid, as the kernel takes it."""
+def tool_on(grid: Grid, gravity: K.Gravity | None = None) -> K.Tool:
+    """The tool on its grid, with its nodes' weight (`gravity_on`; none by default), as the kernel
+    takes it."""
     return K.Tool(
+        gravity=gravity or K.no_gravity(),
         lower=grid.lower,
         upper=grid.upper,
         node_area=grid.node_area,
@@ -311,7 +375,7 @@ def simulate_rod(
     weights = scheme_weights(num)
     grid = make_grid(case.tool, num.cells, weights.end_masses)
     n, tau = grid.cells, num.time_step
-    tool, rod = tool_on(grid), rod_constants(case, num, grid)
+    tool, rod = tool_on(grid, gravity_on(grid, tau, acceleration(case))), rod_constants(case, num, grid)
     contact, medium = end_conditions(case, grid)
     striker = striker_on(case, num, tool, rod)
     anvil = anvil_on(case, grid, contact)
@@ -323,10 +387,13 @@ def simulate_rod(
     probe_node, probe_weight = _probe_nodes(grid, out.probes)
     field_stride = out.field_stride if out.fields else 0
     state = K.new_state(n, len(striker.tool.node_area) - 1 if striker.elastic else 0)
+    if case.gravity is not None:
+        K.start_at_rest(state, at_rest(case, grid))
+    set_at_rest = float(state.ends[K.S_MEDIUM_SET])
     observed = K.new_observed(MAX_CONTACTS)
     blows = case.blows.count if case.blows else 1
     blow, blow_steps = 0, num.steps // blows
-    log = BlowLog(launch_energy=launch_energy(case))
+    log = BlowLog(launch_energy=launch_energy(case), set_at_rest=set_at_rest)
     log.start(state.energy[0])
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
     lag = 1 if weights.centered and not weights.impedance_ends else 0
@@ -468,6 +535,7 @@ def simulate_rod(
         energy=energy,
         history=dict(zip(FORCE_HISTORY.values(), table)),
         permanent_penetration=ends[K.S_MEDIUM_SET],
+        set_at_rest=set_at_rest,
         blows=log.table() if case.blows else None,
     )
     held = recorder.held()

@@ -65,7 +65,7 @@ def fewest_cells(case: Case) -> int:
     """The fewest cells the explicit scheme at Courant number 1 (τ = L/(N·a)) takes the case on:
     an elastic striker's wave transit must span `MIN_STRIKER_CELLS` time steps, so a striker
     shorter (in transit time) than the tool needs N ≥ 2·(L/a)/(L_s/a_s)."""
-    if not case.striker.elastic:
+    if not case.elastic_striker:
         return MIN_CELLS
     tool_transit = case.tool.length / wave_speed(case.tool)
     cells = max(MIN_CELLS, math.ceil(MIN_STRIKER_CELLS * tool_transit / striker_transit(case.striker)))
@@ -109,8 +109,11 @@ def contact_time_estimate(case: Case) -> float:
     """Duration of the striker's contact with a rigid wall under the case's contact law (s).
 
     The tool yields, so the true contact is longer: a time step from this estimate errs on the
-    fine side. With no impact velocity the external force sets the indentation instead.
+    fine side. With no impact velocity the external force sets the indentation instead; with a
+    history driving the struck end (`struck_end`), its pulse's length.
     """
+    if case.struck_end is not None:
+        return case.struck_end.driver[1].width()
     depth = rigid_wall_depth(case)
     if depth is None:
         return case.numerics.duration
@@ -122,7 +125,9 @@ def contact_time_estimate(case: Case) -> float:
 
 def contact_stiffness_estimate(case: Case) -> float:
     """The contact's tangent stiffness `(1+α)·c1·δ^α` at the depth of a rigid-wall impact (N/m);
-    the contact's own stiffness c1 (α = 0) when nothing drives it."""
+    the contact's own stiffness c1 (α = 0) when nothing drives it; 0 with no contact."""
+    if case.contact is None:
+        return 0.0
     alpha = case.contact.exponent
     depth = rigid_wall_depth(case)
     return (1.0 + alpha) * case.contact.stiffness * (depth if depth is not None else 0.0) ** alpha
@@ -290,7 +295,7 @@ def resolve_numerics(
                 )
             ]
         )
-    if ends == "impedance" and case.striker.elastic and striker_cells(case.striker, tau) < MIN_STRIKER_CELLS:
+    if ends == "impedance" and case.elastic_striker and striker_cells(case.striker, tau) < MIN_STRIKER_CELLS:
         need = math.ceil(MIN_STRIKER_CELLS * cells * (h / a) / striker_transit(case.striker))
         raise CaseError(
             [
@@ -365,6 +370,11 @@ def area_integral(tool: Tool, x: np.ndarray) -> np.ndarray:
     return at_stations[k] + pa[k] * d + 0.5 * slope * d * d
 
 
+def node_areas(area_mid: np.ndarray) -> np.ndarray:
+    """S̄_i, the mean area of each node's half cells (`S̄_i·ρh` its mass; half a cell at the ends)."""
+    return np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]), [0.5 * area_mid[-1]]))
+
+
 def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     x = np.linspace(0.0, tool.length, cells + 1)
     h = tool.length / cells
@@ -373,7 +383,7 @@ def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
     # just inside it, and a cell mean h/2 away would put it O(h) off on a taper (the cells' mass
     # changes by O(h²)).
     area_mid[[0, -1]] = tool_area(tool, x[[0, -1]])
-    node_area = np.concatenate(([0.5 * area_mid[0]], 0.5 * (area_mid[1:] + area_mid[:-1]), [0.5 * area_mid[-1]]))
+    node_area = node_areas(area_mid)
     lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
     lower[1:-1] = area_mid[:-1] / node_area[1:-1]
     upper[1:-1] = area_mid[1:] / node_area[1:-1]
@@ -403,6 +413,16 @@ def shaft_spans(grid: Grid) -> tuple[np.ndarray, np.ndarray]:
     left[1], right[-2] = 0.0, length
     left[[0, -1]] = right[[0, -1]]
     return left, right
+
+
+def node_weights(grid: Grid, acceleration: float) -> np.ndarray:
+    """Each node's weight (N) under `acceleration` (m/s²): the mass of its half cells, the ends'
+    carried by nodes 1 and N − 1 as their shaft is (`shaft_spans`), the ends none."""
+    weight = node_areas(grid.area_mid) * grid.density * grid.h * acceleration
+    weight[1] += weight[0]
+    weight[-2] += weight[-1]
+    weight[[0, -1]] = 0.0
+    return weight
 
 
 def shaft_nodes(segments: list, grid: Grid) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -451,15 +471,18 @@ def rigidity(case: Case) -> float:
 
 
 def time_scale(case: Case) -> float:
-    """The time the contact force's shape is drawn over: the rigid-wall contact time, or, for a
+    """The time the contact force's shape is drawn over (a driving history's pulse length): the
+    rigid-wall contact time, or, for a
     contact stiff against the tool (its damping ratio on the tool's impedance Z above about 1),
     the time the tool brakes the striker in, m1/Z (Saint-Venant's 1/β): the contact's own quick
     rise is left to the ends' substeps."""
+    if case.struck_end is not None:
+        return contact_time_estimate(case)
     tool = case.tool
     area = tool.area if tool.area is not None else tool.profile.area[0]
     braking = striker_mass(case.striker) / (tool.density * wave_speed(tool) * area)
     scale = max(contact_time_estimate(case), braking)
-    if case.striker.elastic:
+    if case.elastic_striker:
         # an elastic striker's pulse has the striker's transit as its features' length: on the
         # first grid it has `MIN_STRIKER_CELLS` (at a tolerance of 1e-2)
         scale = min(scale, 2.0 * striker_transit(case.striker))

@@ -45,7 +45,10 @@ E_STRIKER_STRAIN = 9  # an elastic striker's
 E_LAUNCHED, E_WITHDRAWN = 10, 11
 E_ANVIL_KINETIC = 12
 E_TO_SHAFT = 13  # the net work done on the soil along the tool's side (`shaft`)
-ENERGY_SLOTS = 14
+# Under gravity: the weights' work since impact, and what the tool, the medium and the contacts
+# stored at rest before it (`solver.rest`), with the medium's share
+E_GRAVITY_WORK, E_STORED_AT_REST, E_MEDIUM_AT_REST = 14, 15, 16
+ENERGY_SLOTS = 17
 
 
 def new_extremes() -> np.ndarray:

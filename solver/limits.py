@@ -29,7 +29,7 @@ def output_values(case: Case, numerics: ResolvedNumerics) -> float:
     values = rows * (L.HISTORY_COLUMNS + len(out.probes))
     if out.fields and numerics.model == "rod":
         nodes = numerics.cells + 1
-        if case.striker.elastic:
+        if case.elastic_striker:
             nodes += striker_cells(case.striker, numerics.time_step) + 1
         values += (numerics.steps // out.field_stride + 1) * 2 * nodes
     return float(values)

@@ -56,6 +56,10 @@ class Energy(_Part):
     transfer_efficiency: float = Field(description="to_medium and to_shaft over the energy supplied, 1")
     dissipated_contact: float = Field(description="by the contact's damper b1 (and the anvil's contact's), J")
     dissipated_medium: float = Field(description="by the medium's damper b2, J")
+    gravity_work: float = Field(description="work of the weights (under gravity) since impact, J")
+    stored_at_rest: float = Field(
+        description="what the tool, the medium and the anvil's contact stored at rest under gravity before impact, J"
+    )
     numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
     striker_withdrawn: float = Field(
         description="what the striker still had when each blow ended and the next began, J"
@@ -159,12 +163,20 @@ def _downsample(history: dict[str, np.ndarray]) -> dict[str, list]:
 
 def to_medium(energy: np.ndarray) -> float:
     """The net work on the medium so far (`energy` in the kernel's slots): stored, plastic and
-    dissipated."""
-    return float(energy[L.E_MEDIUM_POTENTIAL] + energy[L.E_MEDIUM_PLASTIC] + energy[L.E_DISSIPATED_MEDIUM])
+    dissipated, less what it held at rest under gravity before the first blow."""
+    return float(
+        energy[L.E_MEDIUM_POTENTIAL]
+        + energy[L.E_MEDIUM_PLASTIC]
+        + energy[L.E_DISSIPATED_MEDIUM]
+        - energy[L.E_MEDIUM_AT_REST]
+    )
 
 
 def launch_energy(case: Case) -> float:
-    """What one launch brings (J): the striker's kinetic energy at impact, and an anvil's."""
+    """What one launch brings (J): the striker's kinetic energy at impact, and an anvil's (none
+    when a history drives the struck end: its work is the external work)."""
+    if case.striker is None:
+        return 0.0
     anvil = case.anvil
     return 0.5 * striker_mass(case.striker) * case.impact_velocity**2 + (
         0.5 * anvil.mass * anvil.velocity**2 if anvil else 0.0
@@ -192,11 +204,13 @@ def build_summary(
     extra_warnings: list[str] | None = None,
     permanent_penetration: float = 0.0,
     blows: list[dict] | None = None,
+    set_at_rest: float = 0.0,
 ) -> dict:
     """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
     `open_contact` is the start of a contact still open at the end (None if there is none),
     `history` needs the paths of FORCE_HISTORY only, `permanent_penetration` is the medium's
-    at the end and `blows` each blow's row of the `blows` table (None: the case has no `blows`).
+    at the end (`set_at_rest` before the first blow, under gravity) and `blows` each blow's row of
+    the `blows` table (None: the case has no `blows`).
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
     follow (`add_accuracy`).
@@ -222,13 +236,24 @@ def build_summary(
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
     withdrawn = energy[L.E_WITHDRAWN]
     shaft = energy[L.E_TO_SHAFT]
-    numerical = initial + external - sum(at_end.values()) - dissipated_contact - dissipated_medium - withdrawn - shaft
+    gravity_work, at_rest = energy[L.E_GRAVITY_WORK], energy[L.E_STORED_AT_REST]
+    numerical = (
+        initial
+        + external
+        + gravity_work
+        + at_rest
+        - sum(at_end.values())
+        - dissipated_contact
+        - dissipated_medium
+        - withdrawn
+        - shaft
+    )
     budget = initial + max(external, 0.0)
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     medium = to_medium(energy)
     supplied = initial + external
     yields = case.medium is not None and case.medium.kind != "linear"
-    last_set = (blows[-1]["set"] if blows else float(permanent_penetration)) if yields else None
+    last_set = (blows[-1]["set"] if blows else float(permanent_penetration - set_at_rest)) if yields else None
 
     return {
         "name": case.name,
@@ -264,6 +289,8 @@ def build_summary(
             "transfer_efficiency": float((medium + shaft) / supplied) if supplied > 0 else 0.0,
             "dissipated_contact": float(dissipated_contact),
             "dissipated_medium": float(dissipated_medium),
+            "gravity_work": float(gravity_work),
+            "stored_at_rest": float(at_rest),
             "numerical": float(numerical),
             "striker_withdrawn": float(withdrawn),
             **{k: float(v) for k, v in at_end.items()},

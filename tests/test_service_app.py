@@ -49,7 +49,7 @@ PROFILE = {"area": None, "profile": {"x": [0.0, 0.6, 1.2], "area": [0.01, 0.01, 
     [
         ({"contact": {"exponent": 0.9}}, "contact.exponent", "must be ≤ 0.5"),
         ({"tool": PROFILE}, "tool.profile.area[2]", "must be > 0.0"),
-        ({"striker": None}, "striker", "is required"),
+        ({"striker": None}, "striker", "is required, unless a history drives the struck end (struck_end)"),
         ({"colour": "red"}, "colour", "is not a known field"),
         ({"force": {"kind": "pulse", "amplitude": 1e3}}, "force.duration", "is required"),
         ({"force": {"kind": "square", "amplitude": 1e3}}, "force", "kind must be one of 'sine', 'abs_sine', 'pulse'"),

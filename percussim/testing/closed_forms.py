@@ -120,6 +120,23 @@ def soil_case(
     return case
 
 
+def rectangular_force_case(
+    numerics: dict | None = None,
+    resistance: float = SOIL_RESISTANCE,
+    quake: float = SOIL_RESISTANCE / SOIL_STIFFNESS,
+    drive: str = "force",
+) -> dict:
+    """The equal piston's wave without the piston: the tool's struck end driven (`struck_end`) by
+    the force F_i lasting T (or by its velocity F_i/Z), on undamped Smith soil (R_u, q). After T
+    the end is free, so the toe's reflection, compression for R_u ≥ F_i, returns as tension and
+    sets the toe no deeper: the set is `smith_set`'s."""
+    value = INCIDENT if drive == "force" else INCIDENT / Z
+    case = soil_case(numerics or {}, resistance, quake)
+    del case["striker"], case["contact"]
+    case["struck_end"] = {drive: {"time": [0.0, T], "values": [value, value]}}
+    return case
+
+
 def drilling(blows: int, numerics: dict | None = None) -> dict:
     """`blows` blows of the equal piston on rock at Lundberg's optimum (`BLOW_NUMERICS` unless
     `numerics` says otherwise), no recordings."""
@@ -189,9 +206,12 @@ def rock_penetration(x: float, unloading: float = UNLOADING) -> tuple[float, flo
 
 def smith_set(resistance: float = SOIL_RESISTANCE, stiffness: float = SOIL_STIFFNESS) -> tuple[float, float]:
     """(t_q, set) of undamped Smith soil under the rectangular wave F_i lasting T: elastic until
-    `t_q = −(Z/k)·ln(1 − R_u/(2F_i))`, then flowing at `(2F_i − R_u)/Z` until T."""
+    `t_q = −(Z/k)·ln(1 − R_u/(2F_i))`, then flowing at `(2F_i − R_u)/Z` until T; refusal (no set,
+    t_q = ∞) when R_u ≥ 2F_i."""
+    if resistance >= 2.0 * INCIDENT:
+        return math.inf, 0.0
     t_q = -(Z / stiffness) * math.log(1.0 - resistance / (2.0 * INCIDENT))
-    return t_q, (2.0 * INCIDENT - resistance) * (T - t_q) / Z
+    return t_q, (2.0 * INCIDENT - resistance) * max(T - t_q, 0.0) / Z
 
 
 # --- the anvil --------------------------------------------------------------------------------
@@ -407,6 +427,54 @@ def free_pile_on_springs(frequency_hz: float = 50.0, cells: int = 50) -> dict:
         "numerics": {"duration": 0.05, "scheme": "explicit", "cells": cells},
         "outputs": {"fields": True, "field_stride": 1},
     }
+
+
+# --- Gravity (`gravity`) ----------------------------------------------------------------------------
+
+
+def pile_under_its_weight(cells: int = 200, anvil: bool = False) -> dict:
+    """A 20-m steel pile (0.01 m², free at its head) on elastic shaft springs along its whole length
+    and an elastic Smith toe (neither yields under its weight), vertical (g = 9.81), struck by a
+    ram too light to move it (1 mg at 1 mm/s): it stays at rest. `anvil`: with a 500-kg helmet on a
+    linear cushion."""
+    case = {
+        "name": "pile under its own weight",
+        "striker": {"mass": 1e-6, "velocity": 1e-3},
+        "tool": {"length": 20.0, "youngs_modulus": 2.1e11, "density": 7850.0, "area": 0.01},
+        "contact": {"stiffness": 1e8, "exponent": 0.0},
+        "medium": {"kind": "smith", "ultimate_resistance": 2e6, "quake": 0.0025, "damping_factor": 0.5},
+        "shaft": [{"from": 0.0, "to": 20.0, "ultimate_resistance": 4e6, "quake": 0.0025, "damping_factor": 0.2}],
+        "gravity": {"acceleration": 9.81},
+        "numerics": {"duration": 0.02, "scheme": "explicit", "cells": cells},
+    }
+    if anvil:
+        case["anvil"] = {"mass": 500.0, "contact": {"stiffness": 2e9, "exponent": 0.0}}
+    return case
+
+
+def static_compression(
+    x: np.ndarray,
+    *,
+    length: float,
+    stiffness: float,
+    weight_per_length: float,
+    shaft_stiffness_per_length: float,
+    toe_stiffness: float,
+    head_load: float = 0.0,
+) -> np.ndarray:
+    """u(x) (m) of a uniform rod (S·E = `stiffness`) at rest under its weight w (N/m) and a load P
+    at its head, on shaft springs k′ (N/m per m) and a toe spring k_t:
+    `S·E·u'' − k′·u + w = 0`, `S·E·u'(0) = −P`, `S·E·u'(L) = −k_t·u(L)`. With β = √(k′/(S·E)),
+    `u = w/k′ + A·cosh βx + B·sinh βx`."""
+    beta = math.sqrt(shaft_stiffness_per_length / stiffness)
+    base = weight_per_length / shaft_stiffness_per_length
+    b = -head_load / (stiffness * beta)
+    bl = beta * length
+    # S·E·β(A sinh βL + B cosh βL) = −k_t (base + A cosh βL + B sinh βL)
+    a = -(toe_stiffness * (base + b * math.sinh(bl)) + stiffness * beta * b * math.cosh(bl)) / (
+        stiffness * beta * math.sinh(bl) + toe_stiffness * math.cosh(bl)
+    )
+    return base + a * np.cosh(beta * x) + b * np.sinh(beta * x)
 
 
 # --- A cushion (`contact.restitution`) ------------------------------------------------------------

@@ -343,6 +343,9 @@ const GROUPS = [
   { id: "blows", title: "Blows", open: false, items: [
     { path: "blows.count", hint: "each lasts the duration T; empty: one blow" },
   ] },
+  { id: "gravity", title: "Gravity", open: false, items: [
+    { path: "gravity.acceleration", hint: "9.81 for a vertical pile; empty: no weight" },
+  ] },
   { id: "numerics", title: "Numerics", open: true, items: [
     { path: "numerics.duration" },
     { mode: "numerics:accuracy" },
@@ -371,6 +374,7 @@ const ALIASES = {
   "striker.area": ["striker:shape", "striker:model"], "striker.profile": ["striker:shape", "striker:model"],
   "tool.area": ["tool:shape"], "tool.profile": ["tool:shape"],
   medium: ["medium.kind"], force: ["force.kind"], "anvil.contact": ["anvil"], blows: ["blows.count"],
+  gravity: ["gravity.acceleration"],
 };
 
 // ------------------------------------------------------------------------------------------

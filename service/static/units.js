@@ -9,6 +9,7 @@ export const QUANTITIES = {
   length: { units: [["m", 0], ["mm", -3], ["cm", -2]], shown: "mm" },
   mass: { units: [["kg", 0], ["g", -3], ["t", 3]] },
   speed: { units: [["m/s", 0]] },
+  acceleration: { units: [["m/s²", 0]] },
   stress: { units: [["Pa", 0], ["MPa", 6], ["GPa", 9]], shown: "MPa" }, // a modulus too
   density: { units: [["kg/m³", 0], ["g/cm³", 3]] },
   area: { units: [["m²", 0], ["cm²", -4], ["mm²", -6]] },
@@ -23,6 +24,8 @@ export const QUANTITIES = {
   energy: { units: [["J", 0]] },
   ratio: { units: [["–", 0], ["%", -2]], shown: "%" },
   dimensionless: { units: [["", 0]] },
+  depth: { units: [["m", 0]] }, // a pile's toe below the surface, a ram's stroke: in metres, as a site reads them
+  blow_count: { units: [["blows/m", 0]] },
 };
 const POWER = new Map(Object.values(QUANTITIES).flatMap((q) => q.units));
 

@@ -3,7 +3,7 @@
 A package of modules, each with one job: `bundles` (what a step takes and carries, by name),
 `rows` (the tool's rows and their sweep), `contact` (the contact law and R(t)), `struck_end` and
 `working_end` (what the tool touches: the striker, an anvil, the media), `shaft` (the soil along
-the tool's side, a term along the tool), `audit` (the energy), `recording` (the extremes,
+the tool's side, a term along the tool), `gravity` (the weight of the tool's nodes, another), `audit` (the energy), `recording` (the extremes,
 contacts, histories, probes and fields) and `step` (`advance`: the phases of a step in order). This module names what the controller, the tests and the benches
 use.
 
@@ -90,10 +90,13 @@ from ..layout import (
 )
 from .audit import first_node, tool_energy_and_stresses
 from .bundles import (
+    DRIVEN_BY_FORCE,
+    DRIVEN_BY_VELOCITY,
     MEDIUM_BILINEAR,
     MEDIUM_LINEAR,
     MEDIUM_SMITH,
     MIN_SEGMENT,
+    NOT_DRIVEN,
     S_CONTACT_START,
     S_FORCE_BEFORE,
     S_FORCE_BEFORE_THAT,
@@ -105,6 +108,7 @@ from .bundles import (
     Anvil,
     Contact,
     ForceLaw,
+    Gravity,
     Medium,
     Observed,
     Recorders,
@@ -119,12 +123,16 @@ from .bundles import (
     new_observed,
     new_state,
 )
+from .gravity import no_gravity, start_at_rest
 from .rows import factor_tool_rows, segment_layout, substitute_toward_working_end, sweep_toward_struck_end
 from .shaft import no_shaft
 from .step import advance, start_blow
 from .struck_end import struck_end_step
 
 __all__ = [
+    "DRIVEN_BY_FORCE",
+    "DRIVEN_BY_VELOCITY",
+    "NOT_DRIVEN",
     "Anvil",
     "Contact",
     "E_CONTACT_POTENTIAL",
@@ -140,6 +148,7 @@ __all__ = [
     "FORCE_PULSE",
     "FORCE_SINE",
     "ForceLaw",
+    "Gravity",
     "MEDIUM_BILINEAR",
     "MEDIUM_LINEAR",
     "MEDIUM_SMITH",
@@ -176,8 +185,10 @@ __all__ = [
     "first_node",
     "new_observed",
     "new_state",
+    "no_gravity",
     "no_shaft",
     "segment_layout",
+    "start_at_rest",
     "start_blow",
     "struck_end_step",
     "substitute_toward_working_end",

@@ -17,9 +17,11 @@ from ..layout import (
     E_DISSIPATED_CONTACT,
     E_DISSIPATED_MEDIUM,
     E_EXTERNAL_WORK,
+    E_GRAVITY_WORK,
     E_LAUNCHED,
     E_MEDIUM_PLASTIC,
     E_MEDIUM_POTENTIAL,
+    E_STORED_AT_REST,
     E_STRIKER_KINETIC,
     E_STRIKER_STRAIN,
     E_TO_SHAFT,
@@ -179,13 +181,14 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
 @compiled(inline="always")
 def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool, step):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
-    at layer m (`flows`: the work of R and what the dampers b1, b2 dissipated over the step), the
+    at layer m (`flows`: the work of R, what the dampers b1, b2 dissipated and the work of the
+    striker's and the anvil's weights over the step), the
     tool's and an elastic striker's at m − ½ (the form the explicit scheme conserves); the balance
     compares them at m − ½."""
     u, y, ends, energy, striker_u = state.u, state.y, state.ends, state.energy, state.striker
     new, cur, _, _ = layer
     n = step.n
-    work, dissipated, dissipated_far = flows
+    work, dissipated, dissipated_far, lifted = flows
     if anvil.present:
         anvil_at = ends[S_ANVIL_DISP]
         velocity_a = ends[S_ANVIL_VELOCITY]
@@ -201,6 +204,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
         u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
     )
     energy[0, E_EXTERNAL_WORK] += work
+    energy[0, E_GRAVITY_WORK] += lifted
     energy[0, E_DISSIPATED_CONTACT] += dissipated
     energy[0, E_DISSIPATED_MEDIUM] += dissipated_far
     energy[0, E_TOOL_KINETIC] = tool_kinetic * step.kinetic_factor
@@ -214,6 +218,10 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
         + energy[0, E_TO_SHAFT]  # at m − ½, as the tool's
         - step.initial_energy
         - step.anvil_energy
+        - energy[0, E_STORED_AT_REST]
+        # the tool's weights' work at m − ½, the striker's and the anvil's at m: half a step back
+        - energy[0, E_GRAVITY_WORK]
+        + 0.5 * lifted
         + energy[0, E_WITHDRAWN]
         - energy[0, E_LAUNCHED]
     )

@@ -47,7 +47,8 @@ S_CONTACT_DEEPEST, S_ANVIL_CONTACT_DEEPEST = 32, 33
 # The work done on the tool through its struck end in this blow, and its end force and
 # displacement at the layer recorded last (`track_transferred`)
 S_TRANSFERRED, S_TRANSFER_FORCE, S_TRANSFER_DISP = 34, 35, 36
-END_SLOTS = 37
+S_BLOW_START = 37  # when the present blow started: a driving history's time counts from it
+END_SLOTS = 38
 # The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
 INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
 FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end
@@ -81,15 +82,21 @@ WORKING_END_STATE = 6
 
 STATUS_OK, STATUS_NON_FINITE = 0, 1
 
+# What drives the struck end (`Striker.driver`): a striker, or a given force or velocity history
+NOT_DRIVEN, DRIVEN_BY_FORCE, DRIVEN_BY_VELOCITY = 0, 1, 2
+
 # What `advance` takes, as named bundles. Numba passes a namedtuple's fields as separate values and
 # reads them as registers: a bundle costs nothing in the step (typing them all costs about 3 µs a
 # call of `advance`, against ~10 ms of steps a call). Build them by keyword, as `solver.controller`
 # does: a bundle of another kind in the place of one does not compile.
-Tool = namedtuple("Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area")
+Gravity = namedtuple("Gravity", "first last lift weight")
+"""The weight of a rod's nodes from `first` to `last` (interior nodes; none when `last` < `first`):
+each node's weight W_i (N) and the lift τ²·W_i/m_i it adds to the node's explicit row (`gravity.py`)."""
+Tool = namedtuple("Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area gravity")
 """The tool on its grid (`solver.grid.Grid`): the operator's weights `lower_i`, `upper_i` of the
 neighbours (all 1 when `uniform`), the nodes' areas S̄_i (`node_area·ρh` is a node's mass: half a
-cell at the ends, 0 at a massless end), the cells' areas S_{i+½} and the areas at the struck and
-working ends (their stresses are the end forces over them)."""
+cell at the ends, 0 at a massless end), the cells' areas S_{i+½}, the areas at the struck and
+working ends (their stresses are the end forces over them) and its nodes' weight (`Gravity`)."""
 ToolRows = namedtuple("ToolRows", "p inv_den coefficient coefficient_product p_product")
 """The tool's rows u_1 … u_N eliminated once (`factor_tool_rows`)."""
 Rod = namedtuple(
@@ -115,15 +122,21 @@ R_u/q; 0 for a free end) and damper (b2), the impedance of the tool's end cell, 
 stiffness k_u, soil's ultimate resistance R_u and Smith damping J (s/m)."""
 ForceLaw = namedtuple("ForceLaw", "kind amplitude omega start duration")
 """R(t) on the striker: a `laws.FORCE_…` kind and its parameters."""
-Striker = namedtuple("Striker", "elastic tool rod impedance back_impedance mass back_delay")
+Striker = namedtuple(
+    "Striker", "elastic tool rod impedance back_impedance mass back_delay weight driver signal_time signal_values"
+)
 """The striker as a rod (when `elastic`): its `Tool` and `Rod` on its own grid (node 0 its impact
 face, at Courant number 1 with the tool's time step), the impedances ρ·a·S of its face and back
 cells, its mass, and `back_delay`: the time a wave takes there and back over the part of the striker beyond
-its last node, less than 2τ (its length is rarely a whole number of cells)."""
-Anvil = namedtuple("Anvil", "present mass velocity contact")
+its last node, less than 2τ (its length is rarely a whole number of cells). Under gravity a lumped
+striker's `weight` m1·g (N; 0 otherwise; an elastic one's nodes carry theirs, its `Tool`'s). With
+no striker a history drives the struck end (`struck_end`): `driver` (`DRIVEN_BY_…`; `NOT_DRIVEN`
+with a striker), the history's instants (s from the blow's start) and values, linear between them."""
+Anvil = namedtuple("Anvil", "present mass velocity contact weight")
 """A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
 impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end
-impedance); the case's `Contact` is then the striker's with the anvil."""
+impedance); the case's `Contact` is then the striker's with the anvil. Its `weight` m_a·g (N; 0
+without gravity)."""
 Shaft = namedtuple("Shaft", "first last resistance stiffness damping_factor inv_mass")
 """The soil along the tool's side, node by node from `first` to `last` (interior nodes; none when
 `last` < `first`): each node's ultimate resistance r_i (N), its stiffness r_i/q_i (N/m), Smith's damping

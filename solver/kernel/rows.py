@@ -9,6 +9,7 @@ import numpy as np
 
 from ..compiled import compiled
 from .bundles import MIN_SEGMENT, SEGMENTS, ToolRows, boundary_weights
+from .gravity import weigh_rows
 from .working_end import working_end_diagonal
 
 
@@ -176,7 +177,8 @@ def right_hand_sides(u, layer, tool, rows, rod, weights, step):
 
 @compiled(inline="always")
 def explicit_interior(u, layer, tool, r, n):
-    """The explicit scheme's interior nodes 1 … n−1 of the new layer: uncoupled (den_i = 1)."""
+    """The explicit scheme's interior nodes 1 … n−1 of the new layer: uncoupled (den_i = 1), the
+    weight's lift added (`weigh_rows`)."""
     new, cur, old, _ = layer
     grid_lower, grid_upper = tool.lower, tool.upper
     if tool.uniform:
@@ -189,6 +191,7 @@ def explicit_interior(u, layer, tool, r, n):
                 - u[old, i]
                 + r * (grid_lower[i] * (u[cur, i - 1] - u[cur, i]) + grid_upper[i] * (u[cur, i + 1] - u[cur, i]))
             )
+    weigh_rows(u, new, tool.gravity)
 
 
 NO_CARRIES = (0.0, 0.0, 0.0, 0.0)

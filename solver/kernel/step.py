@@ -13,7 +13,12 @@ from ..compiled import compiled
 from ..layout import (
     E_ANVIL_KINETIC,
     E_CONTACT_POTENTIAL,
+    E_GRAVITY_WORK,
     E_LAUNCHED,
+    E_MEDIUM_AT_REST,
+    E_MEDIUM_PLASTIC,
+    E_MEDIUM_POTENTIAL,
+    E_STORED_AT_REST,
     E_STRIKER_KINETIC,
     E_STRIKER_STRAIN,
     E_WITHDRAWN,
@@ -21,7 +26,7 @@ from ..layout import (
     X_FAILED_TIME,
     X_MAX_PENETRATION,
 )
-from .audit import audit_impedance_energy, audit_scheme_energy, track_energy_excess
+from .audit import audit_impedance_energy, audit_scheme_energy, tool_energy_and_stresses, track_energy_excess
 from .bundles import (
     BACK_INCOMING,
     END_ANVIL_CONTACT_DEEPEST,
@@ -41,6 +46,7 @@ from .bundles import (
     MEDIUM_BILINEAR,
     MEDIUM_SLOTS,
     MEDIUM_STATE,
+    NOT_DRIVEN,
     S_ANVIL_CONTACT_DEEPEST,
     S_ANVIL_DISP,
     S_ANVIL_FORCE,
@@ -50,11 +56,14 @@ from .bundles import (
     S_BACK_MEAN_BEFORE,
     S_BACK_SLOPE,
     S_BACK_SLOPE_BEFORE,
+    S_BLOW_START,
     S_CONTACT_DEEPEST,
     S_CONTACT_START,
     S_FORCE_BEFORE,
     S_IMPULSE,
     S_IN_CONTACT,
+    S_INCOMING,
+    S_INCOMING_BEFORE,
     S_MEDIUM_FORCE,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
@@ -74,6 +83,8 @@ from .bundles import (
     boundary_weights,
 )
 from .contact import contact_law, external_force, pressed_to
+from .driven_end import driven_end_step, driven_force, piece
+from .gravity import gravity_work
 from .recording import (
     record_fields,
     record_history,
@@ -88,7 +99,7 @@ from .recording import (
 from .rows import back_substitute, explicit_interior, right_hand_sides, segment_layout, sweep
 from .shaft import record_shaft, shaft_on_rows
 from .struck_end import free_back_end, incoming_wave, mean_velocity, solve_struck_end, struck_end_step, struck_forces
-from .working_end import fresh_rock, medium_state, working_end_force, working_end_row, working_end_step
+from .working_end import fresh_rock, medium_energy, medium_state, working_end_force, working_end_row, working_end_step
 
 # --- A step's phases ------------------------------------------------------------------------------
 #
@@ -183,13 +194,32 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
         ends[S_BACK_ENERGY] = striker.back_impedance * 0.25 * velocity * velocity * striker.back_delay
 
 
+@compiled(inline="always")
+def rest_anvil(state, row, anvil):
+    """Under gravity a helmet (the anvil) rests on the tool between blows: it is set, still, on
+    its contact pressed by its weight, `Φ'(δ) = c1·δ^(α+1) = m_a·g`; what it had (its energy and
+    its contact's) is withdrawn, what it has at rest launched."""
+    u, ends, energy = state.u, state.ends, state.energy
+    end = anvil.contact
+    before = contact_law(ends[S_ANVIL_DISP] - u[row, 0], pressed_to(end, ends[S_ANVIL_CONTACT_DEEPEST]))[1]
+    overlap = (anvil.weight / end.stiffness) ** (1.0 / (end.exponent + 1.0))
+    ends[S_ANVIL_DISP] = u[row, 0] + overlap
+    ends[S_ANVIL_CONTACT_DEEPEST] = overlap
+    ends[S_ANVIL_FORCE] = anvil.weight
+    after = contact_law(overlap, pressed_to(end, overlap))[1]
+    energy[0, E_WITHDRAWN] += before
+    energy[0, E_LAUNCHED] += after
+    energy[0, E_CONTACT_POTENTIAL] += after - before
+
+
 @compiled()
 def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
     had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
     strikes (the struck end, or the anvil, which stays where it is and starts again at its own
-    velocity) (`E_LAUNCHED`); a contact still open closes at t_m and the new one opens there.
-    Rock meets the blow fresh (`fresh_rock`)."""
+    velocity, or under gravity rests on the tool: `rest_anvil`) (`E_LAUNCHED`); a contact still
+    open closes at t_m and the new one opens there; a history driving the struck end starts
+    again. Rock meets the blow fresh (`fresh_rock`)."""
     u, y, ends, energy = state.u, state.y, state.ends, state.energy
     if medium.kind == MEDIUM_BILINEAR:
         rock = fresh_rock(u[m % 3, u.shape[1] - 1], medium_state(ends), medium)
@@ -197,6 +227,8 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
             ends[MEDIUM_SLOTS[k]] = rock[k]
     row, row_before = m % 3, (m - 1) % 3
     t = m * tau
+    if anvil.weight > 0.0:
+        rest_anvil(state, row, anvil)
     struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
     potential = contact_law(y[row] - struck, pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
     ends[S_CONTACT_DEEPEST] = 0.0  # the new striker meets its cushion unpressed
@@ -214,6 +246,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
             tau,
         )
     launch_striker(state, row, row_before, struck, contact, striker, tau)
+    ends[S_BLOW_START] = t
     launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
     # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
     beyond = ends[S_BACK_ENERGY] if striker.elastic else 0.0
@@ -226,33 +259,57 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
     energy[0, E_STRIKER_STRAIN] = beyond
     energy[0, E_ANVIL_KINETIC] = anvil_energy
     energy[0, E_CONTACT_POTENTIAL] -= potential  # the anvil's with the tool stays
-    ends[S_IN_CONTACT] = 1.0
+    ends[S_IN_CONTACT] = 1.0 if striker.driver == NOT_DRIVEN else 0.0
     ends[S_CONTACT_START] = t
 
 
 @compiled(inline="always")
-def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step):
-    """Layer 0 by (5), (6): the tool at rest, the striker at 0 moving at W1, δ(0) = 0 (in contact
-    from the first instant), an anvil at 0 between them moving at its own velocity; and layer −1
-    (row 2) one step before. Returns layer 0 as recorded."""
+def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, medium, step):
+    """Layer 0 by (5), (6): the tool at rest (layers 0 and −1, rows 0 and 2, as the state holds
+    them: unloaded, or under gravity as `gravity.start_at_rest` set them), the striker moving at
+    W1 where it strikes, δ(0) = 0 (in contact from the first instant), an anvil there between
+    them moving at its own velocity; and the energy the state at rest stores (`E_STORED_AT_REST`,
+    the medium's share `E_MEDIUM_AT_REST`). Returns layer 0 as recorded."""
     u, ends, energy = state.u, state.ends, state.energy
     striker_velocity = contact.striker_velocity
-    for i in range(step.n + 1):
-        u[layer.new, i] = 0.0
-        u[2, i] = 0.0
-    launch_striker(state, layer.new, 2, 0.0, contact, striker, rod.time_step)
-    ends[S_IN_CONTACT] = 1.0
+    u0 = u[layer.new, 0]
+    struck = ends[S_ANVIL_DISP] if anvil.present else u0
+    launch_striker(state, layer.new, 2, struck, contact, striker, rod.time_step)
+    ends[S_IN_CONTACT] = 1.0 if striker.driver == NOT_DRIVEN else 0.0
     ends[S_CONTACT_START] = 0.0
+    ends[S_BLOW_START] = 0.0
     # Φ(δ⁰) = Φ(0) = 0; the state before impact counts 0 too: no link acts yet.
     ends[S_POTENTIAL_BEFORE] = 0.0
     ends[S_POTENTIAL_BEFORE_THAT] = 0.0
-    ends[S_ANVIL_DISP] = 0.0
     ends[S_ANVIL_VELOCITY] = anvil.velocity
     energy[0, E_ANVIL_KINETIC] = step.anvil_energy
+    stored, plastic = medium_energy(u[layer.new, step.n], medium_state(ends), medium)
+    resting = 0.0  # the anvil's contact, pressed by its weight
+    if anvil.present:
+        resting = contact_law(ends[S_ANVIL_DISP] - u0, pressed_to(anvil.contact, ends[S_ANVIL_CONTACT_DEEPEST]))[1]
+    strain = tool_energy_and_stresses(
+        u, layer.new, 2, layer.new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    )[1]
+    energy[0, E_MEDIUM_POTENTIAL] = stored
+    energy[0, E_MEDIUM_PLASTIC] = plastic
+    energy[0, E_CONTACT_POTENTIAL] = resting
+    energy[0, E_STORED_AT_REST] = strain * 0.5 * step.e_over_h + stored + plastic + resting
+    energy[0, E_MEDIUM_AT_REST] = stored + plastic
     if weights.impedance_ends:
-        contact_force, end_force = struck_forces(
-            (0.0, striker_velocity, 0.0, anvil.velocity, 0.0), 0.0, 0.5 * striker_velocity, contact, striker, anvil
-        )
+        # the waves a static strain sends to the struck end (`gravity.start_at_rest`)
+        resting_wave = (ends[S_INCOMING] - ends[S_INCOMING_BEFORE]) / rod.time_step
+        if striker.driver == NOT_DRIVEN:
+            contact_force, end_force = struck_forces(
+                (struck, striker_velocity, struck, anvil.velocity, u0),
+                resting_wave,
+                0.5 * striker_velocity,
+                contact,
+                striker,
+                anvil,
+            )
+        else:
+            inside, value, _ = piece(0.0, striker)
+            contact_force = end_force = driven_force(inside, value, resting_wave, contact.impedance, striker)[0]
         energy[0, E_STRIKER_KINETIC] = step.initial_energy
     else:
         contact_force = end_force = contact.damping * striker_velocity
@@ -276,7 +333,8 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     end forces' extremes their substeps see. Returns whether the new ends are finite (they are
     written to the new layer only then), the striker's velocity, the contact force, the force on
     the tool's struck end (the anvil's, or the contact's), the medium's, and `(work of R,
-    dissipated by the contacts, by the medium)` over the step. `scratch`: room for the struck
+    dissipated by the contacts, by the medium, work of the striker's and the anvil's weights)`
+    over the step. `scratch`: room for the struck
     end's and the working end's states and the events."""
     u, y, ends, striker_u = state.u, state.y, state.ends, state.striker
     new, cur, _, _ = layer
@@ -287,6 +345,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     face_in, face_slope = 0.0, 0.0
     if striker.elastic:
         face_in, face_slope = incoming_wave(striker_u, layer, 1, 0, ends, FACE_INCOMING, tau)
+    lifted_from = striker.weight * y[cur] + anvil.weight * ends[S_ANVIL_DISP]
     end_state[END_STRIKER_DISP] = y[cur]
     end_state[END_STRIKER_VELOCITY] = ends[S_STRIKER_VELOCITY]
     end_state[END_TOOL_DISP] = u[cur, 0]
@@ -298,16 +357,23 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     end_state[END_ANVIL_FORCE] = ends[S_ANVIL_FORCE]
     end_state[END_CONTACT_DEEPEST] = ends[S_CONTACT_DEEPEST]
     end_state[END_ANVIL_CONTACT_DEEPEST] = ends[S_ANVIL_CONTACT_DEEPEST]
-    work, dissipated, crossings, contact_range, end_range = struck_end_step(
-        t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
-    )
+    if striker.driver == NOT_DRIVEN:
+        work, dissipated, crossings, contact_range, end_range = struck_end_step(
+            t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
+        )
+    else:
+        work, dissipated, crossings, contact_range, end_range = driven_end_step(
+            t - tau, tau, end_state, v_in, v_slope, contact, striker, ends[S_BLOW_START]
+        )
     far_state[WORK_DISP] = u[cur, n]
     far_state[WORK_FORCE] = ends[S_MEDIUM_FORCE]
     for k in range(MEDIUM_STATE):
         far_state[WORK_MEDIUM[k]] = ends[MEDIUM_SLOTS[k]]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
     track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
-    flows = (work, dissipated, dissipated_far)
+    # the weights' work on the lumped striker and the anvil, as they moved under it
+    lifted = striker.weight * end_state[END_STRIKER_DISP] + anvil.weight * end_state[END_ANVIL_DISP] - lifted_from
+    flows = (work, dissipated, dissipated_far, lifted)
     if not (
         abs(end_state[END_STRIKER_DISP]) < 1e300
         and abs(end_state[END_TOOL_DISP]) < 1e300
@@ -498,7 +564,7 @@ def advance(
         layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3, ref=(m - step.boundary.back) % 3)
         t = m * tau
         if m == 0:
-            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, step)
+            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, medium, step)
             interior = AT_REST
         else:
             for slot in range(ENERGY_SLOTS):
@@ -510,8 +576,10 @@ def advance(
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
             # the explicit scheme's interior rows are final here (none has a shaft otherwise)
             shaft_on_rows(u, layer, shaft, state.shaft_sets, energy, tau)
+            energy[0, E_GRAVITY_WORK] += gravity_work(u, layer, tool.gravity)
             if striker.elastic:
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
+                energy[0, E_GRAVITY_WORK] += gravity_work(striker_u, layer, striker.tool.gravity)
             if weights.impedance_ends:
                 finite, recorded, interior, balance = impedance_ends_step(
                     state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step

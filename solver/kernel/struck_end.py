@@ -145,19 +145,19 @@ def struck_forces(x, v_in, v_face, contact, striker, anvil):
 def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil):
     """The rates of the state `x` = (y, w, y_a, w_a, u_0) under the contact force F1, the force
     F2 on the tool's end and R, with the velocities a stage `X = x + g·X'` has (g = 0: at x):
-    `m1·w' = R − F1`, or an elastic striker's face `y' = 2·v_face − F1/Z_s`; the anvil's
-    `m_a·w_a' = F1 − F2`; `u_0' = F2/Z + 2·v_in`."""
+    `m1·w' = R + W1 − F1`, or an elastic striker's face `y' = 2·v_face − F1/Z_s`; the anvil's
+    `m_a·w_a' = F1 − F2 + W_a`; `u_0' = F2/Z + 2·v_in` (W1, W_a their weights under gravity)."""
     _, w, _, w_a, _ = x
     if striker.elastic:
         w_rate = 0.0
         y_rate = 2.0 * v_face - force / striker.impedance
     else:
-        w_rate = (r - force) / contact.striker_mass
+        w_rate = (r + striker.weight - force) / contact.striker_mass
         y_rate = w + g * w_rate
     ya_rate = wa_rate = 0.0
     impedance = contact.impedance
     if anvil.present:
-        wa_rate = (force - end_force) / anvil.mass
+        wa_rate = (force - end_force + anvil.weight) / anvil.mass
         ya_rate = w_a + g * wa_rate
         impedance = anvil.contact.impedance
     return y_rate, w_rate, ya_rate, wa_rate, end_force / impedance + 2.0 * v_in
@@ -243,12 +243,12 @@ def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
         y_free, give = x[0] + 2.0 * g * v_face, g / striker.impedance
     else:
         m1 = contact.striker_mass
-        y_free, give = x[0] + g * (x[1] + g * r / m1), g * g / m1
+        y_free, give = x[0] + g * (x[1] + g * (r + striker.weight) / m1), g * g / m1
     u_free = x[4] + 2.0 * g * v_in
     if not anvil.present:
         force, delta = spring_stage(y_free - u_free, x[0] - x[4], give + g / contact.impedance, g, guess[0], contact)
         return force, force, delta, 0.0
-    ya_free = x[2] + g * x[3]
+    ya_free = x[2] + g * (x[3] + g * anvil.weight / anvil.mass)
     return anvil_balance(
         (y_free - ya_free, ya_free - u_free),
         (x[0] - x[2], x[2] - x[4]),
@@ -368,7 +368,11 @@ def pressed_bodies(contact, anvil, deep1, deep2):
     """The striker's contact and the anvil (with its contact) as cushions pressed to `deep1` and
     `deep2`."""
     pressed = Anvil(
-        present=anvil.present, mass=anvil.mass, velocity=anvil.velocity, contact=pressed_to(anvil.contact, deep2)
+        present=anvil.present,
+        mass=anvil.mass,
+        velocity=anvil.velocity,
+        contact=pressed_to(anvil.contact, deep2),
+        weight=anvil.weight,
     )
     return pressed_to(contact, deep1), pressed
 
