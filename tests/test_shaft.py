@@ -3,8 +3,6 @@ against closed forms and the energy audit."""
 
 from __future__ import annotations
 
-import math
-
 import h5py
 import numpy as np
 import pytest
@@ -15,6 +13,7 @@ from percussim.solver.io import read_result
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
 from percussim.testing.closed_forms import free_pile_on_springs, shaft_rigid_mode
+from percussim.testing.reference import ringing
 
 
 def pile_with_shaft(**numerics) -> dict:
@@ -84,18 +83,14 @@ def test_a_segment_is_written_back_as_it_was_read():
 def test_a_free_pile_on_shaft_springs_rings_its_rigid_mode_at_the_closed_form():
     case = free_pile_on_springs(frequency_hz=50.0)
     result = simulate(case)
-    fields, summary = result.fields, result.summary
+    summary = result.summary
     grid = make_grid(parse_case(case).tool, case["numerics"]["cells"], end_masses=True)
-    mean = fields.displacement @ grid.node_area / grid.node_area.sum()
-    after = fields.time > summary["contacts"][0]["end"]
-    t, u = fields.time[after], mean[after]
-    crossings = [t[k] - u[k] * (t[k + 1] - t[k]) / (u[k + 1] - u[k]) for k in np.flatnonzero(np.diff(np.sign(u)))]
-    half_periods = np.diff(crossings)
+    rings = ringing(result, grid)
     shaft = case["shaft"][0]
     expected = shaft_rigid_mode(shaft["ultimate_resistance"] / shaft["quake"] / 10.0, 7850.0, 0.01)
-    assert len(half_periods) >= 3
-    assert math.pi / half_periods.mean() == pytest.approx(expected, rel=2e-3)
-    assert np.ptp(half_periods) / half_periods.mean() < 5e-3  # one frequency: the mean ignores the waves
+    assert rings.half_periods >= 3
+    assert rings.omega == pytest.approx(expected, rel=2e-3)
+    assert rings.spread < 5e-3  # one frequency: the mean ignores the waves
     assert summary["energy"]["to_shaft"] > 0.0
     assert abs(summary["energy"]["numerical"]) < 1e-4 * summary["energy"]["initial"]  # the contact's substeps' own
 

@@ -452,6 +452,26 @@ def pile_under_its_weight(cells: int = 200, anvil: bool = False) -> dict:
     return case
 
 
+def driven_pile(numerics: dict | None = None) -> dict:
+    """A 4-t ram at 4.43 m/s (a 1-m fall) on a cast-nylon cushion (5.89e9 N/m, e = 0.8) on a
+    15-m steel pipe pile (0.0157 m²) with Smith soil on its shaft (153 kN from 3 to 9 m and 345 kN
+    from 9 to 15 m, q = 2.54 mm, J = 0.16 s/m) and at its toe (1.245 MN, 2.54 mm, 0.492 s/m), no
+    gravity: shaft and toe both yield, the soil's dampers act, and the cushion loses energy. The
+    case `smith_model.smith_pile` takes."""
+    return {
+        "name": "driven pile",
+        "striker": {"mass": 4000.0, "velocity": 4.4294},
+        "tool": {"length": 15.0, "youngs_modulus": 2.1e11, "density": 7850.0, "area": 0.0157079},
+        "contact": {"stiffness": 5.89e9, "exponent": 0.0, "restitution": 0.8},
+        "medium": {"kind": "smith", "ultimate_resistance": 1.245e6, "quake": 2.54e-3, "damping_factor": 0.492},
+        "shaft": [
+            {"from": 3.0, "to": 9.0, "ultimate_resistance": 1.53e5, "quake": 2.54e-3, "damping_factor": 0.16},
+            {"from": 9.0, "to": 15.0, "ultimate_resistance": 3.45e5, "quake": 2.54e-3, "damping_factor": 0.16},
+        ],
+        "numerics": numerics or {"duration": 0.03},
+    }
+
+
 def static_compression(
     x: np.ndarray,
     *,

@@ -274,3 +274,25 @@ def recorded_force(history: dict[str, np.ndarray], peak: float, reference: dict[
         float(np.abs(second).max() / peak),
         float(alternating.mean()),
     )
+
+
+class Ringing(NamedTuple):
+    """The rigid-body mode a run's tool rings at: its angular frequency (rad/s, from the mean
+    half period), the half periods' spread over their mean, and how many were seen."""
+
+    omega: float
+    spread: float
+    half_periods: int
+
+
+def ringing(result, grid) -> Ringing:
+    """The mass-weighted mean displacement of the tool (`result.fields` on `grid`) after the first
+    contact, its zero crossings (linear between samples) and what they say of its frequency: the
+    mean ignores the elastic waves, whose momentum along the tool sums to none."""
+    fields = result.fields
+    mean = fields.displacement @ grid.node_area / grid.node_area.sum()
+    after = fields.time > result.summary["contacts"][0]["end"]
+    t, u = fields.time[after], mean[after]
+    crossings = [t[k] - u[k] * (t[k + 1] - t[k]) / (u[k + 1] - u[k]) for k in np.flatnonzero(np.diff(np.sign(u)))]
+    half = np.diff(crossings)
+    return Ringing(float(math.pi / half.mean()), float(np.ptp(half) / half.mean()), len(half))

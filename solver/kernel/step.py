@@ -319,9 +319,9 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, m
         time=t,
         velocity=striker_velocity,
         contact_force=contact_force,
-        medium_force=0.0,
+        medium_force=ends[S_MEDIUM_FORCE],
         struck_end_stress=-end_force / tool.struck_end_area,
-        working_end_stress=0.0,
+        working_end_stress=-ends[S_MEDIUM_FORCE] / tool.working_end_area,
     )
 
 
