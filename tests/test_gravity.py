@@ -174,6 +174,6 @@ def test_the_soils_slip_in_a_blow_locks_a_new_balance_into_the_pile_that_the_nex
 def closed_form_toe_share(case) -> float:
     """The toe's share of a uniform pile's weight at rest on elastic shaft and toe springs."""
     parsed = parse_case(case)
-    tool, shaft, toe = parsed.tool, parsed.shaft[0], parsed.medium
+    tool, toe = parsed.tool, parsed.medium
     u_toe = closed_form(parsed, np.array([tool.length]))[0]
     return toe.ultimate_resistance / toe.quake * u_toe / (tool.density * tool.area * tool.length * G)
