@@ -29,6 +29,8 @@ _PUBLIC = {
     "run_sweep": "percussim.solver.simulate",
     "calibrate": "percussim.solver.calibrate",
     "optimize": "percussim.solver.optimize",
+    "bearing_graph": "percussim.solver.pile_studies",
+    "drivability": "percussim.solver.pile_studies",
     "read_record": "percussim.solver.record",
     "Limits": "percussim.solver.limits",
     "CaseError": "percussim.solver.case",

@@ -333,9 +333,8 @@ def _limit(text: str) -> tuple[str, dict]:
     )
 
 
-def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict) -> None:
-    """The full answer to --output, its plot to --plot (format from the extension), `shown` to
-    stdout and the warnings to stderr."""
+def _save_study(answer: dict, args: argparse.Namespace, plot: str) -> None:
+    """The full answer to --output, its plot to --plot (format from the extension)."""
     from .solver.study_plots import render_study
 
     if args.output:
@@ -343,6 +342,12 @@ def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict)
     if args.plot:
         fmt = Path(args.plot).suffix.lstrip(".").lower() or "png"
         Path(args.plot).write_bytes(render_study(answer, plot, fmt, name=Path(args.case).stem))
+
+
+def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict) -> None:
+    """The full answer to --output, its plot to --plot, `shown` to stdout and the warnings to
+    stderr."""
+    _save_study(answer, args, plot)
     for warning in answer.get("warnings", []):
         print(f"percussim: warning: {warning}", file=sys.stderr)
     print(json.dumps(shown, indent=2))
@@ -361,18 +366,26 @@ def _study(args: argparse.Namespace, what: str, request: Callable[[], dict], sol
     return _guarded(args, what, work)
 
 
+# What each study is called on the service: the client's submit and view, and the answer's name in
+# the view (None: the view is the answer, its rows beside the job's record).
+ON_SERVICE = {
+    "calibration": ("submit_calibration", "calibration", "fit"),
+    "optimisation": ("submit_optimization", "optimization", "optimum"),
+    "bearing graph": ("submit_bearing_graph", "bearing_graph", None),
+    "drivability": ("submit_drivability", "drivability", None),
+}
+
+
 def _study_on_service(args: argparse.Namespace, what: str, request: dict) -> dict:
     """The study as a job on the service: submitted, waited for, its answer read back."""
     from .client import Client
 
+    submit, view, answer = ON_SERVICE[what]
     with Client(args.url, api_key=args.api_key) as api:
-        if what == "calibration":
-            submit, view, answer = api.submit_calibration, api.calibration, "fit"
-        else:
-            submit, view, answer = api.submit_optimization, api.optimization, "optimum"
-        study_id = submit(request)["id"]
+        study_id = getattr(api, submit)(request)["id"]
         _wait(api, study_id, args.progress)
-        return view(study_id)[answer]
+        found = getattr(api, view)(study_id)
+        return found if answer is None else found[answer]
 
 
 def _calibrate(args: argparse.Namespace) -> int:
@@ -439,6 +452,81 @@ def _optimize(args: argparse.Namespace) -> int:
         },
     )
     return 0 if answer["values"] is not None else EXIT_FAILED
+
+
+def _range(text: str) -> list[float]:
+    """`LOW:HIGH:COUNT`: COUNT values evenly from LOW to HIGH (LOW alone for a COUNT of 1)."""
+    low, high, count = (text.split(":") + ["", ""])[:3]
+    try:
+        values = [float(low), float(high)]
+        count_ = int(count)
+        if count_ < 1 or text.count(":") != 2:
+            raise ValueError
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"expected LOW:HIGH:COUNT, COUNT a whole number ≥ 1 (e.g. 1e6:4e6:10), not {text!r}"
+        ) from None
+    if count_ == 1:
+        return values[:1]
+    return [values[0] + (values[1] - values[0]) * k / (count_ - 1) for k in range(count_)]
+
+
+def _row_warnings(answer: dict, name: str) -> list[str]:
+    """Each row's warnings, named by the row's value of `name`."""
+    return [
+        f"{name} = {row[name]:.6g}: {warning}"
+        for row in answer["rows"]
+        for warning in row.get("warnings", []) + ([row["error"]] if row.get("error") else [])
+    ]
+
+
+def _write_rows(answer: dict, args: argparse.Namespace, plot: str, first: str, totals: dict) -> int:
+    """A pile study's answer: all of it to --output, its plot to --plot, its warnings and each
+    row's to stderr, and a table of its rows (then `totals`) to stdout. Fails if a variant failed."""
+    _save_study(answer, args, plot)
+    for warning in answer["warnings"] + _row_warnings(answer, first):
+        print(f"percussim: warning: {warning}", file=sys.stderr)
+    columns = [first, "set", "blow_count", "max_compressive_stress", "max_tensile_stress", "transferred_energy",
+               "error_estimate", "blows"]  # fmt: skip
+    print("\t".join(columns))
+    for row in answer["rows"]:
+        print("\t".join(_cell(row.get(c)) for c in columns))
+    for name, value in totals.items():
+        print(f"{name}\t{_cell(value)}")
+    return EXIT_FAILED if any(row.get("error") for row in answer["rows"]) else 0
+
+
+def _bearing_graph(args: argparse.Namespace) -> int:
+    from .solver.case import as_case
+    from .solver.pile_studies import bearing_graph
+
+    def request() -> dict:
+        given = {"capacity": args.capacity, "stroke": args.stroke, "toe_share": args.toe_share}
+        return {"case": as_case(_case_source(args.case))} | {k: v for k, v in given.items() if v is not None}
+
+    answer = _study(args, "bearing graph", request, bearing_graph)
+    if isinstance(answer, int):
+        return answer
+    return _write_rows(answer, args, "bearing_graph", answer["variable"], {})
+
+
+def _drivability(args: argparse.Namespace) -> int:
+    from .solver.case import CaseError, FieldError, as_case
+    from .solver.pile_studies import drivability
+
+    def request() -> dict:
+        try:
+            soil = json.loads(Path(args.soil).read_bytes())
+        except (OSError, ValueError) as error:
+            reason = "no such file" if isinstance(error, FileNotFoundError) else str(error)
+            raise CaseError([FieldError(field="soil", message=f"{args.soil}: {reason}")]) from None
+        return {"case": as_case(_case_source(args.case)), "soil": soil}
+
+    answer = _study(args, "drivability", request, drivability)
+    if isinstance(answer, int):
+        return answer
+    totals = ("total_blows", "driving_time", "refusal_depth", "driven_to", "restrike_refusal_depth")
+    return _write_rows(answer, args, "drivability", "depth", {name: answer[name] for name in totals})
 
 
 def _warmup(args: argparse.Namespace) -> int:
@@ -613,7 +701,51 @@ def parser() -> argparse.ArgumentParser:
         metavar="N",
         help="the budget of model runs, both stages (default 1000)",
     )
-    for study, plotted in ((fit, "the record against the model"), (optimise, "the evaluations")):
+    bearing = commands.add_parser(
+        "bearing-graph",
+        help="a pile's blow count and stresses against its capacity (bearing graph) or its ram's stroke "
+        "(inspector's chart), each blow after blow until the set settles",
+    )
+    bearing.add_argument("case", help="a pile case JSON with Smith soil at its toe, or a preset's name")
+    varied = bearing.add_mutually_exclusive_group(required=True)
+    varied.add_argument(
+        "--capacity",
+        type=_range,
+        metavar="LOW:HIGH:COUNT",
+        help="ultimate capacities R_u (N), toe and shaft together, e.g. 1e6:4e6:10",
+    )
+    varied.add_argument(
+        "--stroke",
+        type=_range,
+        metavar="LOW:HIGH:COUNT",
+        help="the ram's strokes (m) at the case's capacity, e.g. 0.5:2:7 (the case gives striker.stroke)",
+    )
+    bearing.add_argument(
+        "--toe-share",
+        dest="toe_share",
+        type=float,
+        metavar="S",
+        help="the toe's share of the capacity, the shaft taking the rest (default: the case's own)",
+    )
+    drive = commands.add_parser(
+        "drivability",
+        help="a pile driven into layered soil: blow count and stresses at each depth, total blows, driving "
+        "time, refusal",
+    )
+    drive.add_argument("case", help="a pile case JSON (its hammer, cushion and pile), or a preset's name")
+    drive.add_argument(
+        "--soil",
+        required=True,
+        metavar="SOIL.json",
+        help="layers (from, to, shaft_resistance, toe_resistance, quakes, damping factors, setup_factor), "
+        "depths, blow_rate, refusal: see docs/piling.md",
+    )
+    for study, plotted in (
+        (fit, "the record against the model"),
+        (optimise, "the evaluations"),
+        (bearing, "the blow count and stresses"),
+        (drive, "the blow count and stresses by depth"),
+    ):
         study.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
         study.add_argument("--plot", metavar="PLOT.png", help=f"draw {plotted} here (.png or .svg)")
         _here_or_on_service(
@@ -624,6 +756,8 @@ def parser() -> argparse.ArgumentParser:
         )
     fit.set_defaults(handler=_calibrate)
     optimise.set_defaults(handler=_optimize)
+    bearing.set_defaults(handler=_bearing_graph)
+    drive.set_defaults(handler=_drivability)
     plot = commands.add_parser("plot", help="draw the plots of a result file (PNG, SVG)")
     plot.add_argument("result", help="an HDF5 result of percussim run --output or the service")
     plot.add_argument("--out", metavar="DIR", help="folder for the plots (default: RESULT-plots next to the file)")

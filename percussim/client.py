@@ -8,6 +8,7 @@
         rows = api.run_sweep("examples/fig5.json", {"striker.velocity": [3, 5, 7]})
         fit = api.calibrate({"case": "examples/fig5.json", "record": "record.csv",
                              "parameters": {"contact.stiffness": [1e10, 1e13]}})
+        graph = api.run_bearing_graph({"case": "pile.json", "capacity": [1e6, 2e6, 3e6]})
 
 It needs only httpx: the solver (and so NumPy, h5py and Numba) is imported by `result` alone,
 which reads the HDF5 result into the same `Result` a local run gives, and by a calibration
@@ -372,12 +373,59 @@ class Client:
         study_id = self.submit_optimization(request)["id"]
         return self._answer(study_id, self.optimization, "optimum", progress, timeout)
 
+    # -- the pile studies: each a job, its rows beside its record once it has succeeded
+
+    def submit_bearing_graph(self, request: dict) -> dict:
+        """Queue a bearing graph or an inspector's chart on the workers. `request` is that of a local
+        `percussim.bearing_graph`: `{"case", "capacity": [N, ...]}` (or `"stroke": [m, ...]`, the case
+        giving striker.stroke), with `"toe_share"` if not the case's own and the case as for
+        `submit`. Returns the study's record; raises `Refused` naming each offending field."""
+        return self._json("POST", "/v1/bearing-graphs", json=request | {"case": _case_json(request["case"])})
+
+    def bearing_graph(self, study_id: str) -> dict:
+        """The bearing graph's record, with its `rows` (and the rest of its answer) once it has
+        succeeded."""
+        return self._json("GET", f"/v1/bearing-graphs/{quote(study_id, safe='')}")
+
+    def run_bearing_graph(self, request: dict, progress: Progress | None = None, timeout: float | None = None) -> dict:
+        """Submit a bearing graph (see `submit_bearing_graph`), wait for it (see `wait`) and return
+        it: its record with a row per capacity or stroke, as a local `percussim.bearing_graph`
+        returns them."""
+        return self._answer(self.submit_bearing_graph(request)["id"], self.bearing_graph, None, progress, timeout)
+
+    def submit_drivability(self, request: dict) -> dict:
+        """Queue a drivability on the workers. `request` is that of a local `percussim.drivability`:
+        `{"case", "soil"}`, the case as for `submit` and the soil its JSON or the path of a soil
+        JSON file (docs/piling.md). Returns the study's record; raises `Refused` naming each
+        offending field."""
+        soil = request["soil"]
+        if isinstance(soil, (str, os.PathLike)):
+            soil = json.loads(Path(soil).read_bytes())
+        return self._json("POST", "/v1/drivability", json={"case": _case_json(request["case"]), "soil": soil})
+
+    def drivability(self, study_id: str) -> dict:
+        """The drivability's record, with its `rows`, `total_blows`, `driving_time` and
+        `refusal_depth` once it has succeeded."""
+        return self._json("GET", f"/v1/drivability/{quote(study_id, safe='')}")
+
+    def run_drivability(self, request: dict, progress: Progress | None = None, timeout: float | None = None) -> dict:
+        """Submit a drivability (see `submit_drivability`), wait for it (see `wait`) and return it:
+        its record with its rows and totals, as a local `percussim.drivability` returns them."""
+        return self._answer(self.submit_drivability(request)["id"], self.drivability, None, progress, timeout)
+
     def _answer(
-        self, study_id: str, view: Callable[[str], dict], name: str, progress: Progress | None, timeout: float | None
+        self,
+        study_id: str,
+        view: Callable[[str], dict],
+        name: str | None,
+        progress: Progress | None,
+        timeout: float | None,
     ) -> dict:
-        """The study's answer `name` from its `view`, once `wait` has seen it succeed."""
+        """The study's answer `name` from its `view` (the view itself for None), once `wait` has
+        seen it succeed."""
         self.wait(study_id, progress=progress, timeout=timeout)
-        return view(study_id)[name]
+        found = view(study_id)
+        return found if name is None else found[name]
 
     @staticmethod
     def _poll(

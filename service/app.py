@@ -12,7 +12,7 @@ from fastapi.responses import JSONResponse
 
 from percussim.common.settings import Settings
 from percussim.common.settings import settings as env_settings
-from percussim.common.store import CALIBRATION, OPTIMIZATION, WorkerRegistry
+from percussim.common.store import WorkerRegistry
 
 from . import errors, page, presets, retention
 from .auth import authenticate
@@ -21,7 +21,7 @@ from .jobs import jobs_router
 from .limits import BodySizeLimit
 from .metrics import metrics_router
 from .queue import JobQueue
-from .studies import studies_router
+from .studies import KINDS, studies_router
 from .sweeps import sweeps_router
 
 READY_WITHIN = 15.0  # seconds: three missed worker heartbeats (every 5 s) and a worker is gone
@@ -54,7 +54,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(jobs_router(settings, queue, presets.openapi_examples()), dependencies=keyed)
     app.include_router(cases_router(settings), dependencies=keyed)
     app.include_router(sweeps_router(settings, queue), dependencies=keyed)
-    for kind in (CALIBRATION, OPTIMIZATION):
+    for kind in KINDS:
         app.include_router(studies_router(settings, queue, kind), dependencies=keyed)
     app.include_router(presets.router, dependencies=keyed)
     app.include_router(page.router)

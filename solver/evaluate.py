@@ -12,7 +12,9 @@ answer on a finer grid (fits) or under the tolerance (optimisations).
 
 A batch of runs is plain JSON (`Batch`: cases, the grid, what to read from each), so that it runs
 in this process, in a pool over every core (`LocalEvaluator`) or on the service's workers alike:
-an evaluator maps `evaluate_batch` over batches.
+an evaluator maps `evaluate_batch` over batches. A batch without a grid is of variants each solved
+as a case is, to its own accuracy, driven until its set settles (`settle.settled_run`): the pile
+studies' bearing graphs and drivability.
 """
 
 from __future__ import annotations
@@ -25,8 +27,8 @@ import time
 from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor
 from contextlib import contextmanager
-from dataclasses import dataclass
-from typing import Any, TypedDict
+from dataclasses import asdict, dataclass
+from typing import Any, NotRequired, TypedDict
 
 import numpy as np
 
@@ -42,13 +44,22 @@ from .sweep import Sweep, variants
 class Batch(TypedDict):
     """Runs to make: `cases` (case JSON), each on `cells` cells (explicit, Courant 1) over
     `duration` s, read for `series` ({quantity, times}: at `times`, or with times None at the
-    run's own instants, which come back as `time`) or `quantities` (summary paths)."""
+    run's own instants, which come back as `time`) or `quantities` (summary paths). With `cells`
+    None each case is solved to its own accuracy over its own duration, driven until its set
+    settles, within `limits` (`Limits` as JSON): its answer then also gives the `blows` it took
+    and its summary's `warnings`."""
 
     cases: list[dict]
-    cells: int
-    duration: float
+    cells: int | None
+    duration: float | None
     series: dict | None
     quantities: list[str] | None
+    limits: NotRequired[dict]
+
+
+def settled_batch(cases: list[dict], quantities: list[str], limits: Limits) -> Batch:
+    """A batch of variants each solved to its own accuracy, driven until its set settles."""
+    return Batch(cases=cases, cells=None, duration=None, series=None, quantities=quantities, limits=asdict(limits))
 
 
 # An evaluator runs a batch and returns per case {"series": [...]}, {"quantities": {...}} or
@@ -64,6 +75,8 @@ def evaluate_batch(batch: Batch) -> list[dict]:
 def _evaluate(tree: dict, batch: Batch) -> dict:
     from .controller import simulate_rod  # the kernel, loaded when a run needs it
 
+    if batch["cells"] is None:
+        return _settled(tree, batch)
     try:
         case = parse_case(tree)
         case = case.model_copy(update={"numerics": case.numerics.model_copy(update={"duration": batch["duration"]})})
@@ -79,6 +92,20 @@ def _evaluate(tree: dict, batch: Batch) -> dict:
         values = series(wanted["quantity"], result.history, result.probe_stress, np.asarray(wanted["times"]))
         return {"series": values.tolist()}
     return {"quantities": {path: quantity(result.summary, path) for path in batch["quantities"]}}
+
+
+def _settled(tree: dict, batch: Batch) -> dict:
+    from .settle import settled_run
+
+    try:
+        summary = settled_run(parse_case(tree), Limits(**batch["limits"]))
+    except (CaseError, NumericalFailure) as error:
+        return {"error": str(error)}
+    return {
+        "quantities": {path: quantity(summary, path) for path in batch["quantities"]},
+        "blows": len(summary["blows"]),
+        "warnings": summary["warnings"],
+    }
 
 
 class LocalEvaluator:
@@ -103,8 +130,11 @@ class LocalEvaluator:
 
     def worth_spreading(self, batch: Batch) -> bool:
         """Whether `batch` is long enough to spread: runs that would take `SPREAD_SECONDS` here
-        (the first batch runs here, to learn what a run costs)."""
-        return len(batch["cases"]) > 1 and len(batch["cases"]) * self.run_seconds >= self.SPREAD_SECONDS
+        (the first batch runs here, to learn what a run costs). Variants solved to their own
+        accuracy always are: each is a ladder of runs, whose cost no run on one grid tells."""
+        if len(batch["cases"]) < 2:
+            return False
+        return batch["cells"] is None or len(batch["cases"]) * self.run_seconds >= self.SPREAD_SECONDS
 
     def __call__(self, batch: Batch) -> list[dict]:
         if self.processes == 1 or not self.worth_spreading(batch):

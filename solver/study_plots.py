@@ -1,6 +1,7 @@
 """Plots of a study's answer (JSON, not a result file): a fit's record against its model with the
-residual, and an optimisation's evaluations with the best so far. Same canvas, sizes and formats
-as `plots`."""
+residual, an optimisation's evaluations with the best so far, and the pile studies' blow count
+and stresses against the capacity, the stroke or the depth. Same canvas, sizes and formats as
+`plots`."""
 
 from __future__ import annotations
 
@@ -17,6 +18,8 @@ if TYPE_CHECKING:
 STUDY_PLOTS = {
     "fit": "Record against the fitted model, and the residual",
     "convergence": "Every evaluation of the objective, and the best so far",
+    "bearing_graph": "Blow count and stresses against the capacity or the ram's stroke",
+    "drivability": "Blow count and stresses against the depth",
 }
 # quantity → how its axis reads, and the scale to that unit
 _AXES = {
@@ -118,9 +121,76 @@ def convergence_figure(answer: dict, name: str = "case") -> Figure:
     return fig
 
 
+def _column(rows: list[dict], name: str, scale: float = 1.0) -> np.ndarray:
+    """A pile study's column, NaN where a row has none (refusal, a failed variant)."""
+    return np.array([np.nan if row.get(name) is None else row[name] * scale for row in rows], dtype=float)
+
+
+def _stresses(ax, along: np.ndarray, rows: list[dict], vertical: bool = False) -> None:
+    """The rows' largest compressive and tensile stresses (MPa) against `along`."""
+    for column, label, style in (
+        ("max_compressive_stress", "compressive", {"color": "C3", "ls": "--"}),
+        ("max_tensile_stress", "tensile", {"color": "C2", "ls": ":"}),
+    ):
+        stress = _column(rows, column, 1e-6)
+        ax.plot(*((stress, along) if vertical else (along, stress)), marker=".", lw=1.2, label=label, **style)
+
+
+def bearing_graph_figure(answer: dict, name: str = "case") -> Figure:
+    """The blow count (left) and the largest stresses (right) against the capacity or the stroke."""
+    fig = _new_figure()
+    ax = fig.subplots()
+    capacity = answer["variable"] == "ultimate_resistance"
+    rows = answer["rows"]
+    along = _column(rows, answer["variable"], 1e-3 if capacity else 1.0)
+    ax.plot(along, _column(rows, "blow_count"), marker="o", ms=4, lw=1.6, color="C0", label="blow count")
+    decorate(ax, "ultimate capacity (kN)" if capacity else "ram stroke (m)", "blow count (blows/m)")
+    stresses = ax.twinx()
+    _stresses(stresses, along, rows)
+    stresses.set_ylabel("largest stress (MPa)")
+    handles = [line for axis in (ax, stresses) for line in axis.get_lines()]
+    ax.legend(handles, [line.get_label() for line in handles], loc="upper left")
+    what = "Bearing graph" if capacity else "Inspector's chart"
+    fig.suptitle(f"{what} of {name}: toe share {answer['toe_share']:.3g}", fontsize="medium")
+    return fig
+
+
+def drivability_figure(answer: dict, name: str = "case") -> Figure:
+    """The blow count (and the restrike's) and the largest stresses against the depth, downward."""
+    fig = _new_figure()
+    counts, stresses = fig.subplots(1, 2, sharey=True)
+    rows = answer["rows"]
+    depth = _column(rows, "depth")
+    counts.plot(_column(rows, "blow_count"), depth, marker="o", ms=3, lw=1.6, color="C0", label="driving")
+    restrikes = [row["restrike"] or {} for row in rows]
+    if any(restrikes):
+        counts.plot(_column(restrikes, "blow_count"), depth, marker=".", lw=1.2, color="C1", label="restrike")
+    counts.axvline(answer["refusal"], color="0.3", lw=0.8, ls="--", label="refusal")
+    counts.invert_yaxis()
+    counts.set_xlim(left=0.0)
+    counts.legend(loc="best")
+    decorate(counts, "blow count (blows/m)", "depth (m)")
+    _stresses(stresses, depth, rows, vertical=True)
+    stresses.legend(loc="best")
+    decorate(stresses, "largest stress (MPa)", "")
+    total = answer["total_blows"]
+    title = f"Drivability of {name}"
+    if total is not None:
+        title += f": {total:.4g} blows to {answer['driven_to']:g} m, {answer['driving_time'] / 60:.3g} min"
+    if answer["refusal_depth"] is not None:
+        title += f"; refusal at {answer['refusal_depth']:g} m"
+    fig.suptitle(title, fontsize="medium")
+    return fig
+
+
 def render_study(answer: dict, plot: str, fmt: str, name: str = "case") -> bytes:
-    """Plot `plot` ('fit' or 'convergence') of a study's answer as PNG or SVG bytes."""
-    draw = {"fit": fit_figure, "convergence": convergence_figure}[plot]
+    """Plot `plot` (a name of `STUDY_PLOTS`) of a study's answer as PNG or SVG bytes."""
+    draw = {
+        "fit": fit_figure,
+        "convergence": convergence_figure,
+        "bearing_graph": bearing_graph_figure,
+        "drivability": drivability_figure,
+    }[plot]
     buffer = io.BytesIO()
     with DRAWING:
         save(draw(answer, name), fmt, buffer)

@@ -1,5 +1,5 @@
-"""A study's batches of runs spread over the workers: the evaluator of calibrations and
-optimisations run as jobs.
+"""A study's batches of runs spread over the workers: the evaluator of the studies run as jobs
+(calibrations, optimisations, bearing graphs, drivability).
 
 A batch is cut into parts, each a file in the study's folder (`JobStore.batches`), and a
 `percussim.evaluate_part` message is published for each. Whoever creates a part's claim file
@@ -87,13 +87,17 @@ class QueueEvaluator:
             write_atomic(path, json.dumps(part).encode())
         for k in range(1, len(paths)):  # the first is the study's own
             self.publish(number, k)
-        expected = self.here.run_seconds * max(len(p["cases"]) for p in parts)
-        stale = max(MIN_STALE_SECONDS, STALE_FACTOR * expected)
         mine = set()
         for k, path in enumerate(paths):
             if claim(path):
+                started = time.perf_counter()
                 run_part(path)
                 mine.add(k)
+                # what a run costs, learnt from the parts run here too (a batch always spread has no other)
+                per_run = (time.perf_counter() - started) / len(parts[k]["cases"])
+                self.here.run_seconds = max(self.here.run_seconds, per_run)
+        expected = self.here.run_seconds * max(len(p["cases"]) for p in parts)
+        stale = max(MIN_STALE_SECONDS, STALE_FACTOR * expected)
         answers = []
         for k, path in enumerate(paths):
             answer, waited = path.with_suffix(".answer"), time.monotonic()

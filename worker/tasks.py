@@ -1,8 +1,8 @@
 """The job task: run a stored job, by its kind, and store its status and answer.
 
 A run (`kind` 'run') is the solver on its case, storing the summary and the HDF5 result. A
-calibration or an optimisation runs its study, spreading its batches of runs over the workers
-(`fanout`), and stores its answer and plot. Each shares the same life: queued → running →
+study (a calibration, an optimisation, a bearing graph, a drivability) runs, spreading its batches
+of runs over the workers (`fanout`), and stores its answer and plot. Each shares the same life: queued → running →
 succeeded, failed or cancelled, with progress, cancel and the time limit.
 """
 
@@ -20,8 +20,10 @@ from percussim.common.broker import EVALUATE_PART, RUN_JOB
 from percussim.common.metrics import job_observations
 from percussim.common.settings import settings
 from percussim.common.store import (
+    BEARING_GRAPH,
     CALIBRATION,
     CANCELLED,
+    DRIVABILITY,
     FAILED,
     OPTIMIZATION,
     RUN,
@@ -36,6 +38,7 @@ from percussim.solver.case import CaseError, parse_case
 from percussim.solver.errors import Cancelled, NumericalFailure
 from percussim.solver.io import remove_partial
 from percussim.solver.optimize import optimize
+from percussim.solver.pile_studies import bearing_graph, drivability
 from percussim.solver.simulate import simulate
 from percussim.solver.study_plots import render_study
 
@@ -48,7 +51,12 @@ PROGRESS_SECONDS = 0.25  # how often a running job's progress is written
 CANCEL_POLL_SECONDS = 0.1  # how often a running job asks whether it was cancelled
 STORE_RETRY_SECONDS = 60.0  # how long a job's end waits for a database that went away
 ALIVE_WITHIN = 15.0  # s: workers whose heartbeat is this recent may take a study's parts
-STUDIES = {CALIBRATION: (calibrate, "fit"), OPTIMIZATION: (optimize, "convergence")}
+STUDIES = {
+    CALIBRATION: (calibrate, "fit"),
+    OPTIMIZATION: (optimize, "convergence"),
+    BEARING_GRAPH: (bearing_graph, "bearing_graph"),
+    DRIVABILITY: (drivability, "drivability"),
+}
 
 
 class TimeLimitExceeded(Exception):
@@ -171,7 +179,7 @@ def _run(
 def _study(
     store: JobStore, job_id: str, progress: Callable[[float], None], cancelled: Callable[[], bool]
 ) -> tuple[float, float]:
-    """A calibration or an optimisation: its batches spread over the live workers."""
+    """A study: its batches spread over the live workers."""
     s = settings()
     solve, plot = STUDIES[_stored(lambda: store.get(job_id))["kind"]]
     workers = len(WorkerRegistry(s.results_dir).alive(within=ALIVE_WITHIN)) or 1

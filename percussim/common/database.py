@@ -49,7 +49,7 @@ jobs = Table(
     Column("id", String(32), primary_key=True),
     Column("owner", String(64)),  # the API key's id; null without keys
     Column("name", Text),
-    Column("kind", String(16), nullable=False),  # run, calibration, optimization
+    Column("kind", String(16), nullable=False),  # run, calibration, optimization, bearing_graph, drivability
     Column("status", String(16), nullable=False),
     Column("progress", Float, nullable=False),
     Column("created", DateTime(timezone=True), nullable=False),

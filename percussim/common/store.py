@@ -2,8 +2,8 @@
 of its own under the results folder, readable by any process.
 
     jobs/<id>/case.json     the case as submitted
-    jobs/<id>/request.json  a calibration's or an optimisation's request (kind 'calibration',
-                            'optimization'; a run's kind is 'run')
+    jobs/<id>/request.json  a study's request (kind 'calibration', 'optimization',
+                            'bearing_graph', 'drivability'; a run's kind is 'run')
     jobs/<id>/answer.json   their answer, once succeeded
     jobs/<id>/batches/      their batches of runs while they are spread over the workers
     jobs/<id>/summary.json  the pulse summary, once succeeded
@@ -49,6 +49,7 @@ QUEUED, RUNNING, SUCCEEDED, FAILED, CANCELLED = "queued", "running", "succeeded"
 FINISHED = (SUCCEEDED, FAILED, CANCELLED)
 STATUSES = (QUEUED, RUNNING, *FINISHED)
 RUN, CALIBRATION, OPTIMIZATION = "run", "calibration", "optimization"  # a job's kind
+BEARING_GRAPH, DRIVABILITY = "bearing_graph", "drivability"  # the pile studies' kinds
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
 
@@ -189,8 +190,8 @@ class JobStore:
             shutil.rmtree(self.jobs / job_id, ignore_errors=True)
 
     def create(self, case: dict, kind: str = RUN, request: dict | None = None) -> dict:
-        """A new queued job for `case` (validated JSON), of `kind` with its `request` (a
-        calibration's or an optimisation's, which holds the case too); returns its record."""
+        """A new queued job for `case` (validated JSON), of `kind` with its `request` (a study's,
+        which holds the case too); returns its record."""
         return _record(self._create([(new_id(), case, kind, request)])[0])
 
     def get(self, job_id: str) -> dict:

@@ -1,7 +1,8 @@
 """percussim.testing: what the tests and the benches stand on, importable as a module from
 either. The closed-form references the solver is held to (`reference`: the linear impact,
 Saint-Venant's rigid impact, a cushioned ram, Lundberg's rock) and the cases built around them
-(`closed_forms`: pistons, rock, soil, anvils, a split Hopkinson bar's record); a live stack of
+(`closed_forms`: pistons, rock, soil, anvils, a split Hopkinson bar's record); a pile and its
+soil for the pile studies (`piles`); a live stack of
 Redis, PostgreSQL, the API and its workers on this machine (`live_stack`). Nothing in the solver,
 the API or the workers imports it.
 """

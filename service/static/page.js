@@ -2,7 +2,8 @@
 // The modules: dom.js and api.js (helpers, the API with its key), units.js (the one table of
 // quantities and units), poll.js (the one poll loop), view.js (the right-hand panel's one view),
 // editor.js (the case JSON), form.js with schema.js (the case form, from the case's JSON schema),
-// jobs.js (recent jobs), job.js and summary.js (a job), charts.js, compare.js, sweep.js, studies.js.
+// jobs.js (recent jobs), job.js and summary.js (a job), charts.js, compare.js, sweep.js, studies.js,
+// piling.js (the bearing graph and the drivability).
 import { KEY_STORAGE } from "./api.js";
 import { openComparison } from "./compare.js";
 import { $ } from "./dom.js";
@@ -10,6 +11,7 @@ import { choosePreset, loadPresets, submitCase } from "./editor.js";
 import { buildForm } from "./form.js";
 import { cancelJob, downloadResult, editCase, openJob, shownJob } from "./job.js";
 import { picked, refreshJobs } from "./jobs.js";
+import { startPiling } from "./piling.js";
 import { startStudies } from "./studies.js";
 import { openSweep, startSweeps } from "./sweep.js";
 
@@ -44,6 +46,7 @@ document.addEventListener("keydown", (event) => {
 buildForm();
 startSweeps();
 startStudies();
+startPiling();
 loadPresets();
 refreshJobs();
 const [, view, target] = /^#(job|compare|sweep)=([\w,-]+)$/.exec(location.hash) || [];

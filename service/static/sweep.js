@@ -52,7 +52,7 @@ function addSweepRow([path, values] = ["", ""]) {
 // `3, 5, 7` as [3, 5, 7]; `0.1:0.6:6` as six values from 0.1 to 0.6, to 12 digits so that a step
 // of 0.1 gives 0.3, not 0.30000000000000004. Text that is not a number is passed on for the
 // service to name.
-function sweepValues(text) {
+export function sweepValues(text) {
   const range = /^\s*([^:]+):([^:]+):\s*(\d+)\s*$/.exec(text);
   if (range) {
     const [from, to, count] = [Number(range[1]), Number(range[2]), Number(range[3])];
