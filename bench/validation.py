@@ -19,6 +19,9 @@
    of r = 0.5, 1, 2 and a fractional last cell; tests/test_striker_rod.py), bilinear rock against
    Lundberg's η(x) and Smith soil's set and loop (tests/test_media.py), and the set per blow, blow
    after blow (tests/test_blows.py).
+7. Piles (`bench/validation_piles.py`): the shaft's rigid-body mode, the static compression under
+   gravity, a cushion, a Smith toe's set read through a bearing graph, the audit under gravity,
+   and a driven pile against Smith's lumped-mass model (an independent discretisation).
 
 With --write, the figures go to docs/validation/ beside the markdown.
 """
@@ -28,6 +31,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import sys
 from pathlib import Path
 from time import perf_counter
 from typing import NamedTuple
@@ -44,6 +48,9 @@ from percussim.solver.result import Result
 from percussim.solver.simulate import simulate
 from percussim.testing import closed_forms as CF
 from percussim.testing.reference import LinearImpact, observed_order
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the piles' sections, beside this script
+from validation_piles import pile_sections  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 SCHEMES = ("paper", "sigma", "explicit")
@@ -1105,6 +1112,7 @@ def report(figures: dict[str, Figure]) -> str:
         ("Smith soil: the set and the loop", soil_report(figures)),
         ("Blow after blow", blows_report(figures)),
         ("The anvil: two-body impact and the pulse it prolongs", anvil_report(figures)),
+        *pile_sections(),
     ]
     out = [
         "# Validation",
@@ -1114,7 +1122,9 @@ def report(figures: dict[str, Figure]) -> str:
         "code (`percussim/testing/reference.py`): `tests/test_reference.py`, `tests/test_schemes.py`, "
         "`tests/test_convergence.py`, `tests/test_lumped.py`, `tests/test_energy.py`; the models beyond "
         "the paper, with the cases and closed forms of `percussim/testing/closed_forms.py`: "
-        "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`. An energy "
+        "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`; piles: "
+        "`tests/test_shaft.py`, `tests/test_gravity.py`, `tests/test_cushion.py`, `tests/test_struck_end.py`, "
+        "`tests/test_smith_model.py`. An energy "
         "residual is `energy.numerical` over the energy supplied.",
         "",
     ]

@@ -90,3 +90,22 @@ def test_a_driven_end_is_refused_by_the_schemes_that_do_not_take_it():
     with pytest.raises(CaseError) as refused:
         simulate(parse_case(case))
     assert [e.field for e in refused.value.errors] == ["struck_end"]
+
+
+def test_a_bearing_graph_reads_smiths_set_and_the_refusal_off_its_rows():
+    """The toe takes every capacity (no shaft); one blow each, from rest: each row's set is the
+    closed form's, and from R_u = 2F_i on the rows are refusals."""
+    from percussim.solver.pile_studies import bearing_graph
+
+    quake = CF.SOIL_RESISTANCE / CF.SOIL_STIFFNESS
+    case = CF.rectangular_force_case(FINE, quake=quake) | {"blows": {"count": 1}}
+    shares = (1.0, 1.3, 1.6, 1.9, 2.0, 2.3)
+    graph = bearing_graph({"case": case, "capacity": [s * CF.INCIDENT for s in shares]}, processes=1)
+    assert graph["toe_share"] == 1.0
+    for share, row in zip(shares, graph["rows"]):
+        _, expected = CF.smith_set(share * CF.INCIDENT, share * CF.INCIDENT / quake)
+        if share < 2.0:
+            assert row["set"] == pytest.approx(expected, rel=5e-3), share
+            assert row["blow_count"] == pytest.approx(1.0 / expected, rel=5e-3)
+        else:
+            assert row["set"] <= 1e-12 and row["blow_count"] is None, share

@@ -81,3 +81,13 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     runs = _rows(text, "| case | numerics | cells | run time (s) | energy residual |")
     assert len(runs) == 33
     assert all(abs(float(row[4])) < 5e-3 for row in runs), runs
+    # Piles: each closed form within what its test holds it to
+    closed = _rows(text, "| closed form | expected | solver | relative error |")
+    assert len(closed) == 8 and all(float(row[3]) < 2e-3 for row in closed), closed
+    toe = _rows(text, "| R_u / F_i | closed-form set |")
+    assert [row[4] for row in toe[-2:]] == ["refusal", "refusal"]
+    assert len(toe) == 8 and all(float(row[3]) < 5e-3 for row in toe[:-2]), toe
+    smith = _rows(text, "| quantity | Smith's lumped model (600 masses) |")
+    assert len(smith) == 5 and all(float(row[3]) < 3e-3 for row in smith), smith
+    residual = re.search(r"^\| the residual \(`numerical`\), over what was supplied \| (\S+) \|$", text, re.M)
+    assert residual and abs(float(residual.group(1))) < 5e-3
