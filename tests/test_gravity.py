@@ -13,7 +13,7 @@ from percussim.solver.case import CaseError, parse_case
 from percussim.solver.grid import make_grid, resolve_numerics
 from percussim.solver.rest import at_rest
 from percussim.solver.simulate import simulate
-from percussim.testing.closed_forms import pile_under_its_weight, static_compression
+from percussim.testing.closed_forms import pile_under_its_weight, static_compression, yielding_pile_under_gravity
 
 G = 9.81
 
@@ -59,21 +59,8 @@ def test_a_run_at_rest_stays_there():
     assert abs(energy["numerical"]) < 1e-6 * energy["stored_at_rest"]
 
 
-def yielding_pile(**changes) -> dict:
-    case = pile_under_its_weight(anvil=True)
-    case["striker"] = {"mass": 4000.0, "stroke": 1.0}
-    case["contact"] = {"stiffness": 5.89e9, "exponent": 0.0, "restitution": 0.8}
-    case["medium"] = {"kind": "smith", "ultimate_resistance": 6e5, "quake": 0.0025, "damping_factor": 0.5}
-    case["shaft"] = [
-        {"from": 5.0, "to": 12.0, "ultimate_resistance": 3e5, "quake": 0.0025, "damping_factor": 0.16},
-        {"from": 12.0, "to": 20.0, "ultimate_resistance": 6e5, "quake": 0.0025, "damping_factor": 0.16},
-    ]
-    case["numerics"] = {"duration": 0.04}
-    return case | changes
-
-
 def test_the_energy_audit_closes_with_gravity_shaft_and_toe_yielding():
-    summary = simulate(parse_case(yielding_pile(blows={"count": 2}))).summary
+    summary = simulate(parse_case(yielding_pile_under_gravity(blows={"count": 2}))).summary
     energy = summary["energy"]
     assert energy["to_shaft"] > 0.1 * energy["initial"] and energy["to_medium"] > 0.1 * energy["initial"]
     assert summary["set"] > 1e-3
@@ -84,7 +71,7 @@ def test_the_energy_audit_closes_with_gravity_shaft_and_toe_yielding():
 
 
 def test_a_helmet_rests_on_the_pile_between_blows():
-    case = parse_case(yielding_pile(blows={"count": 2}))
+    case = parse_case(yielding_pile_under_gravity(blows={"count": 2}))
     h = simulate(case).history
     anvil, head = h["anvil/displacement"], h["tool/struck_end_displacement"]
     last = np.searchsorted(h["time"], case.numerics.duration)  # the first blow's last layer
@@ -97,8 +84,8 @@ def test_a_helmet_rests_on_the_pile_between_blows():
 
 
 def test_the_weight_drives_the_pile_deeper():
-    with_gravity = simulate(parse_case(yielding_pile())).summary
-    without = yielding_pile()
+    with_gravity = simulate(parse_case(yielding_pile_under_gravity())).summary
+    without = yielding_pile_under_gravity()
     del without["gravity"]
     without["striker"] = {"mass": 4000.0, "velocity": math.sqrt(2 * G * 1.0)}
     without = simulate(parse_case(without)).summary
@@ -107,7 +94,7 @@ def test_the_weight_drives_the_pile_deeper():
 
 
 def test_a_ram_falls_its_stroke_under_the_cases_gravity():
-    case = parse_case(yielding_pile(gravity={"acceleration": 1.62}))
+    case = parse_case(yielding_pile_under_gravity(gravity={"acceleration": 1.62}))
     assert case.impact_velocity == pytest.approx(math.sqrt(2 * 1.62 * 1.0))
 
 

@@ -472,6 +472,23 @@ def driven_pile(numerics: dict | None = None) -> dict:
     }
 
 
+def yielding_pile_under_gravity(**changes) -> dict:
+    """`pile_under_its_weight` with its 500-kg helmet struck by a 4-t ram falling 1 m through a
+    cushion (5.89e9 N/m, e = 0.8), on soil that yields: 0.3 MN of shaft from 5 to 12 m and 0.6 MN
+    from 12 to 20 m (J = 0.16 s/m), a 0.6-MN toe (J = 0.5 s/m); blows of 40 ms. `changes` replace
+    the case's fields."""
+    case = pile_under_its_weight(anvil=True)
+    case["striker"] = {"mass": 4000.0, "stroke": 1.0}
+    case["contact"] = {"stiffness": 5.89e9, "exponent": 0.0, "restitution": 0.8}
+    case["medium"] = {"kind": "smith", "ultimate_resistance": 6e5, "quake": 0.0025, "damping_factor": 0.5}
+    case["shaft"] = [
+        {"from": 5.0, "to": 12.0, "ultimate_resistance": 3e5, "quake": 0.0025, "damping_factor": 0.16},
+        {"from": 12.0, "to": 20.0, "ultimate_resistance": 6e5, "quake": 0.0025, "damping_factor": 0.16},
+    ]
+    case["numerics"] = {"duration": 0.04}
+    return case | changes
+
+
 def static_compression(
     x: np.ndarray,
     *,
