@@ -7,11 +7,12 @@ Lundberg's efficiency, and the pile blow after blow.
 Times are the least of `--repeats` runs after compilation (`percussim.simulate`, one process).
 The closed forms (`percussim/testing/reference.py`): the rock drill's piston, of the rod's impedance Z, sends
 Z·v/2 for 2L_p/a, and Lundberg's bilinear rock gives the bit's peak force, the penetration and the
-rock's share of the energy (`LundbergRock`); the pile's ram on its linear cushion on a pile of
-impedance Z gives the first peak force before the toe's reflection is back (`CushionedImpact`);
-Smith's soil, unloaded from R_u, springs back by its quake and takes R_u·set as plastic work.
+rock's share of the energy (`LundbergRock`); the pile's ram strikes with m·g·η·h, and Smith's
+soil at the toe, unloaded from R_u, springs back by its quake and takes R_u·set as plastic work.
+The pile's bearing graph follows (`solver.pile_studies.bearing_graph`).
 
-`--write` puts the tables in README.md between its `device presets` markers.
+`--write` puts the tables in README.md between its `device presets` markers, and the bearing
+graph's plot in docs/images/pile_bearing_graph.png.
 """
 
 from __future__ import annotations
@@ -21,15 +22,19 @@ import re
 import time
 from pathlib import Path
 
+from percussim.solver.pile_studies import bearing_graph
 from percussim.solver.presets import load_preset, preset_json
 from percussim.solver.simulate import run_sweep, simulate
+from percussim.solver.study_plots import render_study
 from percussim.solver.sweep import Sweep, variants
-from percussim.testing.reference import CushionedImpact, LundbergRock
+from percussim.testing.reference import LundbergRock
 
 ROOT = Path(__file__).resolve().parents[1]
 
 PISTON_LENGTHS = (0.1, 0.2, 0.3, 0.5, 0.8)
 PILE_BLOWS = 4
+PILE_CAPACITIES = (0.5e6, 1.0e6, 1.5e6, 2.0e6, 2.5e6, 3.0e6, 3.5e6, 4.0e6)
+FIGURE = ROOT / "docs" / "images" / "pile_bearing_graph.png"
 
 
 def timed(name: str, repeats: int) -> tuple[dict, float]:
@@ -79,20 +84,37 @@ def rock_table(summary: dict) -> list[str]:
 
 def pile_table(summary: dict) -> list[str]:
     case = load_preset("pile")
-    ram = CushionedImpact.of_case(case)
-    soil = case.medium
+    ram, soil = case.striker, case.medium
     permanent = summary["medium_penetration"]["permanent"]
-    return rows_of(
-        summary,
-        {
-            "peak contact force (N)": ram.peak_force,
-            "its time (s)": ram.peak_time,
-            "max penetration (m)": permanent + soil.quake,
-        },
-    ) + [
+    return rows_of(summary, {"max penetration (m)": permanent + soil.quake}) + [
+        f"| energy at impact (J) | {summary['energy']['initial']:.4g} | "
+        f"{ram.mass * 9.81 * ram.efficiency * ram.stroke:.4g} (m·g·η·h) |",
+        f"| transferred energy, EMX (J) | {summary['energy']['transferred']:.4g} | — |",
         f"| plastic work at the toe (J) | {summary['energy']['medium_plastic']:.4g} | "
-        f"{soil.ultimate_resistance * permanent:.4g} (R_u·set) |"
+        f"{soil.ultimate_resistance * permanent:.4g} (R_u·set) |",
+        f"| blow count (1/m) | {summary['blow_count']:.4g} | — |",
     ]
+
+
+def pile_bearing_graph(figure: Path | None) -> list[str]:
+    """The pile preset's bearing graph, the toe keeping its share: a row per capacity; its plot
+    to `figure` when given."""
+    answer = bearing_graph({"case": preset_json("pile"), "capacity": list(PILE_CAPACITIES)}, processes=1)
+    if figure is not None:
+        figure.write_bytes(render_study(answer, "bearing_graph", "png", "pile"))
+    lines = [
+        "| capacity (MN) | blows run | set (mm) | blow count (1/m) | max compression (MPa) | max tension (MPa) "
+        "| EMX (kJ) | estimated error |",
+        "|---|---|---|---|---|---|---|---|",
+    ]
+    for row in answer["rows"]:
+        count = "refusal" if row["blow_count"] is None else f"{row['blow_count']:.4g}"
+        lines.append(
+            f"| {row['ultimate_resistance'] / 1e6:g} | {row['blows']} | {row['set'] * 1e3:.4g} | {count} | "
+            f"{row['max_compressive_stress'] / 1e6:.4g} | {row['max_tensile_stress'] / 1e6:.4g} | "
+            f"{row['transferred_energy'] / 1e3:.4g} | {row['error_estimate']:.1e} |"
+        )
+    return lines
 
 
 def piston_sweep() -> list[str]:
@@ -125,7 +147,7 @@ def pile_blows() -> list[str]:
     return lines
 
 
-def report(repeats: int) -> str:
+def report(repeats: int, figure: Path | None = None) -> str:
     rock, rock_ms = timed("rock_drill", repeats)
     pile, pile_ms = timed("pile", repeats)
     head = ["| quantity | solver | closed form |", "|---|---|---|"]
@@ -155,10 +177,17 @@ def report(repeats: int) -> str:
             "",
             *piston_sweep(),
             "",
-            f"The pile, {PILE_BLOWS} blows (`blows.count`): each later blow meets the pile still moving "
-            "from the one before (no gravity or shaft resistance brings it to rest), which raises its force.",
+            f"The pile, {PILE_BLOWS} blows (`blows.count`): before each the helmet rests on the pile again, "
+            "the soil's state carried from the blow before; the set settles.",
             "",
             *pile_blows(),
+            "",
+            "The pile's bearing graph (`percussim bearing-graph pile --capacity 0.5e6:4e6:8`): each capacity "
+            "split as the preset's, 71% at the toe, and driven until its set settles.",
+            "",
+            "![the pile preset's bearing graph](docs/images/pile_bearing_graph.png)",
+            "",
+            *pile_bearing_graph(figure),
         ]
     )
 
@@ -168,7 +197,7 @@ def main() -> None:
     parser.add_argument("--repeats", type=int, default=10)
     parser.add_argument("--write", action="store_true", help="write the tables into README.md")
     args = parser.parse_args()
-    text = report(args.repeats)
+    text = report(args.repeats, FIGURE if args.write else None)
     print(text)
     if args.write:
         readme = ROOT / "README.md"

@@ -13,7 +13,6 @@ from percussim.solver.simulate import simulate
 
 def dropped(stroke: float, efficiency: float = 1.0) -> dict:
     case = preset_json("pile")
-    del case["striker"]["velocity"]
     case["striker"] |= {"stroke": stroke, "efficiency": efficiency}
     return case
 
@@ -28,12 +27,16 @@ def test_a_ram_falling_its_stroke_brings_m_g_eta_h(stroke, efficiency):
     )
 
 
-def test_the_pile_presets_ram_dropped_1_m_is_the_preset():
-    """The preset's 4.4294 m/s is √(2·9.81·1.0) to five digits: the same blow."""
+def test_the_pile_presets_ram_strikes_as_one_given_its_falls_velocity():
+    """The preset's ram falling 0.991 m at an efficiency of 0.67 strikes as a ram given the velocity
+    √(2·9.81·0.67·0.991): the same blow."""
     preset = simulate(preset_json("pile")).summary
-    fallen = simulate(dropped(1.0)).summary
-    assert fallen["peak_contact_force"]["value"] == pytest.approx(preset["peak_contact_force"]["value"], rel=2e-5)
-    assert fallen["set"] == pytest.approx(preset["set"], rel=1e-4)
+    given = preset_json("pile")
+    given["striker"] = {"mass": given["striker"]["mass"], "velocity": math.sqrt(2 * 9.81 * 0.67 * 0.991)}
+    thrown = simulate(given).summary
+    assert thrown["peak_contact_force"]["value"] == pytest.approx(preset["peak_contact_force"]["value"], rel=1e-9)
+    assert thrown["set"] == pytest.approx(preset["set"], rel=1e-9)
+    assert preset["energy"]["initial"] == pytest.approx(4536.0 * 9.81 * 0.67 * 0.991, rel=1e-12)
 
 
 @pytest.mark.parametrize(

@@ -51,7 +51,9 @@ def _same_as_direct(row: dict, tree: dict) -> None:
         expected = summary
         for key in path:
             expected = expected[key]
-        assert row[column] == pytest.approx(expected, rel=1e-9), column
+        # the estimate is a difference of grids' answers over one of them: the split's rounding
+        # grows in it by the ratio
+        assert row[column] == pytest.approx(expected, rel=1e-6 if column == "error_estimate" else 1e-9), column
 
 
 def test_the_toe_takes_its_share_and_the_shaft_keeps_its_proportions():
@@ -157,8 +159,15 @@ def test_total_blows_count_only_the_depths_driven_before_refusal():
         ({"stroke": [1.0]}, "capacity"),
         ({"case": preset_json("fig5")}, "case.medium.kind"),
         ({"case": merge(PILE, {"medium": None})}, "case.medium"),
-        ({"capacity": None, "stroke": [1.0]}, "case.striker.stroke"),
-        ({"case": preset_json("pile"), "toe_share": 0.5}, "toe_share"),
+        (
+            {
+                "case": merge(PILE, {"striker": {"stroke": None, "efficiency": None, "velocity": 3.6}}),
+                "capacity": None,
+                "stroke": [1.0],
+            },
+            "case.striker.stroke",
+        ),
+        ({"case": merge(PILE, {"shaft": None}), "toe_share": 0.5}, "toe_share"),
         ({"toe_share": 1.5}, "toe_share"),
         ({"capacity": [1e6, -2.0]}, "capacity[1]"),
     ],

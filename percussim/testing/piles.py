@@ -1,5 +1,5 @@
-"""A pile and its soil for the pile studies' tests and bench: the pile preset (a 4-t ram dropped 1 m
-on a 15-m steel pipe through a nylon cushion) with 1.8 MN of resistance, a third at the toe and the
+"""A pile and its soil for the pile studies' tests and bench: the pile preset (a 4.5-t ram falling
+0.99 m on a helmet and a 15-m steel pipe, under gravity) with 1.8 MN of resistance, a third at the toe and the
 rest over the shaft's lower 10 m; and sand over dense sand, whose shaft resistance gains half again
 over a pause, its toe refusal within 11 m."""
 

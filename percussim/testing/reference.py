@@ -207,7 +207,7 @@ class CushionedImpact:
     def of_case(cls, case) -> CushionedImpact:
         """A case's lumped striker on its uniform tool through its linear contact (exponent 0,
         no damper: what the closed form assumes, the caller checks)."""
-        return cls(case.striker.mass, case.striker.velocity, case.contact.stiffness, impedance(case.tool))
+        return cls(case.striker.mass, case.impact_velocity, case.contact.stiffness, impedance(case.tool))
 
 
 class LundbergRock:
