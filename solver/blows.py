@@ -57,7 +57,7 @@ class BlowLog:
                     "to_medium": medium,
                     "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
                     "permanent_penetration": float(permanent_penetration),
-                    "set": float(permanent_penetration - self._set),
+                    "set": self.set_of(permanent_penetration),
                     "transferred": float(x[L.X_MAX_TRANSFERRED]),
                 },
                 "extremes": x.copy(),
@@ -65,6 +65,10 @@ class BlowLog:
             }
         )
         self._set = permanent_penetration
+
+    def set_of(self, permanent_penetration: float) -> float:
+        """The set of the blow under way, the medium's permanent penetration now `permanent_penetration`."""
+        return float(permanent_penetration - self._set)
 
     def table(self) -> list[dict]:
         return [blow["row"] for blow in self.blows]

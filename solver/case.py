@@ -456,6 +456,90 @@ class Blows(_Model):
     count: Whole = Field(ge=1, le=1000, description="how many blows", title="Number of blows", **_about(implied=1))
 
 
+Pressure = Annotated[float, Field(ge=0, le=1e10, **_quantity("stress"))]
+
+
+class Accumulator(_Model):
+    """A gas accumulator on the supply line: `p·V_gas^n = precharge·volume^n`."""
+
+    volume: Annotated[float, Field(gt=0, le=1.0, **_quantity("volume"))] = Field(title="Gas volume", **_about("V₀"))
+    precharge: Annotated[float, Field(gt=0, le=1e10, **_quantity("stress"))] = Field(
+        title="Precharge pressure", **_about("p₀")
+    )
+    polytropic_exponent: float = Field(1.4, ge=1.0, le=1.67, title="Polytropic exponent", **_about("n"))
+
+
+class AdaptiveControl(_Model):
+    """After each blow the next stroke moves toward the one that gives `target_set` a blow, within
+    `min_stroke` and `max_stroke` (harder rock, longer stroke)."""
+
+    kind: Literal["adaptive"] = Field(**_about(choices={"adaptive": "adaptive stroke"}))
+    target_set: Annotated[float, Field(gt=0, le=1.0, **_quantity("length"))] = Field(title="Target set a blow")
+    min_stroke: Length = Field(title="Shortest stroke")
+    max_stroke: Length = Field(title="Longest stroke")
+
+
+class HydraulicDrive(_Model):
+    """A differential piston: the front area always at the supply pressure (it returns the
+    striker), the rear area switched by the valve to supply when the striker, on its way back,
+    passes `stroke` from the impact point, and to return at impact."""
+
+    kind: Literal["hydraulic"] = Field(**_about(choices={"hydraulic": "hydraulic: a differential piston"}))
+    supply_pressure: Annotated[float, Field(gt=0, le=1e10, **_quantity("stress"))] = Field(**_about("p_s"))
+    return_pressure: Pressure = Field(0.0, **_about("p_r"))
+    front_area: Area = Field(**_about("A_f"))
+    rear_area: Area = Field(**_about("A_r"))
+    stroke: Length = Field(**_about("s"))
+    valve_time: Annotated[float, Field(ge=0, le=1.0, **_quantity("time"))] = Field(0.0, title="Valve switching time")
+    flow: Annotated[float, Field(gt=0, le=10.0, **_quantity("flow"))] | None = Field(
+        None, title="Pump flow", **_about("Q")
+    )
+    accumulator: Accumulator | None = None
+    friction: Annotated[float, Field(ge=0, le=1e9, **_quantity("force"))] = Field(0.0, **_about("F_f"))
+    control: AdaptiveControl | None = None
+
+    @model_validator(mode="after")
+    def _works(self) -> HydraulicDrive:
+        if self.rear_area <= self.front_area:
+            raise field_error(
+                "HydraulicDrive",
+                ("rear_area",),
+                f"must be larger than front_area = {self.front_area} m²: with the rear on supply the net push "
+                "toward the tool is (rear_area − front_area)·supply_pressure, so the piston would never work",
+                self.rear_area,
+            )
+        if self.supply_pressure <= self.return_pressure:
+            raise field_error(
+                "HydraulicDrive",
+                ("supply_pressure",),
+                f"must be above return_pressure = {self.return_pressure} Pa: the front's pull returns the "
+                "striker only then",
+                self.supply_pressure,
+            )
+        if self.flow is not None and self.accumulator is None:
+            raise field_error(
+                "HydraulicDrive",
+                ("accumulator",),
+                "is needed with a pump's flow: the gas buffers the supply; without either the supply holds "
+                "its pressure",
+                None,
+            )
+        if self.accumulator is not None and self.accumulator.precharge >= self.supply_pressure:
+            raise field_error(
+                "HydraulicDrive",
+                ("accumulator", "precharge"),
+                f"must be below supply_pressure = {self.supply_pressure} Pa: the gas is compressed by the supply",
+                self.accumulator.precharge,
+            )
+        return self
+
+
+class Cycles(_Model):
+    """A hammer at work: `count` cycles, each a return stroke, a work stroke and a blow."""
+
+    count: Whole = Field(ge=1, le=10_000, description="how many work cycles", title="Number of cycles")
+
+
 class SineForce(_Model):
     """External force on the striker `R(t) = P·sin(ωt)`."""
 
@@ -623,6 +707,8 @@ class Case(_Model):
     gravity: Gravity | None = None
     force: Force | None = None
     blows: Blows | None = None
+    drive: HydraulicDrive | None = None
+    cycles: Cycles | None = None
     numerics: Numerics
     outputs: Outputs = Field(default_factory=Outputs)
 
@@ -653,6 +739,36 @@ class Case(_Model):
                     "has nothing to act on: a history drives the struck end (struck_end), with no striker",
                     None,
                 )
+        return self
+
+    @model_validator(mode="after")
+    def _a_hammer_at_work(self) -> Case:
+        """`cycles` run a `drive`, each the other's; they exclude `blows`, and an adaptive stroke
+        needs a medium whose set it reads."""
+        if self.cycles is not None and self.blows is not None:
+            raise field_error(
+                "Case",
+                ("cycles",),
+                "cannot be given with blows: cycles run their blows (a return stroke, a work stroke and a blow "
+                "each); give one of them",
+                self.cycles.count,
+            )
+        if (self.cycles is None) != (self.drive is None):
+            given, missing = ("cycles", "drive") if self.drive is None else ("drive", "cycles")
+            raise field_error(
+                "Case", (missing,), f"is required with {given}: a drive works the striker cycle after cycle", None
+            )
+        if self.drive is not None and self.striker is None:
+            raise field_error("Case", ("drive",), "drives a striker: give striker, not struck_end", None)
+        control = self.drive.control if self.drive is not None else None
+        if control is not None and (self.medium is None or self.medium.kind == "linear"):
+            raise field_error(
+                "Case",
+                ("drive", "control"),
+                "sets the stroke from the set a blow: it needs a medium that yields (medium.kind 'bilinear' or "
+                "'smith')",
+                control.kind,
+            )
         return self
 
     @model_validator(mode="after")
@@ -739,6 +855,13 @@ class Case(_Model):
         return self.striker.impact_velocity(self.gravity.acceleration)
 
     @property
+    def blows_run(self) -> int:
+        """How many blows a run has: its `blows`, or one a work cycle (`cycles`), else one."""
+        if self.cycles is not None:
+            return self.cycles.count
+        return self.blows.count if self.blows else 1
+
+    @property
     def elastic_striker(self) -> bool:
         """Whether an elastic striker (a rod) strikes the tool."""
         return self.striker is not None and self.striker.elastic
@@ -762,6 +885,8 @@ class Case(_Model):
             fields.append("shaft")
         if self.gravity is not None:
             fields.append("gravity")
+        if self.cycles is not None:
+            fields.append("cycles")
         if self.contact is not None and self.contact.restitution < 1.0:
             fields.append("contact.restitution")
         if self.anvil is not None and self.anvil.contact.restitution < 1.0:

@@ -13,8 +13,11 @@ from . import kernel as K
 from . import layout as L
 from .blows import BlowLog
 from .case import Case, Contact, Force, Medium
+from .cycle import HammerAtWork, blow_force
+from .drive import FLIGHT_ROWS, Flight
 from .errors import Cancelled, NumericalFailure
 from .grid import (
+    DEFAULT_TOLERANCE,
     Grid,
     ResolvedNumerics,
     make_grid,
@@ -24,6 +27,7 @@ from .grid import (
     shaft_spans,
     striker_grid,
     striker_mass,
+    tolerance_of,
     wave_speed,
 )
 from .laws import FORCE_KINDS
@@ -96,7 +100,7 @@ def history_paths(case: Case) -> dict[str, int]:
         paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
     if case.anvil is not None:
         paths.update(ANVIL_PATHS)
-    if case.blows is not None and case.blows.count > 1:
+    if case.blows_run > 1:
         paths.update(BLOW_PATHS)
     if case.shaft:
         paths["energy/to_shaft"] = L.H_TO_SHAFT
@@ -380,7 +384,7 @@ def simulate_rod(
     striker = striker_on(case, num, tool, rod)
     anvil = anvil_on(case, grid, contact)
     rows = K.factor_tool_rows(tool, rod, weights, medium)
-    force = force_law(case.force)
+    force = blow_force(case) if case.drive is not None else force_law(case.force)
     shaft = shaft_on(case, grid, tau)
 
     out = case.outputs
@@ -391,8 +395,9 @@ def simulate_rod(
         K.start_at_rest(state, at_rest(case, grid))
     set_at_rest = float(state.ends[K.S_MEDIUM_SET])
     observed = K.new_observed(MAX_CONTACTS)
-    blows = case.blows.count if case.blows else 1
+    blows = case.blows_run
     blow, blow_steps = 0, num.steps // blows
+    hammer = HammerAtWork(case, blow_steps * tau) if case.cycles is not None else None
     log = BlowLog(launch_energy=launch_energy(case), set_at_rest=set_at_rest)
     log.start(state.energy[0])
     # The centred schemes' boundary forces are centred on a layer: it is recorded one step later.
@@ -401,11 +406,12 @@ def simulate_rod(
 
     recorder = MemoryRecorder() if recorder is None else recorder
     recorder.start()
-    total_rows = _kept(0, num.steps, out.history_stride)
+    # each flight between two blows adds its records (`drive.FLIGHT_ROWS`) to every history
+    total_rows = _kept(0, num.steps, out.history_stride) + (FLIGHT_ROWS * (blows - 1) if hammer else 0)
     total_frames = _kept(0, num.steps, field_stride)
     probe_x = np.asarray(out.probes, float)
     paths = history_paths(case)
-    for path in paths:
+    for path in list(paths) + (list(DRIVE_PATHS) if hammer else []):
         recorder.create(path, (total_rows,))
     recorder.create("probes/x", probe_x.shape)
     recorder.append("probes/x", probe_x)
@@ -436,6 +442,7 @@ def simulate_rod(
     summary_columns = [HISTORY_PATHS[path] for path in FORCE_HISTORY.values()]
     summary_table = []  # the summary's histories at `summary_rows`, chunk by chunk
     row = 0  # history rows kept before this chunk
+    elapsed = 0.0  # the flights' time so far (s), between blows
 
     chunk = max(1, CHUNK_NODE_STEPS // (n + 1))
     first = 0
@@ -480,8 +487,14 @@ def simulate_rod(
         if status == K.STATUS_NON_FINITE:
             raise NumericalFailure(observed.extremes[L.X_FAILED_TIME], num)
         history = recorders.history
+        history[L.H_TIME, :n_hist] += elapsed  # the flights' time between the blows
         for path, column in paths.items():
             recorder.append(path, history[column, :n_hist])
+        if n_hist:
+            kept_last = (history[:, n_hist - 1].copy(), recorders.probes[n_hist - 1].copy())
+        if hammer is not None:
+            recorder.append("drive/rear_pressure", np.full(n_hist, case.drive.return_pressure))
+            recorder.append("drive/supply_pressure", np.full(n_hist, hammer.drive.pressure(hammer.gas)))
         recorder.append("probes/stress", recorders.probes[:n_hist])
         for k, path in enumerate(segment_paths):
             recorder.append(path, recorders.shaft_history[k, :n_hist])
@@ -490,7 +503,9 @@ def simulate_rod(
         row += n_hist
         if n_field:
             lo, hi = recorded
-            recorder.append("fields/time", np.arange(-(-lo // field_stride) * field_stride, hi + 1, field_stride) * tau)
+            recorder.append(
+                "fields/time", np.arange(-(-lo // field_stride) * field_stride, hi + 1, field_stride) * tau + elapsed
+            )
             layers = {
                 "": (recorders.field_u, recorders.field_stress),
                 "striker_": (recorders.striker_u, recorders.striker_stress),
@@ -510,7 +525,17 @@ def simulate_rod(
         first = last + 1
         if last == boundary and blow < blows - 1:
             ended = state.energy[0].copy()
-            K.start_blow(last, state, observed, contact, striker, anvil, medium, tau)
+            velocity = case.impact_velocity
+            if hammer is not None:
+                flight = fly_between(hammer, state, last, striker, contact, anvil, log, yields(case))
+                flown = flight_history(kept_last, flight, last * tau + elapsed)
+                record_flight(recorder, paths, kept_last, flight, flown)
+                low, high = np.searchsorted(summary_rows, (row, row + FLIGHT_ROWS))
+                summary_table.append(flown[summary_columns].take(summary_rows[low:high] - row, axis=1))
+                row += FLIGHT_ROWS
+                elapsed += flight.duration
+                velocity = flight.impact_velocity
+            K.start_blow(last, state, observed, contact, striker, anvil, medium, tau, velocity)
             log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
             observed = K.new_observed(MAX_CONTACTS)
             log.start(state.energy[0])
@@ -536,8 +561,10 @@ def simulate_rod(
         history=dict(zip(FORCE_HISTORY.values(), table)),
         permanent_penetration=ends[K.S_MEDIUM_SET],
         set_at_rest=set_at_rest,
-        blows=log.table() if case.blows else None,
+        blows=log.table() if case.blows or hammer else None,
     )
+    if hammer is not None:
+        summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)
     held = recorder.held()
     if held is None:
         return Result(
@@ -551,6 +578,50 @@ def simulate_rod(
             streamed=True,
         )
     return Result.from_arrays(case, num, held, summary)
+
+
+DRIVE_PATHS = ("drive/rear_pressure", "drive/supply_pressure")  # a hammer at work's, beside the kernel's
+
+
+def yields(case: Case) -> bool:
+    """Whether the case's medium yields (has a set)."""
+    return case.medium is not None and case.medium.kind != "linear"
+
+
+def fly_between(hammer, state, last, striker, contact, anvil, log, has_set) -> Flight:
+    """The striker's flight after the blow that ended at layer `last`, from the kernel's state:
+    the striker's displacement and velocity (an elastic one's mean), to the struck end (or the
+    anvil) where the tool is held."""
+    row, ends = last % 3, state.ends
+    velocity = ends[K.S_STRIKER_VELOCITY]
+    if striker.elastic:
+        velocity = ends[K.S_LAUNCH_VELOCITY] - ends[K.S_IMPULSE] / striker.mass
+    impact_point = ends[K.S_ANVIL_DISP] if anvil.present else state.u[row, 0]
+    last_set = log.set_of(ends[K.S_MEDIUM_SET]) if has_set else None
+    return hammer.between(state.y[row], velocity, impact_point, last_set)
+
+
+def flight_history(kept_last, flight: Flight, start: float) -> np.ndarray:
+    """A flight's rows of the history's columns from `start` (s): the striker's from the flight,
+    no contact force, the rest held at the last row kept (`kept_last`: the history's and the
+    probes'; the tool is not stepped)."""
+    rows = np.repeat(kept_last[0][:, None], FLIGHT_ROWS, axis=1)
+    rows[L.H_TIME] = start + flight.time
+    rows[L.H_STRIKER_DISP] = flight.displacement
+    rows[L.H_STRIKER_VEL] = flight.velocity
+    rows[L.H_CONTACT_FORCE] = 0.0
+    rows[L.H_OVERLAP] = flight.displacement - flight.impact_point
+    return rows
+
+
+def record_flight(recorder, paths, kept_last, flight: Flight, rows: np.ndarray) -> None:
+    """A flight's records (`rows`, `flight_history`'s) in every history, the drive's pressures,
+    and the probes held."""
+    for path, column in paths.items():
+        recorder.append(path, rows[column])
+    recorder.append("drive/rear_pressure", flight.rear_pressure)
+    recorder.append("drive/supply_pressure", flight.supply_pressure)
+    recorder.append("probes/stress", np.tile(kept_last[1], (FLIGHT_ROWS, 1)))
 
 
 def warm_up() -> None:

@@ -276,7 +276,7 @@ def resolve_numerics(
             ]
         )
     # every blow has the same steps
-    steps = max(1, math.ceil(steps - 1e-9)) * (case.blows.count if case.blows else 1)
+    steps = max(1, math.ceil(steps - 1e-9)) * case.blows_run
     ends = None
     if model != "rod":
         ends = "none"

@@ -51,6 +51,7 @@ _UNITS = {
     "x": "m",
     "stress": "Pa",
     "resistance": "N/m",  # along the tool, per metre
+    "pressure": "Pa",  # a hammer's drive's
 }
 
 

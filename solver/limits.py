@@ -55,9 +55,9 @@ def excesses(case: Case, numerics: ResolvedNumerics, limits: Limits = Limits()) 
                 f"{numerics.cells} cells exceed the limit of {limits.max_cells} (PERCUSSIM_MAX_CELLS raises it)",
             )
         )
-    blows = case.blows.count if case.blows else 1
+    blows = case.blows_run
     per_blow = f" × {blows} blows" if blows > 1 else ""
-    fewer_blows = ", or give fewer blows.count" if blows > 1 else ""
+    fewer_blows = f", or give fewer {'cycles' if case.cycles else 'blows'}.count" if blows > 1 else ""
     if numerics.steps > limits.max_steps:
         found.append(
             Excess(

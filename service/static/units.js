@@ -13,6 +13,8 @@ export const QUANTITIES = {
   stress: { units: [["Pa", 0], ["MPa", 6], ["GPa", 9]], shown: "MPa" }, // a modulus too
   density: { units: [["kg/m³", 0], ["g/cm³", 3]] },
   area: { units: [["m²", 0], ["cm²", -4], ["mm²", -6]] },
+  volume: { units: [["m³", 0], ["L", -3], ["cm³", -6]], shown: "L" },
+  flow: { units: [["m³/s", 0], ["L/s", -3]], shown: "L/s" },
   stiffness: { units: [["N/m", 0], ["kN/m", 3], ["kN/mm", 6], ["MN/m", 6], ["GN/m", 9]] },
   contact_stiffness: { units: [["N/m^(1+α)", 0]] }, // its unit follows the exponent α
   damping: { units: [["N·s/m", 0], ["kN·s/m", 3], ["MN·s/m", 6]] },

@@ -48,7 +48,8 @@ S_CONTACT_DEEPEST, S_ANVIL_CONTACT_DEEPEST = 32, 33
 # displacement at the layer recorded last (`track_transferred`)
 S_TRANSFERRED, S_TRANSFER_FORCE, S_TRANSFER_DISP = 34, 35, 36
 S_BLOW_START = 37  # when the present blow started: a driving history's time counts from it
-END_SLOTS = 38
+S_LAUNCH_VELOCITY = 38  # the present blow's striker was launched at (W1, or what a drive gave it)
+END_SLOTS = 39
 # The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
 INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
 FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end

@@ -39,11 +39,11 @@ def contact_spring(delta, contact):
 
 
 @compiled(inline="always")
-def pressed_to(contact, deepest):
-    """The `Contact` as a cushion pressed to its `deepest` overlap so far (`laws.contact_law`)."""
+def _contact(contact, deepest, velocity):
+    """The `Contact` pressed to `deepest`, its striker launched at `velocity`."""
     return Contact(
         striker_mass=contact.striker_mass,
-        striker_velocity=contact.striker_velocity,
+        striker_velocity=velocity,
         stiffness=contact.stiffness,
         exponent=contact.exponent,
         tension_stiffness=contact.tension_stiffness,
@@ -52,6 +52,18 @@ def pressed_to(contact, deepest):
         restitution=contact.restitution,
         deepest=deepest,
     )
+
+
+@compiled(inline="always")
+def pressed_to(contact, deepest):
+    """The `Contact` as a cushion pressed to its `deepest` overlap so far (`laws.contact_law`)."""
+    return _contact(contact, deepest, contact.striker_velocity)
+
+
+@compiled(inline="always")
+def launched_at(contact, velocity):
+    """The `Contact` of a striker launched at `velocity` (a hammer's drive gives each blow its own)."""
+    return _contact(contact, contact.deepest, velocity)
 
 
 @compiled(inline="always")

@@ -64,6 +64,7 @@ from .bundles import (
     S_IN_CONTACT,
     S_INCOMING,
     S_INCOMING_BEFORE,
+    S_LAUNCH_VELOCITY,
     S_MEDIUM_FORCE,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
@@ -82,7 +83,7 @@ from .bundles import (
     StepConstants,
     boundary_weights,
 )
-from .contact import contact_law, external_force, pressed_to
+from .contact import contact_law, external_force, launched_at, pressed_to
 from .driven_end import driven_end_step, driven_force, piece
 from .gravity import gravity_work
 from .recording import (
@@ -213,9 +214,10 @@ def rest_anvil(state, row, anvil):
 
 
 @compiled()
-def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
+def start_blow(m, state, observed, contact, striker, anvil, medium, tau, velocity):
     """The next blow, from layer m (the last one computed): the striker, withdrawn with what it
-    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at W1 where it
+    had left (its energy and the contact's, `E_WITHDRAWN`), is launched again at `velocity` (W1,
+    or what a hammer's drive gave it) where it
     strikes (the struck end, or the anvil, which stays where it is and starts again at its own
     velocity, or under gravity rests on the tool: `rest_anvil`) (`E_LAUNCHED`); a contact still
     open closes at t_m and the new one opens there; a history driving the struck end starts
@@ -241,13 +243,15 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau):
             ends,
             observed,
             t,
-            mean_velocity(ends[S_IMPULSE], contact, striker) if striker.elastic else ends[S_STRIKER_VELOCITY],
+            mean_velocity(ends[S_IMPULSE], launched_at(contact, ends[S_LAUNCH_VELOCITY]), striker)
+            if striker.elastic
+            else ends[S_STRIKER_VELOCITY],
             False,
             tau,
         )
-    launch_striker(state, row, row_before, struck, contact, striker, tau)
+    launch_striker(state, row, row_before, struck, launched_at(contact, velocity), striker, tau)
     ends[S_BLOW_START] = t
-    launched = 0.5 * contact.striker_mass * contact.striker_velocity * contact.striker_velocity
+    launched = 0.5 * contact.striker_mass * velocity * velocity
     # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
     beyond = ends[S_BACK_ENERGY] if striker.elastic else 0.0
     anvil_energy = 0.0
@@ -275,6 +279,7 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, m
     u0 = u[layer.new, 0]
     struck = ends[S_ANVIL_DISP] if anvil.present else u0
     launch_striker(state, layer.new, 2, struck, contact, striker, rod.time_step)
+    ends[S_LAUNCH_VELOCITY] = striker_velocity
     ends[S_IN_CONTACT] = 1.0 if striker.driver == NOT_DRIVEN else 0.0
     ends[S_CONTACT_START] = 0.0
     ends[S_BLOW_START] = 0.0
@@ -340,6 +345,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     new, cur, _, _ = layer
     n, tau = step.n, rod.time_step
     end_state, far_state, events = scratch
+    contact = launched_at(contact, ends[S_LAUNCH_VELOCITY])  # an elastic striker's mean velocity counts from it
     v_in, v_slope = incoming_wave(u, layer, 1, 0, ends, INCOMING, tau)
     v_far, far_slope = incoming_wave(u, layer, n - 1, n, ends, FAR_INCOMING, tau)
     face_in, face_slope = 0.0, 0.0

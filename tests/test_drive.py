@@ -1,0 +1,214 @@
+"""A hammer's hydraulic drive between blows (solver/drive.py): the flight against the closed
+forms of ideal hydraulics, the energy audit of a flight, the accumulator's gas law, and cycles
+end to end (`cycles`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from percussim.solver.case import CaseError, parse_case
+from percussim.solver.drive import Hydraulics, Valve, fly
+from percussim.solver.simulate import simulate
+
+IDEAL = Hydraulics(mass=2.0, front_area=1e-4, rear_area=3e-4, supply_pressure=15e6, return_pressure=0.0, stroke=0.05)
+RETURNING = Valve(target=0.0, since=0.0, start=0.0)
+
+
+def ideal_flight(drive: Hydraulics, start: float, velocity: float, impact_point: float) -> tuple[float, float, float]:
+    """(t_back, t_in, v_impact): constant pressures, an instant valve, no friction. Back from
+    `start` at `velocity` (< 0) under (A_f·p_s − A_r·p_r)/m until `stroke` from the impact point,
+    then in under (A_r − A_f)·p_s/m: v_i² = v² + 2·(F_b·D + F_w·s)/m."""
+    back = (drive.front_area * drive.supply_pressure - drive.rear_area * drive.return_pressure) / drive.mass
+    work = (drive.rear_area - drive.front_area) * drive.supply_pressure / drive.mass
+    distance = start - (impact_point - drive.stroke)
+    t_back = (velocity + math.sqrt(velocity**2 + 2 * back * distance)) / back
+    v_switch = -math.sqrt(velocity**2 + 2 * back * distance)
+    t_in = (-v_switch + math.sqrt(v_switch**2 + 2 * work * drive.stroke)) / work
+    return t_back, t_in, math.sqrt(v_switch**2 + 2 * work * drive.stroke)
+
+
+@pytest.mark.parametrize("rebound", [0.0, -3.0, -8.0])
+def test_ideal_hydraulics_strike_at_the_closed_forms_velocity_after_its_times(rebound):
+    flight = fly(IDEAL, 0.0, rebound, 0.0, 0.0, RETURNING)
+    t_back, t_in, v_impact = ideal_flight(IDEAL, 0.0, rebound, 0.0)
+    # √(2·p·A_r·s/m + v_r²) when the flight starts at the impact point
+    assert v_impact == pytest.approx(math.sqrt(2 * 15e6 * 3e-4 * 0.05 / 2.0 + rebound**2), rel=1e-12)
+    assert flight.impact_velocity == pytest.approx(v_impact, rel=1e-8)
+    assert flight.switched == pytest.approx(t_back, rel=1e-8)
+    assert flight.duration == pytest.approx(t_back + t_in, rel=1e-8)
+    assert flight.displacement[-1] == pytest.approx(0.0, abs=1e-12)
+    assert flight.displacement.min() < -IDEAL.stroke  # it turned beyond the switch point
+
+
+def test_the_flights_work_is_its_kinetic_energys_change():
+    """Supply, return line, friction and weight: their work sums to ½m(v_i² − v_r²)."""
+    drive = replace(
+        IDEAL,
+        return_pressure=5e5,
+        valve_time=2e-3,
+        friction=40.0,
+        flow=1e-3,
+        accumulator_volume=5e-4,
+        precharge=8e6,
+        weight=2.0 * 9.81,
+    )
+    gas = drive.gas_volume(drive.supply_pressure)
+    flight = fly(drive, 1e-3, -4.0, 0.0, gas, Valve(target=0.0, since=0.0, start=1.0))
+    change = 0.5 * drive.mass * (flight.impact_velocity**2 - 4.0**2)
+    work = flight.supplied + flight.returned + flight.rubbed + flight.lifted
+    assert work == pytest.approx(change, rel=1e-7)
+    assert flight.rubbed < 0 and flight.returned < 0 and flight.supplied > 0
+
+
+def test_the_accumulator_follows_its_gas_law():
+    """Without a pump the gas takes what the chambers draw: V_gas = V_0' + ∫(on·A_r − A_f)·dy,
+    and p = p_0·(V_0/V_gas)^n (started at 12 MPa, under the relief at the supply's 15 MPa, which
+    the oil pushed back as the striker turns never reaches)."""
+    drive = replace(
+        IDEAL,
+        accumulator_volume=2e-4,
+        precharge=8e6,
+        polytropic_exponent=1.3,
+    )
+    start_gas = drive.gas_volume(12e6)
+    flight = fly(drive, 0.0, -3.0, 0.0, start_gas, RETURNING)
+    switch = -drive.stroke
+    y = flight.displacement
+    after = flight.time > flight.switched
+    drawn = -drive.front_area * y + np.where(after, drive.rear_area * (y - switch), 0.0)
+    expected = 8e6 * (2e-4 / (start_gas + drawn)) ** 1.3
+    assert np.allclose(flight.supply_pressure, expected, rtol=1e-6)
+    assert np.ptp(flight.supply_pressure) > 0.05 * 12e6  # it did move
+    assert flight.supply_pressure.max() < drive.supply_pressure
+
+
+def test_a_pump_relieved_at_the_supply_pressure_never_passes_it():
+    drive = replace(
+        IDEAL,
+        flow=5e-3,
+        accumulator_volume=2e-4,
+        precharge=8e6,
+    )
+    flight = fly(drive, 0.0, -3.0, 0.0, drive.gas_volume(15e6), RETURNING)
+    assert flight.supply_pressure.max() <= 15e6 * (1 + 1e-9)
+    assert flight.pumped == pytest.approx(15e6 * 5e-3 * flight.duration, rel=1e-3)
+
+
+def hammer(**changes) -> dict:
+    case = {
+        "striker": {"mass": 2.0, "velocity": 8.0},
+        "tool": {"length": 1.0, "youngs_modulus": 2.1e11, "density": 7800.0, "area": 1e-3},
+        "contact": {"stiffness": 1e9, "exponent": 0.0},
+        "medium": {"kind": "bilinear", "stiffness": 5e7, "unloading_stiffness": 5e8},
+        "drive": {"kind": "hydraulic", "supply_pressure": 15e6, "front_area": 1e-4, "rear_area": 3e-4, "stroke": 0.05},
+        "cycles": {"count": 4},
+        "numerics": {"duration": 0.002, "scheme": "explicit", "cells": 50},
+    }
+    return case | changes
+
+
+def test_cycles_strike_at_what_the_ideal_drive_gives_after_each_blow():
+    case = parse_case(hammer())
+    result = simulate(case)
+    cycle, h = result.summary["cycle"], result.history
+    grid = result.summary["runs"][-1]
+    duration = grid["steps"] // case.cycles.count * grid["time_step"]  # a blow, in whole steps
+    # each blow's last record, before its flight
+    ends = [
+        np.flatnonzero(h["time"] <= sum(cycle["cycle_time"][:k]) + duration * (1 + 1e-9))[-1]
+        for k in range(len(cycle["cycle_time"]))
+    ]
+    for k, end in enumerate(ends):
+        start, velocity = h["striker/displacement"][end], h["striker/velocity"][end]
+        point = h["tool/struck_end_displacement"][end]
+        t_back, t_in, v_impact = ideal_flight(IDEAL, start, velocity, point)
+        assert cycle["impact_velocity"][k + 1] == pytest.approx(v_impact, rel=1e-7)
+        assert cycle["cycle_time"][k] == pytest.approx(duration + t_back + t_in, rel=1e-7)
+    assert np.all(np.diff(h["time"]) > 0)
+    assert cycle["frequency"] == pytest.approx(1.0 / np.mean(cycle["cycle_time"][-2:]), rel=1e-12)
+    assert cycle["impact_power"] == pytest.approx(cycle["impact_energy"] * cycle["frequency"], rel=1e-12)
+    assert len(h["drive/rear_pressure"]) == len(h["time"])
+
+
+@pytest.mark.parametrize(
+    "change, field",
+    [
+        (
+            {
+                "drive": {
+                    "kind": "hydraulic",
+                    "supply_pressure": 15e6,
+                    "front_area": 3e-4,
+                    "rear_area": 3e-4,
+                    "stroke": 0.05,
+                }
+            },
+            "drive.rear_area",
+        ),
+        (
+            {
+                "drive": {
+                    "kind": "hydraulic",
+                    "supply_pressure": 1e5,
+                    "return_pressure": 2e5,
+                    "front_area": 1e-4,
+                    "rear_area": 3e-4,
+                    "stroke": 0.05,
+                }
+            },
+            "drive.supply_pressure",
+        ),
+        (
+            {
+                "drive": {
+                    "kind": "hydraulic",
+                    "supply_pressure": 15e6,
+                    "front_area": 1e-4,
+                    "rear_area": 3e-4,
+                    "stroke": 0.0,
+                }
+            },
+            "drive.stroke",
+        ),
+        ({"blows": {"count": 2}}, "cycles"),
+        ({"cycles": None}, "cycles"),
+        (
+            {
+                "medium": {"kind": "linear", "stiffness": 1e8},
+                "drive": {
+                    "kind": "hydraulic",
+                    "supply_pressure": 15e6,
+                    "front_area": 1e-4,
+                    "rear_area": 3e-4,
+                    "stroke": 0.05,
+                    "control": {"kind": "adaptive", "target_set": 1e-3, "min_stroke": 0.02, "max_stroke": 0.1},
+                },
+            },
+            "drive.control",
+        ),
+    ],
+)
+def test_a_drive_that_cannot_work_is_refused_naming_the_field(change, field):
+    case = hammer(**change)
+    case = {key: value for key, value in case.items() if value is not None}
+    with pytest.raises(CaseError) as refused:
+        parse_case(case)
+    assert [e.field for e in refused.value.errors] == [field]
+
+
+def test_the_cycles_histories_are_written_with_their_units(tmp_path):
+    import h5py
+
+    path = tmp_path / "result.h5"
+    simulate(hammer(cycles={"count": 2}), result_path=path)
+    with h5py.File(path) as f:
+        assert f["drive/rear_pressure"].attrs["units"] == "Pa"
+        assert f["drive/supply_pressure"].attrs["units"] == "Pa"
+        time, y = f["time"][:], f["striker/displacement"][:]
+        assert len(f["drive/rear_pressure"]) == len(time)
+        # the striker flew back beyond the stroke between the blows, in the same history
+        assert y.min() < -0.05 and np.all(np.diff(time) > 0)
