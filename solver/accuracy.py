@@ -196,18 +196,37 @@ class Estimate:
 
 
 ESTIMATED = HEADLINE + ("energy.transfer_efficiency", "set", "blow_count")
+# a hammer at work's (`cycles`): its last impact velocity, and its cycle's frequency, impact energy
+# and efficiency
+CYCLE_ESTIMATED = ("cycle.impact_velocity", "cycle.frequency", "cycle.impact_energy", "cycle.efficiency")
+
+
+def estimated_names(summary: dict) -> tuple[str, ...]:
+    """The quantities a run's error is estimated for: `ESTIMATED`, and a work cycle's."""
+    return ESTIMATED + (CYCLE_ESTIMATED if "cycle" in summary else ())
+
+
 SET_FRACTION = 0.01  # of the deepest penetration: below it a set is refusal, its relative error moot
 
 
 def estimated_values(summary: dict) -> dict[str, float | None]:
-    """The quantities an error is estimated for: the headline ones, the transfer efficiency, and
-    where the medium yields the set and the blow count."""
-    return {
+    """The quantities an error is estimated for: the headline ones, the transfer efficiency,
+    where the medium yields the set and the blow count, and a work cycle's."""
+    values = {
         **headline(summary),
         "energy.transfer_efficiency": summary["energy"]["transfer_efficiency"],
         "set": summary["set"],
         "blow_count": summary["blow_count"],
     }
+    cycle = summary.get("cycle")
+    if cycle is not None:
+        values |= {
+            "cycle.impact_velocity": cycle["impact_velocity"][-1],
+            "cycle.frequency": cycle["frequency"],
+            "cycle.impact_energy": cycle["impact_energy"],
+            "cycle.efficiency": cycle["efficiency"],
+        }
+    return values
 
 
 def set_left_out(summary: dict) -> str | None:
@@ -235,6 +254,11 @@ def not_estimated(summary: dict, impact_velocity: float, has_medium: bool) -> di
     reason = set_left_out(summary)
     if reason:
         skip["set"] = skip["blow_count"] = reason
+    cycle = summary.get("cycle")
+    if cycle is not None:
+        for name in ("frequency", "efficiency"):
+            if cycle[name] is None:
+                skip[f"cycle.{name}"] = "one cycle: no flight to time" if name == "frequency" else "no hydraulic energy"
     return skip
 
 
@@ -246,7 +270,9 @@ def estimate(
     values = [estimated_values(s) for s in summaries]
     skip = not_estimated(summaries[-1], impact_velocity, has_medium)
     errors = {
-        name: quantity_error(h, [v[name] for v in values], formal_order) for name in ESTIMATED if name not in skip
+        name: quantity_error(h, [v[name] for v in values], formal_order)
+        for name in estimated_names(summaries[-1])
+        if name not in skip
     }
     # the two finest grids must agree: a grazing contact that a coarse grid still sees or misses
     # changes none of the quantities estimated by more than their differences show
@@ -269,7 +295,9 @@ def modelled(case: Case, summary: dict, error: float) -> Estimate:
     """A model's own error, `error` on every quantity the run does not leave out (the lumped
     model's ε², which no grid reduces)."""
     skip = not_estimated(summary, case.impact_velocity, case.medium is not None)
-    return Estimate({name: QuantityError(error, None, False) for name in ESTIMATED if name not in skip}, skip, True)
+    return Estimate(
+        {name: QuantityError(error, None, False) for name in estimated_names(summary) if name not in skip}, skip, True
+    )
 
 
 @dataclass(frozen=True)

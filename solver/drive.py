@@ -163,7 +163,13 @@ def fly(
     pieces = []
     state = [start, velocity, gas_volume, 0.0, 0.0, 0.0]
     t0, switched = 0.0, math.nan
-    for stage in ("back", "in"):
+    # a striker the blow left beyond the switch point (a stroke shorter than its rebound) has
+    # passed it: the valve turns at once
+    stages = ("back", "in") if start > switch_at else ("in",)
+    if start <= switch_at:
+        switched = 0.0
+        valve = Valve(target=1.0, since=0.0, start=valve.on_supply(0.0, drive.valve_time))
+    for stage in stages:
         events = [passes_switch] if stage == "back" else [strikes]
         solution = solve_ivp(
             rates,

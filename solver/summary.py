@@ -106,6 +106,24 @@ class RunGrid(_Part):
     steps: int
 
 
+class Cycle(_Part):
+    """A hammer at work (`cycles`): its blows' impact velocities and strokes, its cycles' times,
+    and over the last half of the cycles its means."""
+
+    impact_velocity: list[float] = Field(description="each blow's, m/s")
+    stroke: list[float] = Field(description="the stroke before each blow, m")
+    cycle_time: list[float] = Field(description="each cycle's (a blow and its flight), s")
+    impact_energy: float = Field(description="½·m·v² at impact, J")
+    frequency: float | None = Field(description="blows per second, Hz; null with one cycle")
+    impact_power: float | None = Field(description="impact energy × frequency, W")
+    hydraulic_power: float | None = Field(
+        description="the supply's work on the chambers a cycle (or the pump's p·Q) × frequency, W"
+    )
+    efficiency: float | None = Field(description="the energy to the medium over the hydraulic energy, 1")
+    penetration_rate: float | None = Field(description="the set a blow × frequency, m/s")
+    periodic: bool = Field(description="whether the last two blows struck at the same velocity, within the tolerance")
+
+
 class Summary(_Part):
     """The pulse summary of a run (`GET /v1/jobs/{id}/summary`, `Result.summary`)."""
 
@@ -131,7 +149,8 @@ class Summary(_Part):
     )
     energy: Energy
     force_history: ForceHistory
-    blows: list[Blow] | None = Field(description="one entry per blow; null when the case has no `blows`")
+    blows: list[Blow] | None = Field(description="one entry per blow; null when the case has no `blows` or `cycles`")
+    cycle: Cycle | None = Field(None, description="a hammer at work's (`cycles`); absent otherwise")
     warnings: list[str] = Field(description="what the answer cannot promise, in words")
     why: str = Field(description="why this model, scheme and grid")
     tolerance: float | None = Field(description="the relative accuracy asked, 1; null for a fixed grid")

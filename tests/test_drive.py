@@ -212,3 +212,34 @@ def test_the_cycles_histories_are_written_with_their_units(tmp_path):
         assert len(f["drive/rear_pressure"]) == len(time)
         # the striker flew back beyond the stroke between the blows, in the same history
         assert y.min() < -0.05 and np.all(np.diff(time) > 0)
+
+
+def adaptive(stiffness: float, count: int = 16) -> dict:
+    case = hammer(cycles={"count": count})
+    case["medium"] = {"kind": "bilinear", "stiffness": stiffness, "unloading_stiffness": 10 * stiffness}
+    case["drive"]["control"] = {"kind": "adaptive", "target_set": 1.6e-3, "min_stroke": 0.01, "max_stroke": 0.3}
+    return simulate(parse_case(case)).summary
+
+
+def test_the_adaptive_stroke_settles_the_set_at_its_target_and_lengthens_on_harder_rock():
+    soft, hard = adaptive(5e7), adaptive(1.5e8)
+    for summary in (soft, hard):
+        sets = [blow["set"] for blow in summary["blows"]]
+        assert sets[-1] == pytest.approx(1.6e-3, rel=0.03)
+        assert abs(sets[-1] - 1.6e-3) < 0.5 * abs(sets[1] - 1.6e-3)  # it closed in on it
+        strokes = summary["cycle"]["stroke"]
+        assert all(0.01 <= s <= 0.3 for s in strokes)
+    assert hard["cycle"]["stroke"][-1] > 2.0 * soft["cycle"]["stroke"][-1]
+
+
+def test_a_cycle_at_the_default_accuracy_estimates_its_own_quantities():
+    from percussim.solver.summary import Summary
+
+    case = hammer()
+    case["numerics"] = {"duration": 0.002}
+    summary = simulate(parse_case(case)).summary
+    Summary.model_validate(summary)  # as the service serves it
+    estimate = summary["error_estimate"]
+    for name in ("cycle.impact_velocity", "cycle.frequency", "cycle.impact_energy", "cycle.efficiency"):
+        assert 0.0 <= estimate[name] <= estimate["worst"], name
+    assert summary["cycle"]["hydraulic_power"] > summary["cycle"]["impact_power"] * 0.5
