@@ -452,6 +452,34 @@ def _blows(fig: Figure, src: Source, times) -> None:
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
+def _cycle(fig: Figure, src: Source, times) -> None:
+    """A hammer at work: the striker's position and velocity over the cycles, the drive's
+    pressures, and each blow's impact energy and stroke."""
+    from matplotlib.ticker import MaxNLocator
+
+    cycle = src.summary["cycle"]
+    (motion, pressures), (energies, strokes) = fig.subplots(2, 2)
+    t = src.time()
+    motion.plot(t, src.history("striker/displacement") * 1e3, color="C0", lw=1.2, label="position y (mm)")
+    speed = motion.twinx()
+    speed.plot(t, src.history("striker/velocity"), color="C1", lw=1.0, label="velocity (m/s)")
+    speed.set_ylabel("velocity (m/s)")
+    decorate(motion, src.t_label(), "position y (mm), toward the tool > 0")
+    motion.legend(handles=motion.lines + speed.lines, fontsize=8, loc="lower left")
+    for path, label, style in (("drive/rear_pressure", "rear", "-"), ("drive/supply_pressure", "supply", "--")):
+        pressures.plot(t, src.history(path) / 1e6, ls=style, lw=1.2, label=label)
+    decorate(pressures, src.t_label(), "pressure (MPa)")
+    pressures.legend(fontsize=8)
+    blow = np.arange(1, len(cycle["impact_velocity"]) + 1)
+    mass = src.summary["energy"]["initial"] / (0.5 * cycle["impact_velocity"][0] ** 2)
+    energies.plot(blow, [0.5 * mass * v * v for v in cycle["impact_velocity"]], "o-", ms=4, lw=1.2)
+    decorate(energies, "blow", "impact energy (J)")
+    strokes.plot(blow, np.asarray(cycle["stroke"]) * 1e3, "o-", ms=4, lw=1.2, color="C2")
+    decorate(strokes, "blow", "stroke (mm)")
+    for ax in (energies, strokes):
+        ax.xaxis.set_major_locator(MaxNLocator(integer=True))
+
+
 @dataclass(frozen=True)
 class _Plot:
     title: str
@@ -468,6 +496,7 @@ _TABLE = {
     "energy": _Plot("Energy budget", (), _energy),
     "force_penetration": _Plot("Medium force against penetration", ("medium",), _force_penetration),
     "blows": _Plot("Blow by blow", ("blows",), _blows),
+    "cycle": _Plot("A hammer at work", ("cycles",), _cycle),
 }
 PLOTS = {name: plot.title for name, plot in _TABLE.items()}
 
@@ -508,9 +537,15 @@ def _no_medium(h5: h5py.File, case: dict) -> str | None:
 
 
 def _no_blows(h5: h5py.File, case: dict) -> str | None:
-    if case.get("blows"):
+    if case.get("blows") or case.get("cycles"):
         return None
     return 'this case has no blows table: run it blow after blow with blows.count, e.g. "blows": {"count": 5}'
+
+
+def _no_cycles(h5: h5py.File, case: dict) -> str | None:
+    if case.get("cycles"):
+        return None
+    return 'this case is no hammer at work: give it a drive and cycles, e.g. "cycles": {"count": 10}'
 
 
 # What a plot may need beyond the histories: each check says why a result lacks it, or None.
@@ -519,6 +554,7 @@ _NEEDS: dict[str, Callable[[h5py.File, dict], str | None]] = {
     "probes": _no_probes,
     "medium": _no_medium,
     "blows": _no_blows,
+    "cycles": _no_cycles,
 }
 
 

@@ -13,6 +13,7 @@ import pytest
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.drive import Hydraulics, Valve, fly
 from percussim.solver.simulate import simulate
+from percussim.testing.closed_forms import hammer_at_work
 
 IDEAL = Hydraulics(mass=2.0, front_area=1e-4, rear_area=3e-4, supply_pressure=15e6, return_pressure=0.0, stroke=0.05)
 RETURNING = Valve(target=0.0, since=0.0, start=0.0)
@@ -99,16 +100,7 @@ def test_a_pump_relieved_at_the_supply_pressure_never_passes_it():
 
 
 def hammer(**changes) -> dict:
-    case = {
-        "striker": {"mass": 2.0, "velocity": 8.0},
-        "tool": {"length": 1.0, "youngs_modulus": 2.1e11, "density": 7800.0, "area": 1e-3},
-        "contact": {"stiffness": 1e9, "exponent": 0.0},
-        "medium": {"kind": "bilinear", "stiffness": 5e7, "unloading_stiffness": 5e8},
-        "drive": {"kind": "hydraulic", "supply_pressure": 15e6, "front_area": 1e-4, "rear_area": 3e-4, "stroke": 0.05},
-        "cycles": {"count": 4},
-        "numerics": {"duration": 0.002, "scheme": "explicit", "cells": 50},
-    }
-    return case | changes
+    return hammer_at_work(**changes)
 
 
 def test_cycles_strike_at_what_the_ideal_drive_gives_after_each_blow():
@@ -194,7 +186,6 @@ def test_cycles_strike_at_what_the_ideal_drive_gives_after_each_blow():
 )
 def test_a_drive_that_cannot_work_is_refused_naming_the_field(change, field):
     case = hammer(**change)
-    case = {key: value for key, value in case.items() if value is not None}
     with pytest.raises(CaseError) as refused:
         parse_case(case)
     assert [e.field for e in refused.value.errors] == [field]
@@ -243,3 +234,22 @@ def test_a_cycle_at_the_default_accuracy_estimates_its_own_quantities():
     for name in ("cycle.impact_velocity", "cycle.frequency", "cycle.impact_energy", "cycle.efficiency"):
         assert 0.0 <= estimate[name] <= estimate["worst"], name
     assert summary["cycle"]["hydraulic_power"] > summary["cycle"]["impact_power"] * 0.5
+
+
+def test_the_cycle_is_plotted_from_its_result(tmp_path):
+    from percussim.solver.plots import figure, problem, problems
+
+    path = tmp_path / "result.h5"
+    simulate(hammer(cycles={"count": 3}), result_path=path)
+    assert problems(path)["cycle"] is None
+    fig = figure(path, "cycle")
+    motion, pressures, energies, strokes = fig.axes[:4]
+    assert len(energies.lines[0].get_xdata()) == 3 and len(strokes.lines[0].get_ydata()) == 3
+    assert min(motion.lines[0].get_ydata()) < -50.0  # back beyond the 50-mm stroke, in mm
+    assert max(pressures.lines[1].get_ydata()) == pytest.approx(15.0)  # the supply, MPa
+    other = tmp_path / "fig3.h5"
+    simulate(hammer(cycles=None, drive=None), result_path=other)
+    import h5py
+
+    with h5py.File(other) as f:
+        assert "give it a drive and cycles" in problem(f, "cycle")

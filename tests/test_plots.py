@@ -28,13 +28,13 @@ from percussim.solver.io import write_result
 from percussim.solver.plots import PLOTS, NotAResult, NotAvailable, UnknownPlot, figure, problem, render, write_plots
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
-from percussim.testing.closed_forms import MEDIUM_FINE, drilling, soil_case
+from percussim.testing.closed_forms import MEDIUM_FINE, drilling, hammer_at_work, soil_case
 from percussim.testing.live_stack import ROOT
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 # The result each plot is drawn from in the tests that draw every plot: the Fig. 9 preset's, but
 # for the blows table, which only a case run blow after blow has.
-DRAWN_FROM = {name: "blows" if name == "blows" else "full" for name in PLOTS}
+DRAWN_FROM = {name: name if name in ("blows", "cycle") else "full" for name in PLOTS}
 
 
 def _write(folder, name: str, case: dict) -> str:
@@ -62,6 +62,7 @@ def results(tmp_path_factory) -> dict[str, str]:
             folder, "lumped", {"numerics": {"model": "lumped"}, "outputs": {"fields": True, "probes": []}}
         ),
         "blows": _write(folder, "blows", {**blows, "name": "blows"}),
+        "cycle": _write(folder, "cycle", hammer_at_work(cycles={"count": 3}) | {"name": "cycle"}),
         "soil": _write(folder, "soil", soil_case(MEDIUM_FINE)),
         "damped soil": _write(folder, "damped soil", soil_case(MEDIUM_FINE, damping_factor=0.5)),
     }
@@ -95,7 +96,7 @@ def test_every_plot_has_labelled_axes_with_data_and_a_title_naming_the_case(resu
     ax = fig.axes[0]
     assert ax.get_xlabel() and ax.get_ylabel()
     assert ax.get_lines() or ax.images
-    case = "blows" if name == "blows" else "fig9"
+    case = name if name in ("blows", "cycle") else "fig9"
     assert fig.get_suptitle() == f"{PLOTS[name]} — {case}"
 
 
@@ -326,7 +327,7 @@ def test_a_result_without_fields_or_probes_says_what_to_change(results, tmp_path
     with pytest.raises(NotAvailable, match="outputs.fields = true"):
         figure(results["bare"], "spacetime")
     written, skipped = write_plots(results["bare"], tmp_path, formats=["png"])
-    assert sorted(skipped) == ["blows", "probes", "spacetime", "stress_along"]
+    assert sorted(skipped) == ["blows", "cycle", "probes", "spacetime", "stress_along"]
     assert sorted(p.name for p in written) == ["displacements.png", "energy.png", "force.png", "force_penetration.png"]
 
 
@@ -469,7 +470,7 @@ def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_mak
     assert unknown.status_code == 404
     assert unknown.json()["detail"] == (
         "no plot named 'forces'; the plots are: force, displacements, "
-        "probes, stress_along, spacetime, energy, force_penetration, blows"
+        "probes, stress_along, spacetime, energy, force_penetration, blows, cycle"
     )
     missing = client.get(f"/v1/jobs/{job_id}/plots/probes.svg")
     assert missing.status_code == 404
@@ -543,9 +544,9 @@ def test_the_plot_example_runs_a_preset_and_draws_every_plot(tmp_path):
     )
     assert done.returncode == 0, done.stderr
     drawn = sorted(p.stem for p in (tmp_path / "plots").glob("*.png"))
-    # every plot but the blows table, which the one blow of a preset has not
-    assert drawn == sorted(set(PLOTS) - {"blows"})
+    # every plot but the blows table and the work cycle, which the one blow of a preset has not
+    assert drawn == sorted(set(PLOTS) - {"blows", "cycle"})
     assert [line for line in done.stdout.splitlines() if "skipped" in line] == [
-        "skipped blows: " + plots.problems(tmp_path / "fig9.h5")["blows"]
+        f"skipped {name}: " + plots.problems(tmp_path / "fig9.h5")[name] for name in ("blows", "cycle")
     ]
     assert all(p.read_bytes().startswith(b"\x89PNG\r\n\x1a\n") for p in (tmp_path / "plots").glob("*.png"))

@@ -535,3 +535,22 @@ def cushion_rebound(mass: float, stiffness: float, velocity: float, restitution:
     wall: the rebound velocity −e·v and the contact time (π/2)·√(m/k)·(1 + e) (a quarter period
     loading at k, a quarter unloading at k/e²)."""
     return -restitution * velocity, 0.5 * math.pi * math.sqrt(mass / stiffness) * (1.0 + restitution)
+
+
+# --- A hammer at work (`drive`, `cycles`) -----------------------------------------------------------
+
+
+def hammer_at_work(**changes) -> dict:
+    """A 2-kg striker at 8 m/s on a 1-m steel tool and rock, driven by ideal hydraulics (15 MPa,
+    A_f = 1 cm², A_r = 3 cm², a 50-mm stroke: constant pressures, an instant valve, no friction)
+    for 4 cycles of 2-ms blows on 50 cells. `changes` replace the case's fields (None removes one)."""
+    case = {
+        "striker": {"mass": 2.0, "velocity": 8.0},
+        "tool": {"length": 1.0, "youngs_modulus": 2.1e11, "density": 7800.0, "area": 1e-3},
+        "contact": {"stiffness": 1e9, "exponent": 0.0},
+        "medium": {"kind": "bilinear", "stiffness": 5e7, "unloading_stiffness": 5e8},
+        "drive": {"kind": "hydraulic", "supply_pressure": 15e6, "front_area": 1e-4, "rear_area": 3e-4, "stroke": 0.05},
+        "cycles": {"count": 4},
+        "numerics": {"duration": 0.002, "scheme": "explicit", "cells": 50},
+    }
+    return {key: value for key, value in (case | changes).items() if value is not None}
