@@ -69,7 +69,7 @@ class HammerAtWork:
         self.control = control
         self.blow_duration = blow_duration  # the grid's: whole steps, numerics.duration or a little more
         self.gas = self.drive.gas_volume(self.drive.supply_pressure)
-        self.valve = Valve(target=0.0, since=0.0, start=1.0)  # the rear turns to return at the first impact
+        self.valve = Valve(target=0.0, since=0.0, start=1.0)  # the rear turns to return at each impact
         self.impact_velocities = [case.impact_velocity]
         self.strokes = [self.drive.stroke]
         self.flights: list[Flight] = []
@@ -84,7 +84,8 @@ class HammerAtWork:
         else:
             self.strokes.append(self.strokes[-1])
         drive = Hydraulics(**{**self.drive.__dict__, "stroke": self.strokes[-1]})
-        flight = fly(drive, start, velocity, impact_point, self.gas, self.valve)
+        # the valve began to turn at the blow's impact, a blow ago
+        flight = fly(drive, start, velocity, impact_point, self.gas, self.valve.shifted(self.blow_duration))
         self.gas, self.valve = flight.gas_volume, flight.valve
         self.flights.append(flight)
         self.impact_velocities.append(flight.impact_velocity)

@@ -76,6 +76,10 @@ class Valve:
     since: float
     start: float
 
+    def shifted(self, span: float) -> Valve:
+        """The same valve seen from `span` later (its time counted from then)."""
+        return Valve(target=self.target, since=self.since - span, start=self.start)
+
     def on_supply(self, t: float, valve_time: float) -> float:
         if valve_time <= 0.0 or t >= self.since + valve_time:
             return self.target
@@ -91,7 +95,8 @@ class Flight:
     the striker (J) of the supply (the hydraulic energy it gave the chambers), of the return
     line's pressure, of friction (≤ 0) and of the weight, which sum to its kinetic energy's
     change; the pump's energy (J), and the supply's
-    state at impact (the gas volume, the valve)."""
+    state at impact (the gas volume, and the valve turning to return from then: its time counted
+    from the impact)."""
 
     duration: float
     switched: float
@@ -133,19 +138,24 @@ def fly(
     the supply's state when the flight starts (the valve turned to return at the last impact)."""
     switch_at = impact_point - drive.stroke
     pumped = drive.flow > 0.0 and drive.accumulator_volume > 0.0
+    relieved = drive.gas_volume(drive.supply_pressure)  # the gas volume at the relief's pressure
+    # an emptied accumulator (all gas) holds its precharge: a demand beyond it is not modelled
+    emptied = drive.accumulator_volume
 
     def rates(t, x, valve):
         # x: y, y', the gas volume, and the work on the striker of the supply, of the return line
         # and of friction so far
         y, w, gas = x[:3]
-        supply = drive.pressure(gas)
+        # relieved at the supply pressure: the gas is pressed no further (a trial stage of the
+        # integrator past it reads the relief's pressure), the pump's surplus goes over the valve
+        supply = drive.pressure(min(max(gas, relieved), emptied))
         on = valve.on_supply(t, drive.valve_time)
         taken = (on * drive.rear_area - drive.front_area) * w  # m³/s the chambers draw from the supply
         gas_rate = 0.0
         if drive.accumulator_volume > 0.0:
             gas_rate = taken - (drive.flow if pumped else 0.0)
-            if supply >= drive.supply_pressure and gas_rate < 0.0:
-                gas_rate = 0.0  # relieved: the pump's surplus goes over the relief valve
+            if (gas <= relieved and gas_rate < 0.0) or (gas >= emptied and gas_rate > 0.0):
+                gas_rate = 0.0
         force = push(drive, w, rear_pressure(drive, on, supply), supply)
         returned = (1.0 - on) * drive.return_pressure * drive.rear_area * w
         return [w, force / drive.mass, gas_rate, supply * taken, returned, -drive.friction * abs(w)]
@@ -196,7 +206,7 @@ def fly(
     for k, t in enumerate(times):
         begin, end, dense, on_valve = next(p for p in pieces if t <= p[1] or p is pieces[-1])
         rows[:, k] = dense(min(max(t, begin), end))
-        supply[k] = drive.pressure(rows[2, k])
+        supply[k] = drive.pressure(min(max(rows[2, k], relieved), emptied))
         rear[k] = rear_pressure(drive, on_valve.on_supply(t, drive.valve_time), supply[k])
     return Flight(
         duration=t0,
@@ -212,9 +222,9 @@ def fly(
         returned=state[4],
         rubbed=state[5],
         lifted=drive.weight * (impact_point - start),
-        pumped=drive.flow * drive.pressure(state[2]) * t0 if pumped else 0.0,
-        gas_volume=state[2],
-        valve=Valve(target=0.0, since=t0, start=valve.on_supply(t0, drive.valve_time)),
+        pumped=drive.flow * drive.supply_pressure * t0 if pumped else 0.0,
+        gas_volume=min(max(state[2], relieved), emptied),
+        valve=Valve(target=0.0, since=0.0, start=valve.on_supply(t0, drive.valve_time)),
     )
 
 

@@ -253,3 +253,20 @@ def test_the_cycle_is_plotted_from_its_result(tmp_path):
 
     with h5py.File(other) as f:
         assert "give it a drive and cycles" in problem(f, "cycle")
+
+
+def test_the_valve_turning_at_impact_is_carried_into_the_next_flight():
+    """The rear began to turn to return at impact, a blow before the flight starts: flights from
+    the same state strike the same, whatever came before (the valve's time is the flight's own)."""
+    from percussim.solver.cycle import HammerAtWork
+
+    case = hammer()
+    case["drive"] |= {"valve_time": 5e-3, "return_pressure": 5e5}
+    hammer_at = HammerAtWork(parse_case(case), blow_duration=2e-3)
+    velocities = [hammer_at.between(0.0, -0.5, 0.0, None).impact_velocity for _ in range(3)]
+    assert velocities[1] == pytest.approx(velocities[0], rel=1e-9)
+    assert velocities[2] == pytest.approx(velocities[0], rel=1e-9)
+    # a valve still on supply for its first 3 ms pushes the striker in as it rebounds: a slower return
+    case["drive"]["valve_time"] = 0.0
+    instant = HammerAtWork(parse_case(case), blow_duration=2e-3).between(0.0, -0.5, 0.0, None)
+    assert hammer_at.flights[0].switched > instant.switched
