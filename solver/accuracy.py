@@ -203,7 +203,7 @@ CYCLE_ESTIMATED = ("cycle.impact_velocity", "cycle.frequency", "cycle.impact_ene
 
 def estimated_names(summary: dict) -> tuple[str, ...]:
     """The quantities a run's error is estimated for: `ESTIMATED`, and a work cycle's."""
-    return ESTIMATED + (CYCLE_ESTIMATED if "cycle" in summary else ())
+    return ESTIMATED + (CYCLE_ESTIMATED if summary.get("cycle") is not None else ())
 
 
 SET_FRACTION = 0.01  # of the deepest penetration: below it a set is refusal, its relative error moot

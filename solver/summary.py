@@ -150,7 +150,7 @@ class Summary(_Part):
     energy: Energy
     force_history: ForceHistory
     blows: list[Blow] | None = Field(description="one entry per blow; null when the case has no `blows` or `cycles`")
-    cycle: Cycle | None = Field(None, description="a hammer at work's (`cycles`); absent otherwise")
+    cycle: Cycle | None = Field(description="a hammer at work's (`cycles`); null otherwise")
     warnings: list[str] = Field(description="what the answer cannot promise, in words")
     why: str = Field(description="why this model, scheme and grid")
     tolerance: float | None = Field(description="the relative accuracy asked, 1; null for a fixed grid")
@@ -317,6 +317,7 @@ def build_summary(
         },
         "force_history": _downsample(history),
         "blows": blows,
+        "cycle": None,  # a hammer at work's, its controller's to fill
         "warnings": list(extra_warnings or []) + refusal(last_set),
     }
 

@@ -37,6 +37,10 @@ COLUMNS = (
     ("permanent_penetration", ("medium_penetration", "permanent")),
     ("last_blow_set", ("blows", -1, "set")),  # the set per blow once it has settled
     ("contacts", ("contacts_total",)),
+    # a hammer at work's (`cycles`): its blows a second, impact power and efficiency from the supply
+    ("frequency", ("cycle", "frequency")),
+    ("impact_power", ("cycle", "impact_power")),
+    ("hydraulic_efficiency", ("cycle", "efficiency")),
     ("estimated_error", ("error_estimate", "worst")),  # the worst of the row's quantities
 )
 

@@ -26,6 +26,9 @@ const SWEEP_COLUMNS = {
   permanent_penetration: ["Permanent penetration", "length"],
   last_blow_set: ["Set of the last blow", "length"],
   contacts: ["Contacts", null],
+  frequency: ["Blows a second", "rate"],
+  impact_power: ["Impact power", "power"],
+  hydraulic_efficiency: ["Efficiency from the supply", "ratio"],
   estimated_error: ["Estimated error", "ratio"],
   warnings: ["Warnings", null],
 };

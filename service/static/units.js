@@ -24,6 +24,7 @@ export const QUANTITIES = {
   frequency: { units: [["Hz", 0], ["kHz", 3], ["MHz", 6]], shown: "MHz" },
   slowness: { units: [["s/m", 0]] },
   energy: { units: [["J", 0]] },
+  power: { units: [["W", 0], ["kW", 3]], shown: "kW" },
   ratio: { units: [["–", 0], ["%", -2]], shown: "%" },
   dimensionless: { units: [["", 0]] },
   depth: { units: [["m", 0]] }, // a pile's toe below the surface, a ram's stroke: in metres, as a site reads them
