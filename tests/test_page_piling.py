@@ -33,6 +33,8 @@ def test_a_bearing_graph_from_its_form_is_a_chart_and_a_table(page, stack):
     for k, row in enumerate(graph["rows"]):
         expect(cells.nth(k).locator("[data-column=blow_count]")).to_have_text(shown(row["blow_count"]))
 
+    # an inspector's chart of a ram given its velocity, not a fall
+    fill_json(page, json.dumps(merge(PILE, {"striker": {"stroke": None, "efficiency": None, "velocity": 3.6}})))
     page.select_option("#bearing-variable", "stroke")
     page.fill("#bearing-values", "0.5:1:2")
     page.click("#run-bearing")
