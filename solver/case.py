@@ -761,7 +761,7 @@ class Case(_Model):
         if self.drive is not None and self.striker is None:
             raise field_error("Case", ("drive",), "drives a striker: give striker, not struck_end", None)
         control = self.drive.control if self.drive is not None else None
-        if control is not None and (self.medium is None or self.medium.kind == "linear"):
+        if control is not None and not self.medium_yields:
             raise field_error(
                 "Case",
                 ("drive", "control"),
@@ -862,6 +862,11 @@ class Case(_Model):
         return self.blows.count if self.blows else 1
 
     @property
+    def medium_yields(self) -> bool:
+        """Whether the medium yields (rock or soil: a set a blow)."""
+        return self.medium is not None and self.medium.kind != "linear"
+
+    @property
     def elastic_striker(self) -> bool:
         """Whether an elastic striker (a rod) strikes the tool."""
         return self.striker is not None and self.striker.elastic
@@ -877,7 +882,7 @@ class Case(_Model):
             fields.append("striker.length")
         if self.anvil is not None:
             fields.append("anvil")
-        if self.medium is not None and self.medium.kind != "linear":
+        if self.medium_yields:
             fields.append("medium.kind")
         if self.blows is not None and self.blows.count > 1:
             fields.append("blows.count")

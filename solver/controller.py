@@ -94,7 +94,7 @@ def history_paths(case: Case) -> dict[str, int]:
     if case.struck_end is not None:  # no striker: "contact/force" is the force on the struck end
         for path in STRIKER_PATHS:
             del paths[path]
-    if case.medium is not None and case.medium.kind != "linear":
+    if case.medium_yields:
         paths.update(YIELDING_PATHS)
     if case.elastic_striker:
         paths["energy/striker_strain"] = L.H_STRIKER_STRAIN
@@ -527,7 +527,7 @@ def simulate_rod(
             ended = state.energy[0].copy()
             velocity = case.impact_velocity
             if hammer is not None:
-                flight = fly_between(hammer, state, last, striker, contact, anvil, log, yields(case))
+                flight = fly_between(hammer, state, last, striker, contact, anvil, log, case.medium_yields)
                 flown = flight_history(kept_last, flight, last * tau + elapsed)
                 record_flight(recorder, paths, kept_last, flight, flown)
                 low, high = np.searchsorted(summary_rows, (row, row + FLIGHT_ROWS))
@@ -581,11 +581,6 @@ def simulate_rod(
 
 
 DRIVE_PATHS = ("drive/rear_pressure", "drive/supply_pressure")  # a hammer at work's, beside the kernel's
-
-
-def yields(case: Case) -> bool:
-    """Whether the case's medium yields (has a set)."""
-    return case.medium is not None and case.medium.kind != "linear"
 
 
 def fly_between(hammer, state, last, striker, contact, anvil, log, has_set) -> Flight:

@@ -17,6 +17,7 @@ longest).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 
@@ -83,7 +84,7 @@ class HammerAtWork:
             self.strokes.append(self.next_stroke(last_set))
         else:
             self.strokes.append(self.strokes[-1])
-        drive = Hydraulics(**{**self.drive.__dict__, "stroke": self.strokes[-1]})
+        drive = replace(self.drive, stroke=self.strokes[-1])
         # the valve began to turn at the blow's impact, a blow ago
         flight = fly(drive, start, velocity, impact_point, self.gas, self.valve.shifted(self.blow_duration))
         self.gas, self.valve = flight.gas_volume, flight.valve

@@ -271,8 +271,9 @@ def build_summary(
     excess = extremes[L.X_ENERGY_EXCESS] / budget if budget > 0 else 0.0
     medium = to_medium(energy)
     supplied = initial + external
-    yields = case.medium is not None and case.medium.kind != "linear"
-    last_set = (blows[-1]["set"] if blows else float(permanent_penetration - set_at_rest)) if yields else None
+    last_set = (
+        (blows[-1]["set"] if blows else float(permanent_penetration - set_at_rest)) if case.medium_yields else None
+    )
 
     return {
         "name": case.name,
