@@ -181,15 +181,17 @@ def _force(fig: Figure, src: Source, times) -> None:
 
 
 def displacements(case: dict) -> list[tuple[str, str, str]]:
-    """(key, dataset, label) of the displacements: the striker's y(t), the struck end's u_0(t) and
-    the working end's u_N(t)."""
-    # an elastic striker's recorded displacement is its impact face's
-    striker = "striker's impact face" if case["striker"].get("length") else "striker"
-    return [
-        ("striker", "striker/displacement", striker),
+    """(key, dataset, label) of the displacements: the striker's y(t) (none where a history drives
+    the struck end), the struck end's u_0(t) and the working end's u_N(t)."""
+    ends = [
         ("struck_end", "tool/struck_end_displacement", "struck end of the tool"),
         ("working_end", "tool/working_end_displacement", "working end of the tool"),
     ]
+    if not case.get("striker"):
+        return ends
+    # an elastic striker's recorded displacement is its impact face's
+    striker = "striker's impact face" if case["striker"].get("length") else "striker"
+    return [("striker", "striker/displacement", striker), *ends]
 
 
 def _displacements(fig: Figure, src: Source, times) -> None:
@@ -471,7 +473,8 @@ def _cycle(fig: Figure, src: Source, times) -> None:
     decorate(pressures, src.t_label(), "pressure (MPa)")
     pressures.legend(fontsize=8)
     blow = np.arange(1, len(cycle["impact_velocity"]) + 1)
-    mass = src.summary["energy"]["initial"] / (0.5 * cycle["impact_velocity"][0] ** 2)
+    # the striker's mass from the energy it brought, ½·m·v² at each impact
+    mass = 2.0 * src.summary["energy"]["initial"] / sum(v * v for v in cycle["impact_velocity"])
     energies.plot(blow, [0.5 * mass * v * v for v in cycle["impact_velocity"]], "o-", ms=4, lw=1.2)
     decorate(energies, "blow", "impact energy (J)")
     strokes.plot(blow, np.asarray(cycle["stroke"]) * 1e3, "o-", ms=4, lw=1.2, color="C2")

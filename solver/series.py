@@ -148,12 +148,25 @@ def _energy(src: Source) -> _Table:
     return _Table(columns, read)
 
 
+def _pressures(src: Source) -> _Table:
+    return _histories(
+        src,
+        [("rear", "drive/rear_pressure", "rear chamber p_r"), ("supply", "drive/supply_pressure", "supply p_s")],
+        "Pa",
+    )
+
+
+def _striker_velocity(src: Source) -> _Table:
+    return _histories(src, [("striker", "striker/velocity", "striker velocity, toward the tool > 0")], "m/s")
+
+
 @dataclass(frozen=True)
 class _Chart:
-    plot: str  # the plot it is the data of: its title, and what it needs of a result
+    plot: str  # the plot it is the data of: what it needs of a result, and its title unless `title`
     y: tuple[str, str]  # the axis' label and unit
     table: Callable[[Source], _Table]
     stacked: bool = False  # its curves share one x (read by a stride), to be stacked
+    title: str | None = None  # where the plot draws more than this chart
 
 
 _CHARTS = {
@@ -162,9 +175,12 @@ _CHARTS = {
     "probes": _Chart("probes", ("stress σ", "Pa"), _probes),
     "energy": _Chart("energy", ("energy", "J"), _energy, stacked=True),
     "force_penetration": _Chart("force_penetration", ("medium force", "N"), _force_penetration),
+    # a hammer at work's: the plot's other panels are the summary's, blow by blow
+    "pressures": _Chart("cycle", ("pressure", "Pa"), _pressures, title="The drive's pressures"),
+    "striker_velocity": _Chart("cycle", ("velocity", "m/s"), _striker_velocity, title="The striker's velocity"),
 }
 _FIELDS_PLOT = "spacetime"
-SERIES = {name: PLOTS[chart.plot] for name, chart in _CHARTS.items()} | {FIELDS: PLOTS[_FIELDS_PLOT]}
+SERIES = {name: chart.title or PLOTS[chart.plot] for name, chart in _CHARTS.items()} | {FIELDS: PLOTS[_FIELDS_PLOT]}
 
 
 def _plot_of(name: str) -> str:

@@ -240,11 +240,13 @@ def test_the_cycle_is_plotted_from_its_result(tmp_path):
     from percussim.solver.plots import figure, problem, problems
 
     path = tmp_path / "result.h5"
-    simulate(hammer(cycles={"count": 3}), result_path=path)
+    velocities = simulate(hammer(cycles={"count": 3}), result_path=path).summary["cycle"]["impact_velocity"]
     assert problems(path)["cycle"] is None
     fig = figure(path, "cycle")
     motion, pressures, energies, strokes = fig.axes[:4]
     assert len(energies.lines[0].get_xdata()) == 3 and len(strokes.lines[0].get_ydata()) == 3
+    # each impact's ½·m·v² of the 2-kg striker
+    assert list(energies.lines[0].get_ydata()) == pytest.approx([0.5 * 2.0 * v * v for v in velocities], rel=1e-12)
     assert min(motion.lines[0].get_ydata()) < -50.0  # back beyond the 50-mm stroke, in mm
     assert max(pressures.lines[1].get_ydata()) == pytest.approx(15.0)  # the supply, MPa
     other = tmp_path / "fig3.h5"

@@ -7,11 +7,12 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import re
 from pathlib import Path
 
 import pytest
-from browser import shown
+from browser import case_in_page, shown
 from playwright.sync_api import Page, expect
 
 from percussim.solver.presets import preset_json
@@ -194,3 +195,72 @@ def test_a_comparison_overlays_two_jobs_and_highlights_what_differs(page, stack)
     # Each column's head opens its job.
     page.click("table.compare th.compare-head button:has-text('fig9-fast')")
     page.wait_for_url(f"**/#job={fast}")
+
+
+def test_a_hammer_at_work_set_in_the_form_runs_and_draws_its_cycle(page, stack):
+    """The form's work cycle section writes the drive and its cycles (in place of blows), in SI
+    from the units shown; the job shows the cycle's card and its charts: the drive's pressures
+    within the gas law's bounds, the striker's velocity, and each blow's impact velocity, energy
+    and stroke as the summary gives them."""
+    case_in_page(page, "fig3")
+    page.click("details[data-group=blows] summary")
+    page.fill("#f-blows-count", "3")
+    page.click("details[data-group=drive] summary")
+    page.select_option("#f-drive-kind", "hydraulic")
+    case = json.loads(page.input_value("#case-json"))
+    assert case["drive"] == {"kind": "hydraulic"} and case["cycles"] == {"count": 10} and "blows" not in case
+    expect(page.locator("#f-blows-count")).to_be_hidden()
+    page.fill("#f-cycles-count", "4")
+    for field, unit, value in (
+        ("drive-supply_pressure", "MPa", "15"),
+        ("drive-front_area", "cm²", "10"),
+        ("drive-rear_area", "cm²", "30"),
+        ("drive-stroke", "mm", "50"),
+    ):
+        page.select_option(f"#f-{field} + select", unit)
+        page.fill(f"#f-{field}", value)
+    expect(page.locator("#f-drive-accumulator-volume")).to_be_hidden()
+    page.check("#f-drive-accumulator")
+    page.select_option("#f-drive-accumulator-volume + select", "L")
+    page.fill("#f-drive-accumulator-volume", "0.5")
+    page.select_option("#f-drive-accumulator-precharge + select", "MPa")
+    page.fill("#f-drive-accumulator-precharge", "8")
+    page.select_option("#f-drive-control-kind", "adaptive")
+    assert json.loads(page.input_value("#case-json"))["drive"]["control"] == {"kind": "adaptive"}
+    page.select_option("#f-drive-control-kind", "none")
+    page.select_option("#f-numerics-accuracy", "tolerance")  # cycles are solved under a tolerance
+    case = json.loads(page.input_value("#case-json"))
+    assert case["cycles"] == {"count": 4}
+    assert case["drive"] == {
+        "kind": "hydraulic",
+        "supply_pressure": 15e6,
+        "front_area": 0.001,
+        "rear_area": 0.003,
+        "stroke": 0.05,
+        "accumulator": {"volume": 5e-4, "precharge": 8e6},
+    }
+    job_id = run(stack, case)
+    summary = stack.client.get(f"/v1/jobs/{job_id}/summary").json()
+    cycle = summary["cycle"]
+    open_job(page, job_id)
+    frequency = page.locator("table.cycle tr[data-quantity='cycle.frequency'] td.value")
+    assert float(frequency.text_content()) == pytest.approx(cycle["frequency"], rel=1e-3)
+    for chart in ("pressures", "striker_velocity", "cycles"):
+        drawn(page, chart)
+
+    def traces(chart: str) -> list[dict]:
+        return page.evaluate(
+            f"() => document.querySelector('[data-chart={chart}] .plot-area').data.map((t) => ({{name: t.name, y: t.y}}))"
+        )
+
+    pressures = {trace["name"]: trace["y"] for trace in traces("pressures")}
+    supply = pressures["supply p_s"]
+    # the supply between the gas at the precharge and the relief at the supply pressure (MPa)
+    assert 8.0 <= min(supply) and max(supply) <= 15.0 * (1 + 1e-9) and max(pressures["rear chamber p_r"]) > 8.0
+    (velocity,) = traces("striker_velocity")
+    assert max(velocity["y"]) == pytest.approx(max(cycle["impact_velocity"]), rel=2e-2)
+    bars = {trace["name"]: trace["y"] for trace in traces("cycles")}
+    assert bars["impact velocity"] == pytest.approx(cycle["impact_velocity"], rel=1e-12)
+    assert bars["stroke"] == pytest.approx([1e3 * s for s in cycle["stroke"]], rel=1e-12)  # mm
+    mass = 20.0
+    assert bars["impact energy"] == pytest.approx([0.5 * mass * v * v for v in cycle["impact_velocity"]], rel=1e-9)

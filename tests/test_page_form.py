@@ -320,9 +320,9 @@ def option_values(page: Page, select: str) -> list[str]:
 
 
 # The case's fields edited in the case JSON only, without an input in the form: the shaft's
-# segments, until the form has a table of them, a history driving the struck end (a record read
-# from a file, not typed), and a hammer's drive and cycles, until the form has a section of them.
-JSON_ONLY = {"shaft", "struck_end", "drive", "cycles"}
+# segments, until the form has a table of them, and a history driving the struck end (a record
+# read from a file, not typed).
+JSON_ONLY = {"shaft", "struck_end"}
 
 
 def test_the_forms_fields_are_the_case_schemas(page, stack):

@@ -109,3 +109,17 @@ def test_a_bearing_graph_reads_smiths_set_and_the_refusal_off_its_rows():
             assert row["blow_count"] == pytest.approx(1.0 / expected, rel=5e-3)
         else:
             assert row["set"] <= 1e-12 and row["blow_count"] is None, share
+
+
+def test_a_driven_end_draws_the_plots_and_series_it_can_without_a_striker(tmp_path):
+    """No striker: the displacements are the tool's ends' alone, as a plot and as the page's series."""
+    from percussim.solver import plots, series
+    from percussim.solver.io import write_result
+
+    path = write_result(simulate(parse_case(CF.rectangular_force_case())), tmp_path / "driven.h5")
+    drawn = [name for name, why in plots.problems(path).items() if why is None]
+    assert {"force", "displacements", "energy", "force_penetration"} <= set(drawn)
+    for name in drawn:
+        assert plots.render(path, name, "png").startswith(b"\x89PNG")
+    labels = [curve["label"] for curve in series.series(path, "displacements")["series"]]
+    assert labels == ["struck end of the tool", "working end of the tool"]

@@ -429,16 +429,18 @@ const BLOW_BARS = [
   ["set", "set", "length"],
 ];
 
-function buildBlows(blows) {
-  const number = blows.map((_, i) => i + 1);
-  const traces = BLOW_BARS.map(([key, label, quantity], k) => ({
-    type: "bar", name: label, x: number, y: scaled(blows.map((b) => b[key]), shownUnit(quantity)),
+// Panels of bars side by side, one a [key, label, quantity] of `columns`, against the blow:
+// `rows[i][key]` is blow i+1's.
+function buildBars(rows, columns) {
+  const number = rows.map((_, i) => i + 1);
+  const traces = columns.map(([key, label, quantity], k) => ({
+    type: "bar", name: label, x: number, y: scaled(rows.map((b) => b[key]), shownUnit(quantity)),
     xaxis: `x${k ? k + 1 : ""}`, yaxis: `y${k ? k + 1 : ""}`, marker: { color: PALETTE[k] },
     hovertemplate: `${label} %{y:.4g} ${shownUnit(quantity)}, blow %{x}<extra></extra>`,
   }));
-  const layout = { showlegend: false, grid: { rows: 1, columns: 3, pattern: "independent", xgap: 0.28 },
+  const layout = { showlegend: false, grid: { rows: 1, columns: columns.length, pattern: "independent", xgap: 0.28 },
                    margin: { l: 44, r: 8, t: 24, b: 40 }, annotations: [] };
-  BLOW_BARS.forEach(([, label, quantity], k) => {
+  columns.forEach(([, label, quantity], k) => {
     const n = k ? k + 1 : "";
     layout[`xaxis${n}`] = { title: { text: "blow" }, dtick: 1 };
     layout[`yaxis${n}`] = { title: { text: shownUnit(quantity) } };
@@ -446,6 +448,23 @@ function buildBlows(blows) {
                               showarrow: false, text: label, font: { size: 11 } });
   });
   return { traces, layout };
+}
+
+const buildBlows = (blows) => buildBars(blows, BLOW_BARS);
+
+// A hammer at work's blows (`summary.cycle`): the impact velocity, energy and stroke of each.
+const CYCLE_BARS = [
+  ["impact_velocity", "impact velocity", "speed"],
+  ["impact_energy", "impact energy", "energy"],
+  ["stroke", "stroke", "length"],
+];
+
+// Each blow's row of CYCLE_BARS: its impact energy ½·m·v², the striker's mass m from the energy
+// it brought (`energy.initial`, Σ ½·m·v² over the impacts).
+function cycleRows(summary) {
+  const { impact_velocity: velocity, stroke } = summary.cycle;
+  const mass = (2 * summary.energy.initial) / velocity.reduce((sum, v) => sum + v * v, 0);
+  return velocity.map((v, i) => ({ impact_velocity: v, impact_energy: 0.5 * mass * v * v, stroke: stroke[i] }));
 }
 
 function blowsCsv(blows, stem) {
@@ -469,6 +488,8 @@ const JOB_CHARTS = [
   ["stress_along", "fields", "Stress along the tool"],
   ["spacetime", "fields"], // the service's title for the fields: σ over x and t
   ["force_penetration", "force_penetration"],
+  ["pressures", "pressures"], // a hammer at work's
+  ["striker_velocity", "striker_velocity"],
   ["energy", "energy", null, { size: "tall", wide: true }], // its many terms' legend needs the width
 ];
 
@@ -492,6 +513,7 @@ export async function showCharts(view, summary) {
   }
   const blows = summary.blows && summary.blows.length ? summary.blows : null;
   if (blows) figures.blows = chartFigure("blows", "Blow by blow", { size: "short", wide: true });
+  if (summary.cycle) figures.cycles = chartFigure("cycles", "Cycle by cycle", { size: "short", wide: true });
   box.replaceChildren(card("Plots", h("div", { class: "chart-grid" }, Object.values(figures))));
 
   const jobs = [];
@@ -507,10 +529,18 @@ export async function showCharts(view, summary) {
   line("probes", buildLines);
   line("energy", buildEnergy);
   line("force_penetration", (data) => buildForcePenetration(data, summary));
+  line("pressures", buildLines);
+  line("striker_velocity", buildLines);
   if (series.fields && series.fields.available) jobs.push(drawFields(view, figures, series.fields, summary));
   if (blows) {
     const stem = fileStem(summary.name, view.id, "blows");
     jobs.push(drawChart(figures.blows, { data: blows, build: buildBlows, file: stem, csv: async () => blowsCsv(blows, stem) }));
+  }
+  if (summary.cycle) {
+    const rows = cycleRows(summary);
+    const stem = fileStem(summary.name, view.id, "cycles");
+    jobs.push(drawChart(figures.cycles, { data: rows, build: (data) => buildBars(data, CYCLE_BARS), file: stem,
+                                          csv: async () => blowsCsv(rows, stem) }));
   }
   await Promise.all(jobs);
 }

@@ -259,6 +259,58 @@ const MODES = {
       place(c, "force", stash[`force:${to}`] ?? { kind: to, ...pick(obj(c.force), kindKeys("force", to)) }, "");
     },
   },
+  // A hammer at work: the drive and its cycles come and go together (the one needs the other),
+  // and its cycles take the place of blows (they exclude each other).
+  "drive.kind": {
+    id: "drive.kind", label: "Drive", initial: "none",
+    options: () => [["none", "none: one impact at the striker's velocity"], ...schema.get("drive.kind").choices],
+    hint: "cycle after cycle: a return stroke, a work stroke and a blow",
+    read: (c) => (c.drive === undefined ? "none" : obj(c.drive).kind ?? null),
+    write: (c, to) => {
+      if (to === "none") {
+        Object.assign(stash, { drive: c.drive, cycles: c.cycles });
+        delete c.drive;
+        delete c.cycles;
+        return;
+      }
+      if (c.blows !== undefined) stash.blows = c.blows;
+      delete c.blows;
+      place(c, "drive", restore("drive", { kind: to }), "");
+      place(c, "cycles", restore("cycles", { count: 10 }), "");
+    },
+  },
+  "drive:accumulator": {
+    id: "drive:accumulator", label: "Gas accumulator on the supply", checkbox: true, initial: false,
+    hint: "without it the supply holds its pressure",
+    read: (c) => (c.drive === undefined ? null : obj(c.drive).accumulator !== undefined),
+    write: (c, to) => {
+      const drive = ensure(c, "drive");
+      if (to) {
+        place(drive, "accumulator", restore("accumulator", {}), "drive");
+        if (stash.flow !== undefined) place(drive, "flow", stash.flow, "drive");
+      } else {
+        // a pump's flow needs the gas to buffer it
+        Object.assign(stash, { accumulator: drive.accumulator, flow: drive.flow });
+        delete drive.accumulator;
+        delete drive.flow;
+      }
+    },
+  },
+  "drive.control.kind": {
+    id: "drive.control.kind", label: "Stroke control", initial: "none",
+    options: () => [["none", "none: the stroke as given"], ...schema.get("drive.control.kind").choices],
+    hint: "adaptive: the next stroke moves toward the one that sets the tool by the target",
+    read: (c) => (c.drive === undefined ? null : obj(obj(c.drive).control).kind ?? "none"),
+    write: (c, to) => {
+      const drive = ensure(c, "drive");
+      if (to === "none") {
+        stash.control = drive.control;
+        delete drive.control;
+        return;
+      }
+      place(drive, "control", restore("control", { kind: to }), "drive");
+    },
+  },
   "numerics:accuracy": {
     id: "numerics:accuracy", label: "Accuracy", initial: "tolerance",
     options: [["tolerance", "a tolerance: the solver picks the grid"], ["grid", "a fixed grid"]],
@@ -283,6 +335,10 @@ const MODES = {
 const lumped = () => !rodStriker();
 const grid = () => mode("numerics:accuracy") === "grid";
 const anvil = () => mode("anvil") === true;
+
+const driven = () => mode("drive.kind") !== "none";
+const accumulator = () => driven() && mode("drive:accumulator") === true;
+const adaptive = () => driven() && mode("drive.control.kind") !== "none";
 
 const contactFields = (prefix, more = {}) => [
   { path: `${prefix}.stiffness`, hint: "G(δ) = c₁·δ^α while pressed", ...more },
@@ -341,7 +397,27 @@ const GROUPS = [
     { path: "force.duration" },
   ] },
   { id: "blows", title: "Blows", open: false, items: [
-    { path: "blows.count", hint: "each lasts the duration T; empty: one blow" },
+    { path: "blows.count", when: () => !driven(), hint: "each lasts the duration T; empty: one blow" },
+  ] },
+  { id: "drive", title: "Work cycle", open: false, items: [
+    { mode: "drive.kind" },
+    { path: "cycles.count", when: driven, hint: "the first impact at the striker's velocity, the drive's after it" },
+    { path: "drive.supply_pressure", when: driven },
+    { path: "drive.return_pressure", when: driven },
+    { path: "drive.front_area", when: driven, hint: "always at the supply: it returns the striker" },
+    { path: "drive.rear_area", when: driven, hint: "switched by the valve; larger than the front" },
+    { path: "drive.stroke", when: driven, hint: "back from the impact point, where the valve turns" },
+    { path: "drive.valve_time", when: driven },
+    { path: "drive.friction", when: driven },
+    { mode: "drive:accumulator", when: driven },
+    { path: "drive.accumulator.volume", when: accumulator },
+    { path: "drive.accumulator.precharge", when: accumulator, hint: "below the supply pressure" },
+    { path: "drive.accumulator.polytropic_exponent", when: accumulator, hint: "1: isothermal; 1.4: adiabatic" },
+    { path: "drive.flow", when: accumulator, hint: "empty: the gas alone feeds the supply" },
+    { mode: "drive.control.kind", when: driven },
+    { path: "drive.control.target_set", when: adaptive },
+    { path: "drive.control.min_stroke", when: adaptive },
+    { path: "drive.control.max_stroke", when: adaptive },
   ] },
   { id: "gravity", title: "Gravity", open: false, items: [
     { path: "gravity.acceleration", hint: "9.81 for a vertical pile; empty: no weight" },
@@ -374,7 +450,8 @@ const ALIASES = {
   "striker.area": ["striker:shape", "striker:model"], "striker.profile": ["striker:shape", "striker:model"],
   "tool.area": ["tool:shape"], "tool.profile": ["tool:shape"],
   medium: ["medium.kind"], force: ["force.kind"], "anvil.contact": ["anvil"], blows: ["blows.count"],
-  gravity: ["gravity.acceleration"],
+  gravity: ["gravity.acceleration"], drive: ["drive.kind"], cycles: ["cycles.count", "drive.kind"],
+  "drive.accumulator": ["drive:accumulator"], "drive.control": ["drive.control.kind"],
 };
 
 // ------------------------------------------------------------------------------------------
@@ -797,6 +874,7 @@ const DIGESTS = {
   anvil: () => (isObject(current.anvil) ? (positive(current.anvil.mass) ? `${short(current.anvil.mass)} kg` : "mass ?") : "none"),
   force: () => (current.force === undefined ? "none" : String(obj(current.force).kind ?? "")),
   blows: () => (obj(current.blows).count !== undefined ? String(current.blows.count) : "one"),
+  drive: () => (current.drive === undefined ? "none" : `${obj(current.cycles).count ?? "?"} cycles`),
   outputs: () => {
     const probes = obj(current.outputs).probes;
     const n = Array.isArray(probes) ? probes.length : 0;

@@ -1,7 +1,7 @@
 // A run's pulse summary as cards, in the views' units: the job view's, an optimum's; PULSE, its
 // headline quantities, also heads the comparison's table.
 import { card, fmt, h, table } from "./dom.js";
-import { shown, shownUnit } from "./units.js";
+import { inUnit, shown, shownUnit } from "./units.js";
 
 const inShown = (value, quantity) => fmt(shown(value, quantity));
 const headed = (label, quantity) => `${label} (${shownUnit(quantity)})`;
@@ -130,6 +130,33 @@ function blowsCard(blows) {
         BLOW_COLUMNS.map(([key, , quantity]) => h("td", { class: "num" }, inShown(b[key], quantity)))))));
 }
 
+// A hammer at work's cycle (`cycle`): [key, label, quantity, unit it is shown in (else the
+// quantity's)], its error estimate's key being `cycle.<key>`.
+const CYCLE_ROWS = [
+  ["impact_energy", "Impact energy", "energy"],
+  ["frequency", "Blows per second", "frequency", "Hz"],
+  ["impact_power", "Impact power", "power"],
+  ["hydraulic_power", "Hydraulic power", "power"],
+  ["efficiency", "Efficiency, hydraulic to the medium", "ratio"],
+  ["penetration_rate", "Penetration rate", "speed"],
+];
+
+function cycleCard(s) {
+  const c = s.cycle;
+  const last = c.impact_velocity.length - 1;
+  const value = (v, quantity, unit) => fmt(unit ? inUnit(v, unit) : shown(v, quantity));
+  return card(`Work cycle (${c.impact_velocity.length} blows)`,
+    table("cycle", ["", "value", "unit", "error (est.)"], [
+      pulseRow(s, "Last impact velocity", "cycle.impact_velocity", fmt(c.impact_velocity[last]), "m/s"),
+      CYCLE_ROWS.map(([key, label, quantity, unit]) =>
+        pulseRow(s, label, `cycle.${key}`, value(c[key], quantity, unit), unit ?? shownUnit(quantity))),
+      pulseRow(s, "Last stroke", "cycle.stroke", inShown(c.stroke[last], "length"), shownUnit("length")),
+    ]),
+    h("p", { class: "muted small" }, c.periodic
+      ? "The last cycles repeat: the figures are those of a hammer at work."
+      : "The cycles had not settled into a repeating one: the figures are the last cycles', still changing."));
+}
+
 function modelCard(s) {
   const n = s.numerics || {};
   const pair = (label, value) => h("tr", {}, h("th", {}, label), h("td", { class: "num" }, value));
@@ -160,6 +187,7 @@ export function summaryCards(s) {
   return [
     warningsBanner(s.warnings || []),
     pulseCard(s),
+    s.cycle ? cycleCard(s) : null,
     s.blows && s.blows.length ? blowsCard(s.blows) : null, // null: a case without blows
     h("div", { class: "pair" }, energyCard(s.energy), modelCard(s)),
   ].filter(Boolean);
