@@ -74,12 +74,15 @@ class HammerAtWork:
         self.impact_velocities = [case.impact_velocity]
         self.strokes = [self.drive.stroke]
         self.flights: list[Flight] = []
-        self.blow_start = 0.0  # the striker's displacement at the present blow's impact
+        self.impact_at = 0.0  # the striker's displacement at the present blow's impact
+        self.pushed: list[float] = []  # the supply's work on the front area through each blow
 
     def between(self, start: float, velocity: float, impact_point: float, last_set: float | None) -> Flight:
         """The flight after a blow that left the striker at `start` moving at `velocity` and set the
         tool by `last_set` (None: a medium that does not yield), to its next impact at
         `impact_point`."""
+        # the front, on the supply, takes back what the striker moved toward the tool in the blow
+        self.pushed.append(-self.drive.front_area * self.drive.supply_pressure * (start - self.impact_at))
         if self.control is not None and last_set is not None:
             self.strokes.append(self.next_stroke(last_set))
         else:
@@ -90,6 +93,7 @@ class HammerAtWork:
         self.gas, self.valve = flight.gas_volume, flight.valve
         self.flights.append(flight)
         self.impact_velocities.append(flight.impact_velocity)
+        self.impact_at = flight.displacement[-1]
         return flight
 
     def next_stroke(self, last_set: float) -> float:
@@ -107,11 +111,13 @@ class HammerAtWork:
         velocities = [float(v) for v in self.impact_velocities[: len(blows)]]
         energies = [0.5 * mass * v * v for v in velocities]
         periods = [self.blow_duration + f.duration for f in self.flights]
+        # a cycle's hydraulic energy: the pump's, or what the supply gave the chambers in its blow
+        # and its flight
         hydraulic = [
             f.pumped + self.drive.supply_pressure * self.drive.flow * self.blow_duration
             if self.drive.flow
-            else f.supplied
-            for f in self.flights
+            else pushed + f.supplied
+            for f, pushed in zip(self.flights, self.pushed)
         ]
         if not count:
             return {

@@ -236,6 +236,20 @@ def test_a_cycle_at_the_default_accuracy_estimates_its_own_quantities():
     assert summary["cycle"]["hydraulic_power"] > summary["cycle"]["impact_power"] * 0.5
 
 
+def test_a_cycles_hydraulic_energy_is_the_supplys_work_on_the_volumes_it_fills():
+    """Ideal hydraulics: from one impact to the next the rear fills on supply from the switch point,
+    `stroke` back from the impact point, to the impact (A_r·s), and the front, always on supply,
+    gives back what the tool advanced (A_f·Δ, Δ the blow's set): p_s·(A_r·s − A_f·Δ) a cycle,
+    the blow's share (the striker pushed back while in contact) included, whatever it rebounds."""
+    summary = simulate(parse_case(hammer(cycles={"count": 8}))).summary
+    cycle = summary["cycle"]
+    sets = [blow["set"] for blow in summary["blows"]][:-1]  # each cycle's: its blow, then its flight
+    last = math.ceil(0.5 * len(cycle["cycle_time"]))
+    expected = np.mean([15e6 * (3e-4 * 0.05 - 1e-4 * d) for d in sets[-last:]])
+    assert cycle["hydraulic_power"] / cycle["frequency"] == pytest.approx(expected, rel=1e-3)
+    assert 0.0 < cycle["efficiency"] <= 1.0
+
+
 def test_the_cycle_is_plotted_from_its_result(tmp_path):
     from percussim.solver.plots import figure, problem, problems
 
