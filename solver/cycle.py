@@ -54,9 +54,10 @@ def hydraulics_of(case: Case) -> Hydraulics:
 
 def blow_force(case: Case) -> K.ForceLaw:
     """The drive's push on the striker through a blow (R, constant): the rear on return, the front
-    on the supply's starting pressure."""
+    on the supply's starting pressure. None on an elastic striker, whose equations take no
+    external force (as `force` is refused on one): its blows are short against its flights."""
     d = case.drive
-    push = d.rear_area * d.return_pressure - d.front_area * d.supply_pressure
+    push = 0.0 if case.elastic_striker else d.rear_area * d.return_pressure - d.front_area * d.supply_pressure
     return K.ForceLaw(kind=FORCE_PULSE, amplitude=push, omega=0.0, start=0.0, duration=math.inf)
 
 
@@ -74,6 +75,7 @@ class HammerAtWork:
         self.impact_velocities = [case.impact_velocity]
         self.strokes = [self.drive.stroke]
         self.flights: list[Flight] = []
+        self.pushing = not case.elastic_striker  # whether the drive pushes it through its blows (`blow_force`)
         self.impact_at = 0.0  # the striker's displacement at the present blow's impact
         self.pushed: list[float] = []  # the supply's work on the front area through each blow
 
@@ -82,7 +84,8 @@ class HammerAtWork:
         tool by `last_set` (None: a medium that does not yield), to its next impact at
         `impact_point`."""
         # the front, on the supply, takes back what the striker moved toward the tool in the blow
-        self.pushed.append(-self.drive.front_area * self.drive.supply_pressure * (start - self.impact_at))
+        moved = start - self.impact_at if self.pushing else 0.0
+        self.pushed.append(-self.drive.front_area * self.drive.supply_pressure * moved)
         if self.control is not None and last_set is not None:
             self.strokes.append(self.next_stroke(last_set))
         else:

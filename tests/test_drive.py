@@ -250,6 +250,33 @@ def test_a_cycles_hydraulic_energy_is_the_supplys_work_on_the_volumes_it_fills()
     assert 0.0 < cycle["efficiency"] <= 1.0
 
 
+def test_an_elastic_pistons_cycles_close_their_energy_audit():
+    """An elastic striker takes no external force (its equations have none): the drive pushes it
+    only in its flights, and no work of a push through its blows enters the audit, which closes."""
+    piston = {"velocity": 8.0, "length": 0.1282, "youngs_modulus": 2.1e11, "density": 7800.0, "area": 2e-3}
+    summary = simulate(parse_case(hammer(striker=piston))).summary
+    energy = summary["energy"]
+    assert energy["external_work"] == 0.0
+    assert abs(energy["numerical"]) < 5e-3 * energy["initial"]  # 5% (its external work) before
+
+
+def test_a_matched_piston_stops_dead_and_the_drive_strikes_from_rest_every_cycle():
+    """A piston of the rod's impedance on a stiff face stops dead in each blow (its wave all in
+    the rod), so each flight starts at rest at the impact point and strikes at √(2·p_s·A_r·s/m),
+    whatever the blow before was launched at: its mean velocity counts from its own launch (it
+    counted from the first blow's, and the third struck at 30.4 m/s, not 21.9)."""
+    piston = {"velocity": 8.0, "length": 0.12, "youngs_modulus": 2.1e11, "density": 7800.0, "area": 1e-3}
+    case = hammer(
+        striker=piston,
+        contact={"stiffness": 1e12, "exponent": 0.0},
+        numerics={"duration": 1.5e-4, "scheme": "explicit", "cells": 200},  # before the rod's end answers
+        cycles={"count": 3},
+    )
+    velocities = simulate(parse_case(case)).summary["cycle"]["impact_velocity"]
+    mass = 7800.0 * 1e-3 * 0.12
+    assert velocities[1:] == pytest.approx([math.sqrt(2 * 15e6 * 3e-4 * 0.05 / mass)] * 2, rel=1e-5)
+
+
 def test_the_cycle_is_plotted_from_its_result(tmp_path):
     from percussim.solver.plots import figure, problem, problems
 

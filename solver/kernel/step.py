@@ -250,6 +250,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau, velocit
             tau,
         )
     launch_striker(state, row, row_before, struck, launched_at(contact, velocity), striker, tau)
+    ends[S_LAUNCH_VELOCITY] = velocity  # an elastic striker's mean velocity counts from this blow's
     ends[S_BLOW_START] = t
     launched = 0.5 * contact.striker_mass * velocity * velocity
     # an elastic striker's share beyond its last node is counted with its strain (the audit's form)
