@@ -23,9 +23,10 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import math
-import re
 import time
 from pathlib import Path
+
+from marked import write_marked
 
 from percussim.solver.accuracy import estimated_values
 from percussim.solver.case import CaseError, parse_case
@@ -159,9 +160,7 @@ def main() -> None:
     ]
     (ROOT / "docs" / "accuracy_vs_cost.md").write_text("\n".join(text))
     plot(results, ROOT / "docs" / "accuracy_vs_cost.png")
-    readme = ROOT / "README.md"
-    marked = re.compile(r"(<!-- accuracy_vs_cost: .*? -->\n).*?(<!-- /accuracy_vs_cost -->)", re.S)
-    readme.write_text(marked.sub(lambda m: m.group(1) + found + "\n" + m.group(2), readme.read_text()))
+    write_marked(ROOT / "README.md", "accuracy_vs_cost", found)
 
 
 if __name__ == "__main__":

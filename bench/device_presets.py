@@ -18,9 +18,10 @@ graph's plot in docs/images/pile_bearing_graph.png.
 from __future__ import annotations
 
 import argparse
-import re
 import time
 from pathlib import Path
+
+from marked import write_marked
 
 from percussim.solver.pile_studies import bearing_graph
 from percussim.solver.presets import load_preset, preset_json
@@ -200,12 +201,7 @@ def main() -> None:
     text = report(args.repeats, FIGURE if args.write else None)
     print(text)
     if args.write:
-        readme = ROOT / "README.md"
-        marked = re.compile(r"(<!-- device presets: .*? -->\n).*?(<!-- /device presets -->)", re.S)
-        written, count = marked.subn(lambda m: m.group(1) + text + "\n" + m.group(2), readme.read_text())
-        if count != 1:
-            raise SystemExit("README.md has no device presets markers")
-        readme.write_text(written)
+        write_marked(ROOT / "README.md", "device presets", text)
 
 
 if __name__ == "__main__":

@@ -29,11 +29,12 @@ import hashlib
 import inspect
 import json
 import math
-import re
 import statistics
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
+
+from marked import write_marked
 
 from percussim.solver import characteristics, matrix
 from percussim.solver.accuracy import estimated_values
@@ -389,12 +390,8 @@ def main() -> None:
     if args.write:
         (ROOT / "docs" / "matrix.md").write_text(table(results, stats, preset_rows, args.seed))
         quoted = overview(stats, preset_rows, len(results), args.seed)
-        marked = re.compile(r"(<!-- matrix: .*? -->\n).*?(<!-- /matrix -->)", re.S)
-        for path, text in (
-            (ROOT / "README.md", quoted.replace("(matrix.md)", "(docs/matrix.md)")),
-            (ROOT / "docs" / "numerics.md", quoted),
-        ):
-            path.write_text(marked.sub(lambda m: m.group(1) + text + "\n" + m.group(2), path.read_text()))
+        write_marked(ROOT / "README.md", "matrix", quoted.replace("(matrix.md)", "(docs/matrix.md)"))
+        write_marked(ROOT / "docs" / "numerics.md", "matrix", quoted)
 
 
 if __name__ == "__main__":

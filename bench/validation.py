@@ -22,6 +22,9 @@
 7. Piles (`bench/validation_piles.py`): the shaft's rigid-body mode, the static compression under
    gravity, a cushion, a Smith toe's set read through a bearing graph, the audit under gravity,
    and a driven pile against Smith's lumped-mass model (an independent discretisation).
+8. A hammer at work (`bench/validation_cycle.py`): the drive between blows against the closed
+   forms of ideal hydraulics, its work and gas law, the supply's work a cycle, a matched piston
+   struck from rest, the adaptive stroke, and the rock drill's cycle preset.
 
 With --write, the figures go to docs/validation/ beside the markdown.
 """
@@ -49,7 +52,8 @@ from percussim.solver.simulate import simulate
 from percussim.testing import closed_forms as CF
 from percussim.testing.reference import LinearImpact, observed_order
 
-sys.path.insert(0, str(Path(__file__).resolve().parent))  # the piles' sections, beside this script
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the piles' and the cycle's sections, beside this script
+from validation_cycle import cycle_sections  # noqa: E402
 from validation_piles import pile_sections  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -1113,6 +1117,7 @@ def report(figures: dict[str, Figure]) -> str:
         ("Blow after blow", blows_report(figures)),
         ("The anvil: two-body impact and the pulse it prolongs", anvil_report(figures)),
         *pile_sections(),
+        *cycle_sections(),
     ]
     out = [
         "# Validation",
@@ -1124,7 +1129,7 @@ def report(figures: dict[str, Figure]) -> str:
         "the paper, with the cases and closed forms of `percussim/testing/closed_forms.py`: "
         "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`; piles: "
         "`tests/test_shaft.py`, `tests/test_gravity.py`, `tests/test_cushion.py`, `tests/test_struck_end.py`, "
-        "`tests/test_smith_model.py`. An energy "
+        "`tests/test_smith_model.py`; a hammer at work: `tests/test_drive.py`. An energy "
         "residual is `energy.numerical` over the energy supplied.",
         "",
     ]

@@ -11,25 +11,13 @@ import numpy as np
 import pytest
 
 from percussim.solver.case import CaseError, parse_case
-from percussim.solver.drive import Hydraulics, Valve, fly
+from percussim.solver.drive import Valve, fly
 from percussim.solver.simulate import simulate
-from percussim.testing.closed_forms import hammer_at_work
+from percussim.testing import closed_forms as CF
+from percussim.testing.closed_forms import blow_ends, hammer_at_work, ideal_flight, supply_work_per_cycle
 
-IDEAL = Hydraulics(mass=2.0, front_area=1e-4, rear_area=3e-4, supply_pressure=15e6, return_pressure=0.0, stroke=0.05)
+IDEAL = CF.IDEAL_DRIVE
 RETURNING = Valve(target=0.0, since=0.0, start=0.0)
-
-
-def ideal_flight(drive: Hydraulics, start: float, velocity: float, impact_point: float) -> tuple[float, float, float]:
-    """(t_back, t_in, v_impact): constant pressures, an instant valve, no friction. Back from
-    `start` at `velocity` (< 0) under (A_f·p_s − A_r·p_r)/m until `stroke` from the impact point,
-    then in under (A_r − A_f)·p_s/m: v_i² = v² + 2·(F_b·D + F_w·s)/m."""
-    back = (drive.front_area * drive.supply_pressure - drive.rear_area * drive.return_pressure) / drive.mass
-    work = (drive.rear_area - drive.front_area) * drive.supply_pressure / drive.mass
-    distance = start - (impact_point - drive.stroke)
-    t_back = (velocity + math.sqrt(velocity**2 + 2 * back * distance)) / back
-    v_switch = -math.sqrt(velocity**2 + 2 * back * distance)
-    t_in = (-v_switch + math.sqrt(v_switch**2 + 2 * work * drive.stroke)) / work
-    return t_back, t_in, math.sqrt(v_switch**2 + 2 * work * drive.stroke)
 
 
 @pytest.mark.parametrize("rebound", [0.0, -3.0, -8.0])
@@ -47,16 +35,7 @@ def test_ideal_hydraulics_strike_at_the_closed_forms_velocity_after_its_times(re
 
 def test_the_flights_work_is_its_kinetic_energys_change():
     """Supply, return line, friction and weight: their work sums to ½m(v_i² − v_r²)."""
-    drive = replace(
-        IDEAL,
-        return_pressure=5e5,
-        valve_time=2e-3,
-        friction=40.0,
-        flow=1e-3,
-        accumulator_volume=5e-4,
-        precharge=8e6,
-        weight=2.0 * 9.81,
-    )
+    drive = CF.LOSSY_DRIVE
     gas = drive.gas_volume(drive.supply_pressure)
     flight = fly(drive, 1e-3, -4.0, 0.0, gas, Valve(target=0.0, since=0.0, start=1.0))
     change = 0.5 * drive.mass * (flight.impact_velocity**2 - 4.0**2)
@@ -109,14 +88,7 @@ def test_cycles_strike_at_what_the_ideal_drive_gives_after_each_blow():
     cycle, h = result.summary["cycle"], result.history
     grid = result.summary["runs"][-1]
     duration = grid["steps"] // case.cycles.count * grid["time_step"]  # a blow, in whole steps
-    # each blow's last record, before its flight
-    ends = [
-        np.flatnonzero(h["time"] <= sum(cycle["cycle_time"][:k]) + duration * (1 + 1e-9))[-1]
-        for k in range(len(cycle["cycle_time"]))
-    ]
-    for k, end in enumerate(ends):
-        start, velocity = h["striker/displacement"][end], h["striker/velocity"][end]
-        point = h["tool/struck_end_displacement"][end]
+    for k, (start, velocity, point) in enumerate(blow_ends(result)):
         t_back, t_in, v_impact = ideal_flight(IDEAL, start, velocity, point)
         assert cycle["impact_velocity"][k + 1] == pytest.approx(v_impact, rel=1e-7)
         assert cycle["cycle_time"][k] == pytest.approx(duration + t_back + t_in, rel=1e-7)
@@ -245,7 +217,7 @@ def test_a_cycles_hydraulic_energy_is_the_supplys_work_on_the_volumes_it_fills()
     cycle = summary["cycle"]
     sets = [blow["set"] for blow in summary["blows"]][:-1]  # each cycle's: its blow, then its flight
     last = math.ceil(0.5 * len(cycle["cycle_time"]))
-    expected = np.mean([15e6 * (3e-4 * 0.05 - 1e-4 * d) for d in sets[-last:]])
+    expected = np.mean([supply_work_per_cycle(15e6, 3e-4, 1e-4, 0.05, d) for d in sets[-last:]])
     assert cycle["hydraulic_power"] / cycle["frequency"] == pytest.approx(expected, rel=1e-3)
     assert 0.0 < cycle["efficiency"] <= 1.0
 

@@ -24,9 +24,12 @@ Plain Python, NumPy and SciPy: no test framework, no solver.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import numpy as np
 from scipy.linalg import expm
+
+from percussim.solver.drive import Hydraulics
 
 from .reference import LundbergRock
 
@@ -554,3 +557,58 @@ def hammer_at_work(**changes) -> dict:
         "numerics": {"duration": 0.002, "scheme": "explicit", "cells": 50},
     }
     return {key: value for key, value in (case | changes).items() if value is not None}
+
+
+# The hammer's drive as `solver.drive.fly` takes it: ideal (constant pressures, an instant valve, no
+# friction), and with every loss and store (a return line, a valve's time, friction, a pump and
+# its accumulator, the striker's weight)
+IDEAL_DRIVE = Hydraulics(
+    mass=2.0, front_area=1e-4, rear_area=3e-4, supply_pressure=15e6, return_pressure=0.0, stroke=0.05
+)
+LOSSY_DRIVE = replace(
+    IDEAL_DRIVE,
+    return_pressure=5e5,
+    valve_time=2e-3,
+    friction=40.0,
+    flow=1e-3,
+    accumulator_volume=5e-4,
+    precharge=8e6,
+    weight=2.0 * 9.81,
+)
+
+
+def ideal_flight(drive, start: float, velocity: float, impact_point: float) -> tuple[float, float, float]:
+    """`(t_back, t_in, v_impact)` of a flight under ideal hydraulics (`drive`, a
+    `solver.drive.Hydraulics` with constant pressures, an instant valve, no friction): back from
+    `start` at `velocity` (< 0) under (A_f·p_s − A_r·p_r)/m until `stroke` from the impact point,
+    then in under (A_r − A_f)·p_s/m: v_i² = v² + 2·(F_b·D + F_w·s)/m."""
+    back = (drive.front_area * drive.supply_pressure - drive.rear_area * drive.return_pressure) / drive.mass
+    work = (drive.rear_area - drive.front_area) * drive.supply_pressure / drive.mass
+    distance = start - (impact_point - drive.stroke)
+    t_back = (velocity + math.sqrt(velocity**2 + 2 * back * distance)) / back
+    v_switch = -math.sqrt(velocity**2 + 2 * back * distance)
+    t_in = (-v_switch + math.sqrt(v_switch**2 + 2 * work * drive.stroke)) / work
+    return t_back, t_in, math.sqrt(v_switch**2 + 2 * work * drive.stroke)
+
+
+def blow_ends(result) -> list[tuple[float, float, float]]:
+    """Where each blow of a hammer at work (a `Result` of `cycles`) left the striker and the tool,
+    from its history: `(striker's displacement, its velocity, the struck end's displacement)` at
+    each blow's last record before its flight."""
+    cycle, h, grid = result.summary["cycle"], result.history, result.summary["runs"][-1]
+    duration = grid["steps"] // len(cycle["impact_velocity"]) * grid["time_step"]  # a blow, in whole steps
+    ends = [
+        np.flatnonzero(h["time"] <= sum(cycle["cycle_time"][:k]) + duration * (1 + 1e-9))[-1]
+        for k in range(len(cycle["cycle_time"]))
+    ]
+    return [
+        (h["striker/displacement"][end], h["striker/velocity"][end], h["tool/struck_end_displacement"][end])
+        for end in ends
+    ]
+
+
+def supply_work_per_cycle(supply_pressure: float, rear_area: float, front_area: float, stroke: float, advance: float):
+    """The ideal supply's work over a cycle, `p_s·(A_r·s − A_f·Δ)`: the rear fills on supply from
+    the switch point, `stroke` back from the impact point, to the impact; the front, always on
+    supply, gives back what the tool advanced (Δ, the blow's set)."""
+    return supply_pressure * (rear_area * stroke - front_area * advance)
