@@ -42,6 +42,7 @@ def one(count: int) -> dict:
         "seconds": seconds,
         "grids": [run["cells"] for run in summary["runs"]],
         "worst": summary["error_estimate"]["worst"],
+        "warnings": summary["warnings"],
         "file_mb": size / 1e6,
         "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
     }
@@ -65,6 +66,8 @@ def main() -> None:
             f"{GOAL_SECONDS:g} s for 100), grids {', '.join(map(str, r['grids']))}, estimated error {r['worst']:.1e}, "
             f"peak memory {r['peak_mb']:.0f} MB, result file {r['file_mb']:.1f} MB"
         )
+        for warning in r["warnings"]:
+            print(f"      warning: {warning}")
 
 
 if __name__ == "__main__":
