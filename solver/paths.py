@@ -7,18 +7,23 @@ from typing import Any
 
 
 def set_field(tree: dict, path: str, value: Any) -> None:
-    """Set `path` (dots; list items by their index) in the case JSON `tree`. A path the case does
-    not have is created, so that validation names it as an unknown field."""
-    *parents, leaf = path.split(".")
-    node: Any = tree
-    for key in parents:
-        node = node[int(key)] if isinstance(node, list) else node.setdefault(key, {})
-    if isinstance(node, list):
-        node[int(leaf)] = value
-    elif isinstance(node, dict):
-        node[leaf] = value
+    """Set `path` (dots; list items by their index, `*` for every item: `shaft.*.quake` ties the
+    segments' quakes to one value) in the case JSON `tree`. A path the case does not have is
+    created, so that validation names it as an unknown field."""
+    key, _, rest = path.partition(".")
+    if isinstance(tree, list):
+        for index in range(len(tree)) if key == "*" else [int(key)]:
+            if rest:
+                set_field(tree[index], rest, value)
+            else:
+                tree[index] = value
+    elif isinstance(tree, dict):
+        if rest:
+            set_field(tree.setdefault(key, {}), rest, value)
+        else:
+            tree[key] = value
     else:
-        raise TypeError(f"{path}: {node!r} has no fields")
+        raise TypeError(f"{path}: {tree!r} has no fields")
 
 
 def value_at(tree: Any, path: tuple | str) -> Any:
@@ -31,7 +36,7 @@ def value_at(tree: Any, path: tuple | str) -> Any:
             value = value.get(key)
         elif isinstance(value, list) and value:
             try:
-                value = value[int(key)]
+                value = value[0 if key == "*" else int(key)]  # `*`: every item, tied; the first says it
             except (ValueError, IndexError):
                 return None
         else:
