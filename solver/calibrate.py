@@ -57,6 +57,7 @@ POINTS_PER_PARAMETER = 8
 STARTS = 3  # least-squares starts a round, from the global stage's best points not yet tried
 ROUNDS = 3  # each with a global sample twice as large, until the misfit is the record's noise
 MISFIT_RATIO = 1.25  # a misfit within this × the record's noise: the model reproduces the record
+INPUT_TOO = " and its driving input's"
 MAX_RUNS_PER_START = 60  # model runs a start may use (its Jacobians' included)
 STEP = 1e-4  # finite-difference step on the unit cube
 CONFIDENCE = 0.95
@@ -199,15 +200,19 @@ def calibrate(
     progress: ProgressCallback | None = None,
     cancelled: CancelCheck | None = None,
     limits: Limits = Limits(),
+    input_noise: float = 0.0,
 ) -> dict:
     """Fit `calibration.parameters` so that the case reproduces the record (see the module's
     docstring). `evaluator` runs the batches (default: a pool over `processes`, one a core).
-    Returns the fit as JSON: parameters with standard errors and confidence bounds, correlation,
-    nrmse, evaluations, warnings, the fitted case and the record against the model."""
+    `input_noise` is the misfit the model's own measured input adds, over the record's range (a
+    head driven by a measured velocity: its noise times the impedance): the least misfit is then
+    both noises together. Returns the fit as JSON: parameters with standard errors and confidence
+    bounds, correlation, nrmse, evaluations, warnings, the fitted case and the record against the
+    model."""
     if not isinstance(calibration, Calibration):
         calibration = parse_calibration(calibration)
     with evaluator_for(evaluator, processes) as run:
-        return _calibrate(calibration, run, progress, cancelled, limits)
+        return _calibrate(calibration, run, progress, cancelled, limits, input_noise)
 
 
 def _calibrate(
@@ -216,6 +221,7 @@ def _calibrate(
     progress: ProgressCallback | None,
     cancelled: CancelCheck | None,
     limits: Limits,
+    input_noise: float = 0.0,
 ) -> dict:
     started = time.monotonic()
     case, record = study_case(calibration.case), calibration.record
@@ -231,7 +237,7 @@ def _calibrate(
     check_grid(own_case, problem.cells, problem.duration, limits, field="record.time", remedy=GRID_REMEDY)
 
     n = len(space.paths)
-    noise = record_noise(record)
+    noise = math.hypot(record_noise(record), input_noise)
     sobol = qmc.Sobol(n, scramble=True, seed=20261125)
     points = [own] + list(sobol.random_base2(math.ceil(math.log2(POINTS_PER_PARAMETER * n))))
     costs: list[float] = []
@@ -270,7 +276,8 @@ def _calibrate(
     if fit["nrmse"] > MISFIT_RATIO * noise:
         warnings.append(
             f"the misfit (nrmse {fit['nrmse']:.3g}) is {fit['nrmse'] / max(noise, 1e-300):.3g}× the "
-            f"record's noise ({noise:.3g}, from its sample-to-sample scatter) after {len(solutions)} "
+            f"record's noise ({noise:.3g}, from its sample-to-sample scatter{INPUT_TOO if input_noise else ''}) "
+            f"after {len(solutions)} "
             "starts: the model does not reproduce the record within its noise (a parameter not "
             "fitted, something the model lacks, or an optimum the starts did not find)"
         )

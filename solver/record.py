@@ -277,13 +277,16 @@ class Record(BaseModel):
         return {"history_stride": 1, "probes": [self.x] if self.quantity == "stress" else []}
 
 
+def scatter(values) -> float:
+    """The noise of a finely sampled series, in its units: the scatter of its second differences
+    (robust: a median), which a pulse sampled finely enough hardly has."""
+    second = np.diff(np.asarray(values, float), 2)
+    return 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
+
+
 def record_noise(record: Record) -> float:
-    """The record's noise over its range, from the scatter of its second differences (robust: a
-    median), which a pulse sampled finely enough hardly has: the least misfit a fit can reach."""
-    values = np.asarray(record.values)
-    second = np.diff(values, 2)
-    scatter = 1.4826 * float(np.median(np.abs(second - np.median(second)))) / math.sqrt(6.0)
-    return scatter / float(np.ptp(values))
+    """The record's noise over its range (`scatter`): the least misfit a fit can reach."""
+    return scatter(record.values) / float(np.ptp(record.values))
 
 
 def parse_record(data: dict, field: str = "record") -> Record:

@@ -32,6 +32,7 @@ from .evaluate import Evaluator
 from .grid import make_grid, wave_speed
 from .limits import Limits
 from .pile_record import case_method, proportionality
+from .record import scatter
 from .rest import static_load_test
 from .result import CancelCheck, ProgressCallback
 
@@ -280,6 +281,8 @@ def signal_match(
     warnings = check_record(request, case)
     time, force, velocity = request.record.arrays()
     parameters = request.parameters or default_parameters(case)
+    # the measured velocity drives the model: its noise, times Z, is in the computed force
+    input_noise = impedance(case) * scatter(velocity) / float(np.ptp(force))
     fit = calibrate(
         {
             "case": case.model_dump(mode="json", exclude_none=True),
@@ -296,6 +299,7 @@ def signal_match(
         progress=progress,
         cancelled=cancelled,
         limits=limits,
+        input_noise=input_noise,
     )
     fitted = validated(Case, fit["case"])
     travel = 2.0 * case.tool.length / wave_speed(case.tool)
