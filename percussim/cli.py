@@ -426,6 +426,46 @@ def _calibrate(args: argparse.Namespace) -> int:
     return 0
 
 
+def _match(args: argparse.Namespace) -> int:
+    from .solver.signal_match import read_pile_record, signal_match
+
+    def work() -> dict:
+        source = _case_source(args.case)
+        case = source if isinstance(source, dict) else json.loads(Path(source).read_text())
+        request = {
+            "case": case,
+            "record": read_pile_record(Path(args.record).read_text()).model_dump(),
+            "parameters": dict(args.fit) if args.fit else None,
+        }
+        with _progress_bar(args.progress) as advance:
+            return signal_match(request, processes=args.processes, progress=advance, limits=_limits())
+
+    match = _guarded(args, "signal match", work)
+    if isinstance(match, int):
+        return match
+    _write_study(
+        match,
+        args,
+        "fit",
+        {
+            key: match[key]
+            for key in (
+                "capacity",
+                "resistance_distribution",
+                "match_quality",
+                "case_method",
+                "parameters",
+                "nrmse",
+                "evaluations",
+                "warnings",
+                "grid",
+                "seconds",
+            )
+        },
+    )
+    return 0
+
+
 def _optimize(args: argparse.Namespace) -> int:
     from .solver.case import as_case
     from .solver.optimize import optimize
@@ -672,6 +712,33 @@ def parser() -> argparse.ArgumentParser:
         metavar="FIELD=LOW:HIGH",
         help="a parameter and its bounds (repeat), e.g. contact.stiffness=1e9:1e13",
     )
+    match = commands.add_parser(
+        "match", help="a pile's soil and capacity from the force and velocity measured near its head (signal matching)"
+    )
+    match.add_argument(
+        "case", help="the pile: tool, shaft, a Smith medium and numerics, no striker (the record drives it)"
+    )
+    match.add_argument(
+        "--record",
+        required=True,
+        metavar="RECORD.csv",
+        help="header time,force@X,velocity@X (X: the gauges' station below the head, m), then samples in SI "
+        "units (compression and velocity toward the toe positive)",
+    )
+    match.add_argument(
+        "--fit",
+        type=_bounds,
+        action="append",
+        metavar="FIELD=LOW:HIGH",
+        help="a parameter and its bounds (repeat), e.g. shaft.0.ultimate_resistance=1e5:2e6 (default: each "
+        "shaft segment's and the toe's resistance, one quake and one damping factor for the shaft, and the toe's)",
+    )
+    match.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
+    match.add_argument("--plot", metavar="PLOT.png", help="draw the measured force against the computed one here")
+    match.add_argument("--processes", type=int, help="processes here (default: one a core)")
+    match.add_argument(
+        "--progress", action="store_true", help="show the progress bar on stderr even when it is not a terminal"
+    )
     optimise = commands.add_parser(
         "optimize", help="find the fields' values that maximise or minimise a summary quantity within limits"
     )
@@ -755,6 +822,7 @@ def parser() -> argparse.ArgumentParser:
             "--progress", action="store_true", help="show the progress bar on stderr even when it is not a terminal"
         )
     fit.set_defaults(handler=_calibrate)
+    match.set_defaults(handler=_match, url=None)
     optimise.set_defaults(handler=_optimize)
     bearing.set_defaults(handler=_bearing_graph)
     drive.set_defaults(handler=_drivability)

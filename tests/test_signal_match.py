@@ -5,6 +5,7 @@ field."""
 
 from __future__ import annotations
 
+import json
 import math
 
 import numpy as np
@@ -107,3 +108,21 @@ def test_a_csv_record_reads_as_its_json(record):
     assert read.model_dump() == parse_signal_match({"case": {}, "record": record}).record.model_dump()
     with pytest.raises(CaseError, match="time,force@X,velocity@X"):
         read_pile_record("time,force@0,speed@0\n0,1,2\n")
+
+
+def test_the_command_line_matches_and_refuses(record, tmp_path, capsys):
+    from percussim.cli import main
+
+    rows = "\n".join(f"{t!r},{f!r},{v!r}" for t, f, v in zip(record["time"], record["force"], record["velocity"]))
+    (tmp_path / "record.csv").write_text("time,force@0,velocity@0\n" + rows + "\n")
+    (tmp_path / "pile.json").write_text(json.dumps(guessed()))
+    fits = [arg for path, (low, high) in RESISTANCES.items() for arg in ("--fit", f"{path}={low}:{high}")]
+    common = [str(tmp_path / "pile.json"), "--record", str(tmp_path / "record.csv"), *fits, "--processes", "1"]
+    assert main(["match", *common, "--output", str(tmp_path / "m.json"), "--plot", str(tmp_path / "m.png")]) == 0
+    shown = json.loads(capsys.readouterr().out)
+    assert abs(shown["capacity"]["value"] - 8e5) <= 3 * shown["capacity"]["standard_error"]
+    assert json.loads((tmp_path / "m.json").read_text())["static_load_test"]["load"][-1] > 7e5
+    assert (tmp_path / "m.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    (tmp_path / "pile.json").write_text(json.dumps(guessed() | {"striker": {"mass": 1.0, "velocity": 1.0}}))
+    assert main(["match", *common]) == 2
+    assert "case.striker: the record drives the pile" in capsys.readouterr().err
