@@ -32,6 +32,8 @@ _PUBLIC = {
     "bearing_graph": "percussim.solver.pile_studies",
     "drivability": "percussim.solver.pile_studies",
     "read_record": "percussim.solver.record",
+    "signal_match": "percussim.solver.signal_match",
+    "read_pile_record": "percussim.solver.signal_match",
     "Limits": "percussim.solver.limits",
     "CaseError": "percussim.solver.case",
     "FieldError": "percussim.solver.case",
