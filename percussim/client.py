@@ -355,6 +355,31 @@ class Client:
         study_id = self.submit_calibration(request)["id"]
         return self._answer(study_id, self.calibration, "fit", progress, timeout)
 
+    def submit_signal_match(self, request: dict) -> dict:
+        """Queue a signal match on the workers. `request` is that of a local
+        `percussim.signal_match`: `{"case": the pile (JSON, a file or a preset's name), "record":
+        {"x", "time", "force", "velocity"} or the path of a CSV record (read here), "parameters":
+        {PATH: [low, high]} or none for the default}`. Returns the study's record; raises `Refused`
+        naming each offending field."""
+        record = request["record"]
+        if isinstance(record, (str, os.PathLike)):
+            from percussim.solver.signal_match import read_pile_record
+
+            record = read_pile_record(Path(record).read_text()).model_dump(mode="json")
+        return self._json(
+            "POST", "/v1/signal-matches", json=request | {"case": _case_json(request["case"]), "record": record}
+        )
+
+    def signal_match(self, study_id: str) -> dict:
+        """The signal match's record, with its `match` once it has succeeded (None before)."""
+        return self._json("GET", f"/v1/signal-matches/{quote(study_id, safe='')}")
+
+    def match(self, request: dict, progress: Progress | None = None, timeout: float | None = None) -> dict:
+        """Submit a signal match (see `submit_signal_match`), wait for it (see `wait`) and return
+        the match, as a local `percussim.signal_match` returns it."""
+        study_id = self.submit_signal_match(request)["id"]
+        return self._answer(study_id, self.signal_match, "match", progress, timeout)
+
     def submit_optimization(self, request: dict) -> dict:
         """Queue an optimisation on the workers. `request` is that of a local `percussim.optimize`:
         `{"case", "variables": {PATH: [low, high]}, "objective": {"maximize" or "minimize":

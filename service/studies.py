@@ -1,5 +1,5 @@
-"""`/v1/calibrations`, `/v1/optimizations`, `/v1/bearing-graphs` and `/v1/drivability`: studies of
-many runs, each a job on the workers.
+"""`/v1/calibrations`, `/v1/optimizations`, `/v1/bearing-graphs`, `/v1/drivability` and
+`/v1/signal-matches`: studies of many runs, each a job on the workers.
 
 A study is an ordinary job of its kind (its record, progress, cancel and time limit are a run's),
 checked up front as far as can be without the workers, then queued; the worker that takes it
@@ -21,6 +21,7 @@ from percussim.common.store import (
     CALIBRATION,
     DRIVABILITY,
     OPTIMIZATION,
+    SIGNAL_MATCH,
     SUCCEEDED,
     JobStore,
     UnknownJob,
@@ -29,6 +30,7 @@ from percussim.solver.limits import Limits, check_case
 from percussim.solver.pile_requests import BearingGraph, Drivability, bearing_variants, drivability_variants
 from percussim.solver.plots import FORMATS
 from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.signal_match import SignalMatch, check_record, driven_case
 from percussim.solver.study import Calibration, Optimization, check_calibration, check_optimization, study_case
 
 from .errors import FieldErrors, Problem
@@ -48,7 +50,7 @@ class Study(BaseModel):
     model_config = ConfigDict(extra="allow")
 
     id: str
-    kind: Literal["calibration", "optimization", "bearing_graph", "drivability"]
+    kind: Literal["calibration", "optimization", "bearing_graph", "drivability", "signal_match"]
     status: Literal["queued", "running", "succeeded", "failed", "cancelled"]
     progress: float
     error: str | None
@@ -127,6 +129,21 @@ def _on_its_grid(check: Callable[[BaseModel, Limits], object]) -> Callable[[Base
     return checked
 
 
+def _checked_match(match: SignalMatch, limits: Limits) -> object:
+    """A signal match's check: its record against the pile it drives, on the match's grid."""
+    case = driven_case(match)
+    check_case(study_case(case), limits)
+    return check_record(match, case)
+
+
+def _given_case(study: BaseModel) -> dict:
+    return study.case.model_dump(mode="json", exclude_none=True)
+
+
+def _driven_case(match: SignalMatch) -> dict:
+    return driven_case(match).model_dump(mode="json", exclude_none=True)
+
+
 class Kind(NamedTuple):
     """A kind of study as the API serves it."""
 
@@ -138,6 +155,7 @@ class Kind(NamedTuple):
     checked: str  # what the check looks at, in words
     plot: str
     plotted: str  # what the plot shows, in words
+    case: Callable[[BaseModel], dict] = _given_case  # the job's case, as its record lists it
 
 
 KINDS: dict[str, Kind] = {
@@ -181,12 +199,23 @@ KINDS: dict[str, Kind] = {
         "drivability",
         "The blow count (and the restrike's) and the largest stresses against the depth.",
     ),
+    SIGNAL_MATCH: Kind(
+        "/v1/signal-matches",
+        "signal matches",
+        "match",
+        SignalMatch,
+        _checked_match,
+        "the request's fields, the pile and its Smith toe, the gauges' station, the record's length and units",
+        "fit",
+        "The measured force at the head against the force the matched pile needs, and the residual.",
+        _driven_case,  # the pile as the record drives it
+    ),
 }
 
 
 def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     """The routes of one kind of study for the results store and broker of `settings`."""
-    prefix, tag, answer_name, model, check, checked, plot, plotted = KINDS[kind]
+    prefix, tag, answer_name, model, check, checked, plot, plotted, case_of = KINDS[kind]
     router = APIRouter(prefix=prefix, tags=[tag])
     not_found = {404: {"model": Problem, "description": f"no {kind.replace('_', ' ')} with this id"}}
 
@@ -227,7 +256,7 @@ def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
         check(study, settings.limits())
         jobs = store(request)
         record = jobs.create(
-            study.case.model_dump(mode="json", exclude_none=True),
+            case_of(study),
             kind=kind,
             request=study.model_dump(mode="json", exclude_none=True),
         )

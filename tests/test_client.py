@@ -408,3 +408,27 @@ def test_the_worked_example_runs_a_preset_and_downloads_its_result(stack, tmp_pa
     assert done.returncode == 0, done.stderr
     assert "succeeded" in done.stdout and f"result written to {output}" in done.stdout
     assert read_result(output).summary["name"] == "fig3"
+
+
+def test_a_signal_match_from_a_csv_record_gives_the_local_match(api, tmp_path):
+    """The client reads the head's CSV record, the service's workers match it: the same match,
+    number for number, as `percussim.signal_match` here (a seeded global stage). Gauges off the
+    pile are refused, naming the field."""
+    from test_signal_match import RESISTANCES, guessed
+
+    from percussim.solver.signal_match import signal_match
+    from percussim.testing.pile_records import head_record, pile
+
+    record = head_record(pile())
+    rows = "\n".join(f"{t!r},{f!r},{v!r}" for t, f, v in zip(record["time"], record["force"], record["velocity"]))
+    (tmp_path / "blow.csv").write_text("time,force@0,velocity@0\n" + rows + "\n")
+    request = {"case": guessed(), "record": str(tmp_path / "blow.csv"), "parameters": RESISTANCES}
+    match = api.match(request)
+    here = signal_match(request | {"record": record}, processes=1)
+    for name in RESISTANCES:
+        assert match["parameters"][name] == pytest.approx(here["parameters"][name], rel=1e-9)
+    assert match["capacity"] == pytest.approx(here["capacity"], rel=1e-9)
+    assert match["evaluations"] == here["evaluations"] and match["warnings"] == here["warnings"]
+    with pytest.raises(Refused) as refused:
+        api.submit_signal_match(request | {"record": record | {"x": 12.0}})
+    assert refused.value.status == 422 and refused.value.errors[0].field == "record.x"

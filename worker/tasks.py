@@ -27,6 +27,7 @@ from percussim.common.store import (
     FAILED,
     OPTIMIZATION,
     RUN,
+    SIGNAL_MATCH,
     SUCCEEDED,
     JobStore,
     StoreUnavailable,
@@ -39,6 +40,7 @@ from percussim.solver.errors import Cancelled, NumericalFailure
 from percussim.solver.io import remove_partial
 from percussim.solver.optimize import optimize
 from percussim.solver.pile_studies import bearing_graph, drivability
+from percussim.solver.signal_match import signal_match
 from percussim.solver.simulate import simulate
 from percussim.solver.study_plots import render_study
 
@@ -56,6 +58,7 @@ STUDIES = {
     OPTIMIZATION: (optimize, "convergence"),
     BEARING_GRAPH: (bearing_graph, "bearing_graph"),
     DRIVABILITY: (drivability, "drivability"),
+    SIGNAL_MATCH: (signal_match, "fit"),
 }
 
 

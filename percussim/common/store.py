@@ -3,7 +3,7 @@ of its own under the results folder, readable by any process.
 
     jobs/<id>/case.json     the case as submitted
     jobs/<id>/request.json  a study's request (kind 'calibration', 'optimization',
-                            'bearing_graph', 'drivability'; a run's kind is 'run')
+                            'bearing_graph', 'drivability', 'signal_match'; a run's kind is 'run')
     jobs/<id>/answer.json   their answer, once succeeded
     jobs/<id>/batches/      their batches of runs while they are spread over the workers
     jobs/<id>/summary.json  the pulse summary, once succeeded
@@ -50,6 +50,7 @@ FINISHED = (SUCCEEDED, FAILED, CANCELLED)
 STATUSES = (QUEUED, RUNNING, *FINISHED)
 RUN, CALIBRATION, OPTIMIZATION = "run", "calibration", "optimization"  # a job's kind
 BEARING_GRAPH, DRIVABILITY = "bearing_graph", "drivability"  # the pile studies' kinds
+SIGNAL_MATCH = "signal_match"  # a pile's soil from its head's record
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
 

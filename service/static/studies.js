@@ -148,21 +148,46 @@ async function submitOptimization(event) {
 
 const num = (text, className = "num") => h("td", { class: className }, text);
 
+// Each study kind the job view shows: its route, its answer's name, its cards and its plot's title.
+const STUDY_VIEWS = {
+  calibration: { route: "calibrations", answer: "fit", cards: (fit) => fitCards(fit),
+                 title: "The record against the fitted model" },
+  optimization: { route: "optimizations", answer: "optimum", cards: (optimum) => optimumCards(optimum),
+                  title: "Every run of the objective" },
+  signal_match: { route: "signal-matches", answer: "match", cards: (match) => [capacityCard(match), ...fitCards(match)],
+                  title: "The measured force at the head against the matched pile's" },
+};
+
 export async function showStudy(view, kind) {
+  const spec = STUDY_VIEWS[kind];
   let study;
   try {
-    study = await getJSON(`/v1/${kind}s/${view.id}`);
+    study = await getJSON(`/v1/${spec.route}/${view.id}`);
   } catch (error) {
-    if (!view.signal.aborted) showJobError(`The ${kind} could not be loaded: ${describe(error)}`);
+    if (!view.signal.aborted) showJobError(`The ${kind.replace("_", " ")} could not be loaded: ${describe(error)}`);
     return;
   }
   if (view.signal.aborted) return;
-  const title = kind === "calibration" ? "The record against the fitted model" : "Every run of the objective";
+  const { title } = spec;
   const plot = { name: kind, title, links: { png: study.links.plot_png, svg: study.links.plot_svg } };
   const frame = h("div", { class: "frame loading" });
   const figure = card("Plot", h("figure", { class: "plot wide", "data-plot": kind }, frame, h("figcaption", {}, title)));
-  $("study").replaceChildren(...(kind === "calibration" ? fitCards(study.fit) : optimumCards(study.optimum)), figure);
+  $("study").replaceChildren(...spec.cards(study[spec.answer]), figure);
   await showImage(frame, plot, view);
+}
+
+// A signal match's capacity and how the shaft and the toe share it, each with its standard error.
+function capacityCard(match) {
+  const kn = (v) => (typeof v === "number" ? fmt(v / 1e3) : "not determined");
+  const row = (label, value, error) => h("tr", {}, h("th", {}, label), num(kn(value), "num value"), num(kn(error)));
+  return card("Capacity",
+    table("capacity", ["", "kN", "standard error (kN)"], [
+      row("Total (static)", match.capacity.value, match.capacity.standard_error),
+      ...match.resistance_distribution.map((part) => row(part.part, part.resistance, part.standard_error)),
+    ]),
+    h("p", { class: "muted small" },
+      `Match quality ${fmt(match.match_quality.value, 3)} (2L/c window ${fmt(match.match_quality.window, 3)}); `
+      + `Case method RMX ${match.case_method.map((r) => `${r.damping_factor}: ${kn(r.capacity)}`).join(", ")} kN.`));
 }
 
 function fitCards(fit) {
