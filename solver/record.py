@@ -302,8 +302,39 @@ def read_record(source: str | os.PathLike, **clock: float) -> Record:
     return record_from_csv(text, **clock)
 
 
-def _csv_error(message: str, field: str = "record") -> CaseError:
+def csv_error(message: str, field: str = "record") -> CaseError:
     return CaseError([FieldError(field=field, message=message)])
+
+
+def csv_rows(text: str) -> tuple[list[tuple[int, str]], list[tuple[int, list[str]]]]:
+    """CSV text as `(comments, rows)`, each with its line number (from 1): the comment lines
+    (`#`) before the first row, and every row's cells stripped; blank lines and later comments
+    left out."""
+    comments: list[tuple[int, str]] = []
+    rows: list[tuple[int, list[str]]] = []
+    for line, row in enumerate(csv.reader(io.StringIO(text)), start=1):
+        if not row or not any(cell.strip() for cell in row):
+            continue
+        if row[0].lstrip().startswith("#"):
+            if not rows:
+                comments.append((line, ",".join(row)))
+            continue
+        rows.append((line, [cell.strip() for cell in row]))
+    return comments, rows
+
+
+def csv_numbers(samples: list[tuple[int, list[str]]], width: int, columns: str, numbers: str) -> list[list[float]]:
+    """Each sample row (`csv_rows`'s) as `width` numbers; `CaseError` names the line of one that
+    has other than `width` cells (`columns` says which) or is not `numbers`."""
+    found = []
+    for line, row in samples:
+        if len(row) != width:
+            raise csv_error(f"line {line} has {len(row)} columns, not {width} ({columns})")
+        try:
+            found.append([float(cell) for cell in row])
+        except ValueError:
+            raise csv_error(f"line {line}: {','.join(row)!r} is not {numbers}") from None
+    return found
 
 
 def _clock_comment(line: int, text: str, clock: dict[str, float]) -> None:
@@ -315,33 +346,27 @@ def _clock_comment(line: int, text: str, clock: dict[str, float]) -> None:
     try:
         clock[name] = float(value)
     except ValueError:
-        raise _csv_error(f"line {line}: {name} = {value.strip()!r} is not a number", f"record.{name}") from None
+        raise csv_error(f"line {line}: {name} = {value.strip()!r} is not a number", f"record.{name}") from None
 
 
 def record_from_csv(text: str, **given: float) -> Record:
     """A record from CSV text: a header `time,<quantity>` and two columns, or a header
     `<quantity>`, one column and the sampling in comment lines or in `given`."""
     clock: dict[str, float] = {}
-    rows: list[tuple[int, list[str]]] = []
-    for line, row in enumerate(csv.reader(io.StringIO(text)), start=1):
-        if not row or not any(cell.strip() for cell in row):
-            continue
-        if row[0].lstrip().startswith("#"):
-            if not rows:
-                _clock_comment(line, ",".join(row), clock)
-            continue
-        rows.append((line, [cell.strip() for cell in row]))
+    comments, rows = csv_rows(text)
+    for line, comment in comments:
+        _clock_comment(line, comment, clock)
     for name, value in given.items():
         if name in clock and clock[name] != value:
-            raise _csv_error(f"is {value:g}, but the file says {name} = {clock[name]:g}: give one", f"record.{name}")
+            raise csv_error(f"is {value:g}, but the file says {name} = {clock[name]:g}: give one", f"record.{name}")
         clock[name] = value
     if not rows:
-        raise _csv_error("is empty: give a header time,<quantity> and samples")
+        raise csv_error("is empty: give a header time,<quantity> and samples")
     (header_line, header), samples = rows[0], rows[1:]
     known = ", ".join(q if q != "stress" else "stress@X" for q in QUANTITIES)
     timed = len(header) == 2 and header[0] == "time"
     if not (timed or len(header) == 1 and header[0] != "time"):
-        raise _csv_error(
+        raise csv_error(
             f"line {header_line} must be the header time,<quantity> (or <quantity> alone, "
             f"with sample_rate given) with the quantity one of {known}; found {','.join(header)!r}"
         )
@@ -351,22 +376,13 @@ def record_from_csv(text: str, **given: float) -> Record:
         try:
             quantity, x = "stress", float(quantity.removeprefix("stress@"))
         except ValueError:
-            raise _csv_error(
+            raise csv_error(
                 f"{label!r}: the gauge's station must be a number of metres, as in stress@0.35", "record.x"
             ) from None
     elif quantity not in QUANTITIES or quantity == "stress":
-        raise _csv_error(f"{quantity!r} is not a recorded quantity: give one of {known}", "record.quantity")
+        raise csv_error(f"{quantity!r} is not a recorded quantity: give one of {known}", "record.quantity")
     columns = "time and " + label if timed else label
-    numbers = []
-    for line, row in samples:
-        if len(row) != len(header):
-            raise _csv_error(f"line {line} has {len(row)} columns, not {len(header)} ({columns})")
-        try:
-            numbers.append([float(cell) for cell in row])
-        except ValueError:
-            raise _csv_error(
-                f"line {line}: {','.join(row)!r} is not {'two numbers' if timed else 'a number'}"
-            ) from None
+    numbers = csv_numbers(samples, len(header), columns, "two numbers" if timed else "a number")
     data: dict = {"quantity": quantity, "values": [row[-1] for row in numbers], **clock}
     if timed:
         data["time"] = [row[0] for row in numbers]

@@ -17,8 +17,6 @@ and the fitted case.
 
 from __future__ import annotations
 
-import csv
-import io
 import math
 import re
 from typing import Annotated
@@ -32,7 +30,7 @@ from .evaluate import Evaluator
 from .grid import make_grid, wave_speed
 from .limits import Limits
 from .pile_record import case_method, proportionality
-from .record import scatter
+from .record import csv_error, csv_numbers, csv_rows, scatter
 from .rest import static_load_test
 from .result import CancelCheck, ProgressCallback
 
@@ -109,10 +107,9 @@ _HEADER = re.compile(r"^(force|velocity)@([-+0-9.eE]+)$")
 
 def read_pile_record(text: str) -> PileRecord:
     """A record from CSV text: a header `time,force@X,velocity@X` (X the gauges' station, m), then
-    a line a sample, SI units; `CaseError` names a bad header or value."""
-    rows = list(csv.reader(io.StringIO(text)))
-    rows = [row for row in rows if row and not row[0].lstrip().startswith("#")]
-    header = [cell.strip() for cell in rows[0]] if rows else []
+    a line a sample, SI units; `CaseError` names a bad header or the line of a bad value."""
+    _, rows = csv_rows(text)
+    header = rows[0][1] if rows else []
     found = [_HEADER.match(cell) for cell in header[1:]]
     if (
         len(header) != 3
@@ -120,29 +117,13 @@ def read_pile_record(text: str) -> PileRecord:
         or not all(found)
         or {m.group(1) for m in found} != {"force", "velocity"}
     ):
-        raise CaseError(
-            [
-                FieldError(
-                    field="record", message=f"the header must be time,force@X,velocity@X; it is {','.join(header)}"
-                )
-            ]
-        )
+        raise csv_error(f"the header must be time,force@X,velocity@X; it is {','.join(header)}")
     stations = {float(m.group(2)) for m in found}
     if len(stations) != 1:
-        raise CaseError(
-            [FieldError(field="record.x", message=f"force and velocity must be at one station: {sorted(stations)}")]
-        )
-    columns = {m.group(1): k + 1 for k, m in enumerate(found)}
-    values: dict[str, list[float]] = {"time": [], "force": [], "velocity": []}
-    for line, row in enumerate(rows[1:], start=2):
-        try:
-            values["time"].append(float(row[0]))
-            for name, column in columns.items():
-                values[name].append(float(row[column]))
-        except (ValueError, IndexError):
-            raise CaseError(
-                [FieldError(field="record", message=f"line {line}: {','.join(row)} is not three numbers")]
-            ) from None
+        raise csv_error(f"force and velocity must be at one station: {sorted(stations)}", "record.x")
+    numbers = csv_numbers(rows[1:], 3, ",".join(header), "three numbers")
+    columns = {"time": 0} | {m.group(1): k + 1 for k, m in enumerate(found)}
+    values = {name: [row[k] for row in numbers] for name, k in columns.items()}
     return validated(PileRecord, {"x": stations.pop(), **values}, "record")
 
 

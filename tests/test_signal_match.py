@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import math
+import re
 
 import numpy as np
 import pytest
@@ -108,6 +109,9 @@ def test_a_csv_record_reads_as_its_json(record):
     assert read.model_dump() == parse_signal_match({"case": {}, "record": record}).record.model_dump()
     with pytest.raises(CaseError, match="time,force@X,velocity@X"):
         read_pile_record("time,force@0,speed@0\n0,1,2\n")
+    # a bad sample is named by its line in the file, comments and blank lines counted
+    with pytest.raises(CaseError, match=re.escape("line 5: '1e-4,nan?,2' is not three numbers")):
+        read_pile_record("# gauges at the head\ntime,force@0,velocity@0\n0,1,2\n\n1e-4,nan?,2\n")
 
 
 def test_the_command_line_matches_and_refuses(record, tmp_path, capsys):
