@@ -20,7 +20,7 @@ from percussim.solver.simulate import simulate
 from percussim.testing import closed_forms as CF
 
 IDEAL = CF.IDEAL_DRIVE
-RETURNING = Valve(target=0.0, since=0.0, start=0.0)  # the rear on return from the flight's start
+RETURNING = CF.RETURNING
 
 
 def _row(what: str, expected: str, found: str, error: float) -> str:

@@ -182,6 +182,11 @@ def driven_case(request: SignalMatch) -> Case:
     return validated(Case, case, "case")
 
 
+def round_trip(case: Case) -> float:
+    """2L/c (s): a wave's way to the toe and back to the gauges."""
+    return 2.0 * case.tool.length / wave_speed(case.tool)
+
+
 def impedance(case: Case) -> float:
     """Z = E·A/c at the pile's head (the gauges)."""
     area = case.tool.area if case.tool.area is not None else case.tool.profile.area[0]
@@ -214,7 +219,7 @@ def check_record(request: SignalMatch, case: Case) -> list[str]:
     answer (2L/c after the velocity's peak), or with a unit off by a prefix. Returns the warning
     for a record whose force and velocity are not proportional at impact."""
     time, force, velocity = request.record.arrays()
-    travel = 2.0 * case.tool.length / wave_speed(case.tool)
+    travel, z = round_trip(case), impedance(case)
     peak = time[int(np.argmax(velocity))]
     if time[-1] < peak + travel:
         raise CaseError(
@@ -226,20 +231,20 @@ def check_record(request: SignalMatch, case: Case) -> list[str]:
                 )
             ]
         )
-    ratio = proportionality(time, force, velocity, impedance(case))
+    ratio = proportionality(time, force, velocity, z)
     if not 1.0 / UNITS_OFF < abs(ratio) < UNITS_OFF:
         raise CaseError(
             [
                 FieldError(
                     field="record.force",
-                    message=f"is {ratio:.3g} × Z·v at impact (Z = {impedance(case):.4g} N·s/m, the pile's E·A/c): "
+                    message=f"is {ratio:.3g} × Z·v at impact (Z = {z:.4g} N·s/m, the pile's E·A/c): "
                     "force or velocity is off by a unit's prefix (kN for N, mm/s for m/s); give both in SI",
                 )
             ]
         )
     if abs(ratio - 1.0) > PROPORTIONAL:
         return [
-            f"the force at impact is {ratio:.3g} × Z·v (Z = {impedance(case):.4g} N·s/m, before any reflection "
+            f"the force at impact is {ratio:.3g} × Z·v (Z = {z:.4g} N·s/m, before any reflection "
             "they agree): the pile's area or wave speed in the case may be wrong, or a gauge is bad"
         ]
     return []
@@ -263,7 +268,8 @@ def signal_match(
     time, force, velocity = request.record.arrays()
     parameters = request.parameters or default_parameters(case)
     # the measured velocity drives the model: its noise, times Z, is in the computed force
-    input_noise = impedance(case) * scatter(velocity) / float(np.ptp(force))
+    z, travel = impedance(case), round_trip(case)
+    input_noise = z * scatter(velocity) / float(np.ptp(force))
     fit = calibrate(
         {
             "case": case.model_dump(mode="json", exclude_none=True),
@@ -283,14 +289,13 @@ def signal_match(
         input_noise=input_noise,
     )
     fitted = validated(Case, fit["case"])
-    travel = 2.0 * case.tool.length / wave_speed(case.tool)
     return fit | {
         "warnings": warnings + fit["warnings"],
         "capacity": capacity(fit),
         "resistance_distribution": distribution(fit, fitted),
         "match_quality": match_quality(fit, time[int(np.argmax(velocity))], travel),
         "match_quality_definition": MATCH_QUALITY,
-        "case_method": case_method(time, force, velocity, impedance(case), travel),
+        "case_method": case_method(time, force, velocity, z, travel),
         "static_load_test": static_load_test(fitted, make_grid(fitted.tool, fit["grid"]["cells"], end_masses=True)),
     }
 

@@ -17,7 +17,7 @@ from percussim.testing import closed_forms as CF
 from percussim.testing.closed_forms import blow_ends, hammer_at_work, ideal_flight, supply_work_per_cycle
 
 IDEAL = CF.IDEAL_DRIVE
-RETURNING = Valve(target=0.0, since=0.0, start=0.0)
+RETURNING = CF.RETURNING
 
 
 @pytest.mark.parametrize("rebound", [0.0, -3.0, -8.0])

@@ -29,7 +29,7 @@ from dataclasses import replace
 import numpy as np
 from scipy.linalg import expm
 
-from percussim.solver.drive import Hydraulics
+from percussim.solver.drive import Hydraulics, Valve
 
 from .reference import LundbergRock
 
@@ -565,6 +565,7 @@ def hammer_at_work(**changes) -> dict:
 IDEAL_DRIVE = Hydraulics(
     mass=2.0, front_area=1e-4, rear_area=3e-4, supply_pressure=15e6, return_pressure=0.0, stroke=0.05
 )
+RETURNING = Valve(target=0.0, since=0.0, start=0.0)  # the rear on return from a flight's start
 LOSSY_DRIVE = replace(
     IDEAL_DRIVE,
     return_pressure=5e5,
