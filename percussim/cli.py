@@ -354,8 +354,8 @@ def _write_study(answer: dict, args: argparse.Namespace, plot: str, shown: dict)
 
 
 def _study(args: argparse.Namespace, what: str, request: Callable[[], dict], solve: Callable[..., dict]) -> dict | int:
-    """Run a calibration or an optimisation (`what`) here, or on the service at `args.url`;
-    the answer, or the exit status of a refusal or a failure."""
+    """Run a study (`what`: a calibration, an optimisation, a signal match) here, or on the service
+    at `args.url`; the answer, or the exit status of a refusal or a failure."""
 
     def work() -> dict:
         if args.url:
@@ -373,6 +373,7 @@ ON_SERVICE = {
     "optimisation": ("submit_optimization", "optimization", "optimum"),
     "bearing graph": ("submit_bearing_graph", "bearing_graph", None),
     "drivability": ("submit_drivability", "drivability", None),
+    "signal match": ("submit_signal_match", "signal_match", "match"),
 }
 
 
@@ -429,24 +430,21 @@ def _calibrate(args: argparse.Namespace) -> int:
 def _match(args: argparse.Namespace) -> int:
     from .solver.signal_match import read_pile_record, signal_match
 
-    def work() -> dict:
+    def request() -> dict:
         source = _case_source(args.case)
-        case = source if isinstance(source, dict) else json.loads(Path(source).read_text())
-        request = {
-            "case": case,
+        return {
+            "case": source if isinstance(source, dict) else json.loads(Path(source).read_text()),
             "record": read_pile_record(Path(args.record).read_text()).model_dump(),
             "parameters": dict(args.fit) if args.fit else None,
         }
-        with _progress_bar(args.progress) as advance:
-            return signal_match(request, processes=args.processes, progress=advance, limits=_limits())
 
-    match = _guarded(args, "signal match", work)
+    match = _study(args, "signal match", request, signal_match)
     if isinstance(match, int):
         return match
     _write_study(
         match,
         args,
-        "fit",
+        "signal_match",
         {
             key: match[key]
             for key in (
@@ -733,12 +731,6 @@ def parser() -> argparse.ArgumentParser:
         help="a parameter and its bounds (repeat), e.g. shaft.0.ultimate_resistance=1e5:2e6 (default: each "
         "shaft segment's and the toe's resistance, one quake and one damping factor for the shaft, and the toe's)",
     )
-    match.add_argument("--output", metavar="OUT.json", help="write the whole answer here")
-    match.add_argument("--plot", metavar="PLOT.png", help="draw the measured force against the computed one here")
-    match.add_argument("--processes", type=int, help="processes here (default: one a core)")
-    match.add_argument(
-        "--progress", action="store_true", help="show the progress bar on stderr even when it is not a terminal"
-    )
     optimise = commands.add_parser(
         "optimize", help="find the fields' values that maximise or minimise a summary quantity within limits"
     )
@@ -809,6 +801,7 @@ def parser() -> argparse.ArgumentParser:
     )
     for study, plotted in (
         (fit, "the record against the model"),
+        (match, "the force and the waves at the gauges, the resistance along the pile and the load test"),
         (optimise, "the evaluations"),
         (bearing, "the blow count and stresses"),
         (drive, "the blow count and stresses by depth"),
@@ -822,7 +815,7 @@ def parser() -> argparse.ArgumentParser:
             "--progress", action="store_true", help="show the progress bar on stderr even when it is not a terminal"
         )
     fit.set_defaults(handler=_calibrate)
-    match.set_defaults(handler=_match, url=None)
+    match.set_defaults(handler=_match)
     optimise.set_defaults(handler=_optimize)
     bearing.set_defaults(handler=_bearing_graph)
     drive.set_defaults(handler=_drivability)

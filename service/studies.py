@@ -206,8 +206,9 @@ KINDS: dict[str, Kind] = {
         SignalMatch,
         _checked_match,
         "the request's fields, the pile and its Smith toe, the gauges' station, the record's length and units",
-        "fit",
-        "The measured force at the head against the force the matched pile needs, and the residual.",
+        "signal_match",
+        "The force and the waves at the gauges, measured and computed; the fitted resistance along the pile; "
+        "the static load test.",
         _driven_case,  # the pile as the record drives it
     ),
 }

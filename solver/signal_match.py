@@ -12,7 +12,7 @@ The answer adds what a pile engineer reads off a match: the static `capacity` (t
 resistances' sum, its standard error from their covariance), the `resistance_distribution`, the
 `match_quality` (`MATCH_QUALITY`), the Case method's capacity from the record alone
 (`pile_record.case_method`), a `static_load_test` of the fitted soil (`rest.static_load_test`),
-and the fitted case.
+the waves down and up at the gauges (`waves`), and the fitted case.
 """
 
 from __future__ import annotations
@@ -29,7 +29,7 @@ from .case import INPUT, Case, CaseError, FieldError, field_error, increasing, v
 from .evaluate import Evaluator
 from .grid import make_grid, wave_speed
 from .limits import Limits
-from .pile_record import case_method, proportionality
+from .pile_record import case_method, proportionality, waves
 from .record import csv_error, csv_numbers, csv_rows, scatter
 from .rest import static_load_test
 from .result import CancelCheck, ProgressCallback
@@ -260,7 +260,7 @@ def signal_match(
 ) -> dict:
     """Match the record (see the module's docstring): the calibration's answer (parameters,
     correlation, nrmse, evaluations, warnings, the fitted case) with the pile's `capacity`,
-    `resistance_distribution`, `match_quality`, `case_method` and `static_load_test`."""
+    `resistance_distribution`, `match_quality`, `case_method`, `waves` and `static_load_test`."""
     if not isinstance(request, SignalMatch):
         request = parse_signal_match(request)
     case = driven_case(request)
@@ -293,9 +293,10 @@ def signal_match(
         "warnings": warnings + fit["warnings"],
         "capacity": capacity(fit),
         "resistance_distribution": distribution(fit, fitted),
-        "match_quality": match_quality(fit, time[int(np.argmax(velocity))], travel),
+        "match_quality": match_quality(fit, float(time[np.argmax(velocity)]), travel),
         "match_quality_definition": MATCH_QUALITY,
         "case_method": case_method(time, force, velocity, z, travel),
+        "waves": wave_curves(fit, time, velocity, z),
         "static_load_test": static_load_test(fitted, make_grid(fitted.tool, fit["grid"]["cells"], end_masses=True)),
     }
 
@@ -349,7 +350,8 @@ def distribution(fit: dict, fitted: Case) -> list[dict]:
 
 
 def match_quality(fit: dict, peak: float, travel: float) -> dict:
-    """`MATCH_QUALITY`: over the record, over the 2L/c after the velocity's peak, and after it."""
+    """`MATCH_QUALITY`: over the record, over the 2L/c after the velocity's peak (`window_time`, s),
+    and after it."""
     time = np.asarray(fit["series"]["time"])
     measured, computed = np.asarray(fit["series"]["record"]), np.asarray(fit["series"]["model"])
     scale = max(float(np.max(np.abs(measured))), 1e-300)
@@ -358,4 +360,22 @@ def match_quality(fit: dict, peak: float, travel: float) -> dict:
         return float(np.sqrt(np.mean((computed[mask] - measured[mask]) ** 2)) / scale) if mask.any() else None
 
     window = (time >= peak) & (time <= peak + travel)
-    return {"value": rms(np.ones_like(window)), "window": rms(window), "after": rms(time > peak + travel)}
+    return {
+        "value": rms(np.ones_like(window)),
+        "window": rms(window),
+        "after": rms(time > peak + travel),
+        "window_time": [peak, peak + travel],
+    }
+
+
+def wave_curves(fit: dict, time: np.ndarray, velocity: np.ndarray, impedance: float) -> dict:
+    """The waves going down and coming up at the gauges, (F ± Z·v)/2 (N), measured and computed, at
+    the fit's instants: the computed ones from the matched pile's force and the measured velocity
+    that drives it."""
+    at = np.asarray(fit["series"]["time"])
+    v = np.interp(at, time, velocity)
+    curves = {}
+    for name, force in (("measured", fit["series"]["record"]), ("computed", fit["series"]["model"])):
+        down, up = waves(np.asarray(force), v, impedance)
+        curves[name] = {"down": down.tolist(), "up": up.tolist()}
+    return {"time": at.tolist(), "impedance": impedance, **curves}

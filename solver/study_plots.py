@@ -20,6 +20,8 @@ STUDY_PLOTS = {
     "convergence": "Every evaluation of the objective, and the best so far",
     "bearing_graph": "Blow count and stresses against the capacity or the ram's stroke",
     "drivability": "Blow count and stresses against the depth",
+    "signal_match": "Force and waves at the head, measured and computed; the resistance along the pile; the "
+    "static load test",
 }
 # quantity → how its axis reads, and the scale to that unit
 _AXES = {
@@ -31,11 +33,11 @@ _AXES = {
 }
 
 
-def _new_figure() -> Figure:
+def _new_figure(size: tuple[float, float] = FIGSIZE) -> Figure:
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    fig = Figure(figsize=FIGSIZE, dpi=DPI, layout="constrained")
+    fig = Figure(figsize=size, dpi=DPI, layout="constrained")
     FigureCanvasAgg(fig)
     return fig
 
@@ -183,6 +185,60 @@ def drivability_figure(answer: dict, name: str = "case") -> Figure:
     return fig
 
 
+def signal_match_figure(match: dict, name: str = "case") -> Figure:
+    """A signal match on four panels: the force at the gauges, measured (dots) and computed (line),
+    the 2L/c after the velocity's peak shaded; the waves down and up, (F ± Z·v)/2, measured and
+    computed; each part's fitted resistance as a bar over its span along the pile (the toe's just
+    below the end), with 3 standard errors; and the static load test of the fitted soil."""
+    fig = _new_figure((FIGSIZE[0], 2 * FIGSIZE[1]))
+    (force, waves), (bars, load) = fig.subplots(2, 2)
+    series, curves = match["series"], match["waves"]
+    t = np.asarray(series["time"])
+    scale_t, unit_t = time_unit(t[-1])
+    start, end = match["match_quality"]["window_time"]
+    force.axvspan(start * scale_t, end * scale_t, color="0.92", label="2L/c window")
+    force.plot(t * scale_t, np.asarray(series["record"]) * 1e-3, ".", ms=2, color="0.45", label="measured")
+    force.plot(t * scale_t, np.asarray(series["model"]) * 1e-3, lw=1.3, color="C0", label="computed")
+    force.legend(loc="best", fontsize="small")
+    decorate(force, f"time ({unit_t})", "force at the gauges (kN)")
+    for direction, color in (("down", "C1"), ("up", "C2")):
+        waves.plot(t * scale_t, np.asarray(curves["measured"][direction]) * 1e-3, ".", ms=2, color=color, alpha=0.5)
+        waves.plot(
+            t * scale_t,
+            np.asarray(curves["computed"][direction]) * 1e-3,
+            lw=1.3,
+            color=color,
+            label=f"wave {direction}",
+        )
+    waves.legend(loc="best", fontsize="small", title="dots measured, lines computed", title_fontsize="small")
+    decorate(waves, f"time ({unit_t})", "(F ± Z·v)/2 (kN)")
+    rows = match["resistance_distribution"]
+    length = rows[-1]["to"]
+    for row in rows:
+        toe = row["part"] == "toe"
+        top, width = (length, length / 30) if toe else (row["from"], row["to"] - row["from"])
+        error = None if row["standard_error"] is None else 3e-3 * row["standard_error"]
+        kn = row["resistance"] * 1e-3
+        bars.barh(top, kn, height=width, align="edge", xerr=error, color="C3" if toe else "C0", capsize=3)
+        bars.annotate(f" {row['part']}: {kn:.4g} kN", (0.0, top + width / 2), va="center", fontsize="small")
+    bars.set_ylim(length * 1.05, 0.0)
+    bars.set_xlim(left=0.0)
+    decorate(bars, "fitted resistance (kN), ± 3 standard errors", "below the gauges (m)")
+    test = match["static_load_test"]
+    load.plot(np.asarray(test["load"]) * 1e-3, np.asarray(test["settlement"]) * 1e3, marker=".", lw=1.4, color="k")
+    load.invert_yaxis()
+    decorate(load, "load at the head (kN)", "settlement (mm)")
+    capacity = match["capacity"]
+    error = capacity["standard_error"]
+    fig.suptitle(
+        f"Signal match of {name}: capacity {capacity['value'] * 1e-3:.5g}"
+        + (f" ± {error * 1e-3:.2g}" if error is not None else " (not determined)")
+        + f" kN, match quality {match['match_quality']['value']:.3g}",
+        fontsize="medium",
+    )
+    return fig
+
+
 def render_study(answer: dict, plot: str, fmt: str, name: str = "case") -> bytes:
     """Plot `plot` (a name of `STUDY_PLOTS`) of a study's answer as PNG or SVG bytes."""
     draw = {
@@ -190,6 +246,7 @@ def render_study(answer: dict, plot: str, fmt: str, name: str = "case") -> bytes
         "convergence": convergence_figure,
         "bearing_graph": bearing_graph_figure,
         "drivability": drivability_figure,
+        "signal_match": signal_match_figure,
     }[plot]
     buffer = io.BytesIO()
     with DRAWING:

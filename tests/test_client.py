@@ -432,3 +432,12 @@ def test_a_signal_match_from_a_csv_record_gives_the_local_match(api, tmp_path):
     with pytest.raises(Refused) as refused:
         api.submit_signal_match(request | {"record": record | {"x": 12.0}})
     assert refused.value.status == 422 and refused.value.errors[0].field == "record.x"
+    # `percussim match --url`: the same match through the command line, its plot drawn from it
+    (tmp_path / "pile.json").write_text(json.dumps(guessed()))
+    fits = [arg for path, (low, high) in RESISTANCES.items() for arg in ("--fit", f"{path}={low}:{high}")]
+    there = _percussim(
+        "match", "pile.json", "--record", "blow.csv", *fits, "--url", api.url, "--plot", "m.svg", cwd=tmp_path
+    )
+    assert there.returncode == 0, there.stderr
+    assert json.loads(there.stdout)["capacity"] == pytest.approx(here["capacity"], rel=1e-9)
+    assert (tmp_path / "m.svg").read_text().startswith("<?xml")

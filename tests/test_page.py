@@ -487,27 +487,3 @@ def test_the_page_works_from_the_keyboard(page, stack):
     page.keyboard.press("Enter")
     page.wait_for_url("**/#compare=*")
     expect(page.locator("#comparison table").first).to_be_visible()
-
-
-def test_a_signal_match_job_shows_its_capacity_and_fit(page, stack):
-    """A signal match's job: its capacity and how the shaft and the toe share it, each with its
-    standard error, and the measured force against the matched pile's."""
-    from test_signal_match import RESISTANCES, guessed
-
-    from percussim.testing.pile_records import head_record, pile
-
-    answer = stack.client.post(
-        "/v1/signal-matches", json={"case": guessed(), "record": head_record(pile()), "parameters": RESISTANCES}
-    )
-    assert answer.status_code == 202, answer.text
-    study_id = answer.json()["id"]
-    stack.wait_status(study_id, ("succeeded",))
-    match = stack.client.get(f"/v1/signal-matches/{study_id}").json()["match"]
-    page.click("#refresh-jobs")
-    page.click(f"[data-job='{study_id}']")
-    rows = page.locator("#study table.capacity tbody tr")
-    expect(rows.first).to_contain_text(shown(match["capacity"]["value"] / 1e3))
-    assert page.locator("#study table.capacity tbody th").all_inner_texts() == ["Total (static)", "shaft.0", "toe"]
-    image = page.locator("figure[data-plot=signal_match] img")
-    expect(image).to_be_visible()
-    assert image.evaluate("img => img.complete && img.naturalWidth > 0")

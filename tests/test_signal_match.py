@@ -50,6 +50,15 @@ def test_the_soils_resistances_come_back_within_their_uncertainty(record):
     test = match["static_load_test"]
     assert test["load"][-1] == pytest.approx(capacity["value"], rel=1e-5) and np.all(np.diff(test["settlement"]) > 0)
     assert [row["damping_factor"] for row in match["case_method"]] == [0.2, 0.3, 0.4, 0.5, 0.6, 0.7]
+    # nothing comes up before the shaft's top (3 m down) answers, 6 m/c after the impact: the wave
+    # up is the noise alone there, measured and computed
+    waves = match["waves"]
+    before = np.asarray(waves["time"]) < 6.0 / math.sqrt(2.1e11 / 7850.0)
+    down = np.asarray(waves["measured"]["down"])
+    for curves, bound in ((waves["measured"], 0.06), (waves["computed"], 0.03)):
+        assert np.max(np.abs(np.asarray(curves["up"])[before])) < bound * np.max(down)
+    # and the measured wave up carries the soil's answer afterwards, as the computed one does
+    assert np.max(np.asarray(waves["computed"]["up"])) > 0.2 * np.max(down)
 
 
 def test_a_record_that_cannot_tell_the_shaft_from_the_toe_says_so():

@@ -5,6 +5,7 @@ import { $, clock, h, save, seconds } from "./dom.js";
 import { loadCase } from "./editor.js";
 import { refreshJobs } from "./jobs.js";
 import { poll } from "./poll.js";
+import { showSignalMatch } from "./matching.js";
 import { PILE_STUDIES, showPileStudy } from "./piling.js";
 import { showStudy } from "./studies.js";
 import { summaryCards } from "./summary.js";
@@ -19,7 +20,7 @@ let shown = null; // the job last opened: {id, signal, urls}; its signal aborts 
 // The job on view, if a job is.
 export const shownJob = () => (shown && !shown.signal.aborted ? shown : null);
 
-// A calibration, an optimisation or a pile study: a job whose answer is not a run's result.
+// A calibration, an optimisation, a pile study or a signal match: a job whose answer is not a run's result.
 export const isStudy = (job) => Boolean(job.kind) && job.kind !== "run";
 
 export async function openJob(id) {
@@ -42,6 +43,8 @@ export async function openJob(id) {
   if (job.status === "failed") showJobError(job.error || "the job failed without a reason");
   if (job.status === "succeeded" && job.kind in PILE_STUDIES) {
     await showPileStudy(view, job.kind);
+  } else if (job.status === "succeeded" && job.kind === "signal_match") {
+    await showSignalMatch(view);
   } else if (job.status === "succeeded" && isStudy(job)) {
     await showStudy(view, job.kind);
   } else if (job.status === "succeeded") {

@@ -3,7 +3,8 @@
 // quantities and units), poll.js (the one poll loop), view.js (the right-hand panel's one view),
 // editor.js (the case JSON), form.js with schema.js (the case form, from the case's JSON schema),
 // jobs.js (recent jobs), job.js and summary.js (a job), charts.js, compare.js, sweep.js, studies.js,
-// piling.js (the bearing graph and the drivability).
+// piling.js (the bearing graph and the drivability), matching.js (signal matching), records.js (a
+// measured record chosen on disk).
 import { KEY_STORAGE } from "./api.js";
 import { openComparison } from "./compare.js";
 import { $ } from "./dom.js";
@@ -11,6 +12,7 @@ import { choosePreset, loadPresets, submitCase } from "./editor.js";
 import { buildForm } from "./form.js";
 import { cancelJob, downloadResult, editCase, openJob, shownJob } from "./job.js";
 import { picked, refreshJobs } from "./jobs.js";
+import { startMatching } from "./matching.js";
 import { startPiling } from "./piling.js";
 import { startStudies } from "./studies.js";
 import { openSweep, startSweeps } from "./sweep.js";
@@ -47,6 +49,7 @@ buildForm();
 startSweeps();
 startStudies();
 startPiling();
+startMatching();
 loadPresets();
 refreshJobs();
 const [, view, target] = /^#(job|compare|sweep)=([\w,-]+)$/.exec(location.hash) || [];

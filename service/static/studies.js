@@ -1,9 +1,11 @@
 // Calibrations and optimisations on the page: their forms (over the case in the editor) and a
-// finished study's answer in the job view (a study is a job: the job view polls it).
+// finished study's answer in the job view (a study is a job: the job view polls it); a fit's cards
+// also serve the signal match's view (matching.js).
 import { describe, getJSON } from "./api.js";
 import { $, card, fmt, h, save, showProblems, table, typed } from "./dom.js";
 import { editedCase, loadCase, send } from "./editor.js";
 import { showImage, showJobError } from "./job.js";
+import { chooseRecordFile } from "./records.js";
 import { pulseCard, warningsBanner } from "./summary.js";
 import { shown, shownUnit } from "./units.js";
 
@@ -14,7 +16,7 @@ const STARTING_ROWS = {
   limits: [],
 };
 
-let measured = null; // the record read from the chosen CSV file: {record, lines}, or null
+let chosen = null; // the record file's input (records.js): its record read, or null
 
 function addRow(tableId, [path, second, third] = ["", "", ""]) {
   const limit = tableId === "limits";
@@ -84,37 +86,17 @@ function parseRecord(text) {
   return { record, lines: samples.map(([line]) => line) };
 }
 
-async function chooseRecord() {
-  const file = $("record-file").files[0];
-  const info = $("record-info");
-  const box = $("calibration-errors");
-  measured = null;
-  if (!file) return;
-  try {
-    measured = parseRecord(await file.text());
-    showProblems(box, null);
-    const { record } = measured;
-    const count = record.values.length;
-    const [first, last] = record.time ? [record.time[0], record.time.at(-1)]
-      : [record.time_start || 0, (record.time_start || 0) + (count - 1) / record.sample_rate];
-    const span = Number.isFinite(first) && Number.isFinite(last)
-      ? ` over ${fmt(shown(first, "time"))}–${fmt(shown(last, "time"))} ${shownUnit("time")}` : "";
-    const rate = record.sample_rate
-      ? ` at ${fmt(shown(record.sample_rate, "frequency"))} ${shownUnit("frequency")}` : "";
-    const where = record.quantity === "stress" ? ` at x = ${fmt(record.x)} m` : "";
-    info.textContent = `${file.name}: ${count} samples of ${record.quantity}${where}${rate}${span}.`;
-  } catch (problems) {
-    if (!Array.isArray(problems)) throw problems;
-    info.textContent = "";
-    showProblems(box, `${file.name} is not a record, so it cannot be fitted.`, problems, "where");
-  }
-}
-
-// A refused record's sample, `record.time[5]`, also as the line of the file it came from.
-function recordLine(field) {
-  const match = /^record\.(?:time|values)\[(\d+)\]$/.exec(field);
-  const line = match && measured ? measured.lines[Number(match[1])] : undefined;
-  return line === undefined ? field : `${field} (line ${line})`;
+// What a record read says: its samples, quantity, rate and span.
+function describeRecord(record) {
+  const count = record.values.length;
+  const [first, last] = record.time ? [record.time[0], record.time.at(-1)]
+    : [record.time_start || 0, (record.time_start || 0) + (count - 1) / record.sample_rate];
+  const span = Number.isFinite(first) && Number.isFinite(last)
+    ? ` over ${fmt(shown(first, "time"))}–${fmt(shown(last, "time"))} ${shownUnit("time")}` : "";
+  const rate = record.sample_rate
+    ? ` at ${fmt(shown(record.sample_rate, "frequency"))} ${shownUnit("frequency")}` : "";
+  const where = record.quantity === "stress" ? ` at x = ${fmt(record.x)} m` : "";
+  return `${count} samples of ${record.quantity}${where}${rate}${span}`;
 }
 
 async function submitCalibration(event) {
@@ -122,12 +104,12 @@ async function submitCalibration(event) {
   const box = $("calibration-errors");
   const edited = editedCase(box);
   if (!edited) return;
-  if (!measured) {
+  if (!chosen.measured) {
     showProblems(box, "Choose the record's CSV file first.");
     return;
   }
-  const body = JSON.stringify({ case: edited, record: measured.record, parameters: rows("fit-parameters") });
-  await send("/v1/calibrations", body, { button: $("fit"), box, what: "calibration", where: recordLine });
+  const body = JSON.stringify({ case: edited, record: chosen.measured.record, parameters: rows("fit-parameters") });
+  await send("/v1/calibrations", body, { button: $("fit"), box, what: "calibration", where: chosen.line });
 }
 
 async function submitOptimization(event) {
@@ -154,8 +136,6 @@ const STUDY_VIEWS = {
                  title: "The record against the fitted model" },
   optimization: { route: "optimizations", answer: "optimum", cards: (optimum) => optimumCards(optimum),
                   title: "Every run of the objective" },
-  signal_match: { route: "signal-matches", answer: "match", cards: (match) => [capacityCard(match), ...fitCards(match)],
-                  title: "The measured force at the head against the matched pile's" },
 };
 
 export async function showStudy(view, kind) {
@@ -176,21 +156,8 @@ export async function showStudy(view, kind) {
   await showImage(frame, plot, view);
 }
 
-// A signal match's capacity and how the shaft and the toe share it, each with its standard error.
-function capacityCard(match) {
-  const kn = (v) => (typeof v === "number" ? fmt(v / 1e3) : "not determined");
-  const row = (label, value, error) => h("tr", {}, h("th", {}, label), num(kn(value), "num value"), num(kn(error)));
-  return card("Capacity",
-    table("capacity", ["", "kN", "standard error (kN)"], [
-      row("Total (static)", match.capacity.value, match.capacity.standard_error),
-      ...match.resistance_distribution.map((part) => row(part.part, part.resistance, part.standard_error)),
-    ]),
-    h("p", { class: "muted small" },
-      `Match quality ${fmt(match.match_quality.value, 3)} (2L/c window ${fmt(match.match_quality.window, 3)}); `
-      + `Case method RMX ${match.case_method.map((r) => `${r.damping_factor}: ${kn(r.capacity)}`).join(", ")} kN.`));
-}
-
-function fitCards(fit) {
+// A fit's cards: its warnings, its parameters with their uncertainty and correlation, and its actions.
+export function fitCards(fit) {
   const names = Object.keys(fit.parameters);
   const parameters = names.map((name) => {
     const p = fit.parameters[name];
@@ -272,7 +239,8 @@ export function startStudies() {
   for (const [tableId, starting] of Object.entries(STARTING_ROWS)) starting.forEach((row) => addRow(tableId, row));
   document.querySelectorAll("[data-add]").forEach((button) =>
     button.addEventListener("click", () => addRow(button.dataset.add).querySelector("input").focus()));
-  $("record-file").addEventListener("change", chooseRecord);
+  chosen = chooseRecordFile({ input: "record-file", info: "record-info", box: "calibration-errors",
+    parse: parseRecord, described: describeRecord, unreadable: (name) => `${name} is not a record, so it cannot be fitted.` });
   $("calibration-form").addEventListener("submit", submitCalibration);
   $("optimization-form").addEventListener("submit", submitOptimization);
 }
