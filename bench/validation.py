@@ -25,6 +25,9 @@
 8. A hammer at work (`bench/validation_cycle.py`): the drive between blows against the closed
    forms of ideal hydraulics, its work and gas law, the supply's work a cycle, a matched piston
    struck from rest, the adaptive stroke, and the rock drill's cycle preset.
+9. Signal matching (`bench/validation_matching.py`): a known soil recovered from a head record
+   made by an independent run with 2% noise, the non-uniqueness warning, the Case method against
+   its closed form, and the static load test against its closed form and a rigid-plastic plunge.
 
 With --write, the figures go to docs/validation/ beside the markdown.
 """
@@ -54,6 +57,7 @@ from percussim.testing.reference import LinearImpact, observed_order
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))  # the piles' and the cycle's sections, beside this script
 from validation_cycle import cycle_sections  # noqa: E402
+from validation_matching import matching_sections  # noqa: E402
 from validation_piles import pile_sections  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -1118,6 +1122,7 @@ def report(figures: dict[str, Figure]) -> str:
         ("The anvil: two-body impact and the pulse it prolongs", anvil_report(figures)),
         *pile_sections(),
         *cycle_sections(),
+        *matching_sections(),
     ]
     out = [
         "# Validation",
@@ -1129,7 +1134,8 @@ def report(figures: dict[str, Figure]) -> str:
         "the paper, with the cases and closed forms of `percussim/testing/closed_forms.py`: "
         "`tests/test_striker_rod.py`, `tests/test_media.py`, `tests/test_blows.py`, `tests/test_anvil.py`; piles: "
         "`tests/test_shaft.py`, `tests/test_gravity.py`, `tests/test_cushion.py`, `tests/test_struck_end.py`, "
-        "`tests/test_smith_model.py`; a hammer at work: `tests/test_drive.py`. An energy "
+        "`tests/test_smith_model.py`; a hammer at work: `tests/test_drive.py`; signal matching: "
+        "`tests/test_signal_match.py`, `tests/test_pile_record.py`, `tests/test_load_test.py`. An energy "
         "residual is `energy.numerical` over the energy supplied.",
         "",
     ]

@@ -99,3 +99,15 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     assert len(adaptive) == 2 and all(float(row[2]) < 0.03 for row in adaptive), adaptive
     last_stroke = [float(row[3].split("→")[1].split()[0]) for row in adaptive]
     assert last_stroke[1] > 2 * last_stroke[0]
+    # Signal matching: every unknown and the capacity within 3 standard errors of the truth, the
+    # shaft and the toe that reach the gauges together warned of, the Case method and the load test
+    # against their closed forms as their tests hold them
+    recovered = _rows(text, "| unknown | truth | matched | standard error | off by |")
+    assert len(recovered) == 7 and all(float(row[4].split()[0]) <= 3.0 for row in recovered), recovered
+    assert re.search(
+        r"^Correlation of the two resistances -0\.99\d; the warning: \"shaft\.0\.ultimate_resistance", text, re.M
+    )
+    case_method = _rows(text, "| J_c | closed form")
+    assert len(case_method) == 6 and all(float(row[3]) < 2e-3 for row in case_method), case_method
+    load_test = _rows(text, "| closed form | expected | load test | relative error |")
+    assert len(load_test) == 2 and float(load_test[0][3]) < 1e-9 and float(load_test[1][3]) < 1e-5, load_test
