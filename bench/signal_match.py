@@ -6,9 +6,13 @@ quakes and damping factors off by half or more.
 
     .venv/bin/python bench/signal_match.py [--processes 2] [--write]
 
+Then the same match with the noise on the force and the velocity, on the force alone and on the
+velocity alone, three seeds each: how far each unknown lands, in its standard errors.
+
 Prints each unknown against the truth with its standard error and how many of them it is off,
 the capacity, the match quality, the Case method's RMX, the runs and the wall time (the goal: 30 s
-on 2 cores). `--write` puts them in docs/signal_matching.md between its `signal match` markers.
+on 2 cores). `--write` puts them in docs/signal_matching.md between its `signal match` markers,
+and the speed in docs/performance.md between its `signal match speed` markers.
 """
 
 from __future__ import annotations
@@ -21,7 +25,7 @@ from marked import write_marked
 
 from percussim.solver.controller import warm_up
 from percussim.solver.signal_match import signal_match
-from percussim.testing.pile_records import head_record, pile
+from percussim.testing.pile_records import head_record, pile, with_noise
 
 ROOT = Path(__file__).resolve().parents[1]
 TOOL = {"length": 20.0, "youngs_modulus": 2.1e11, "density": 7850.0, "area": 0.01}
@@ -48,7 +52,8 @@ def main() -> None:
     args = parser.parse_args()
     warm_up()
     numerics = {"duration": 0.025}
-    record = head_record(pile(tool=TOOL, shaft=SHAFT, medium=TOE, numerics=numerics), cells=20_000, peak=2.5e6)
+    clean = head_record(pile(tool=TOOL, shaft=SHAFT, medium=TOE, numerics=numerics), cells=20_000, peak=2.5e6, noise=0.0)
+    record = with_noise(clean, 0.02, 0.02, seed=1)
     guess = pile(
         tool=TOOL,
         shaft=[
@@ -66,6 +71,12 @@ def main() -> None:
         found = match["parameters"][path]
         off = abs(found["value"] - truth) / found["standard_error"]
         lines.append(f"| `{path}` | {truth:.4g} | {found['value']:.4g} | {found['standard_error']:.2g} | {off:.2f} σ |")
+    grid = match["grid"]
+    speed = (
+        f"{match['evaluations']} runs, {seconds:.1f} s on {args.processes} processes (goal: 30 s on 2 cores); the "
+        f"fit's grid {grid['cells']} cells after {grid['refinements']} doublings, the last moving the values by "
+        f"{grid['moved']:.2f} of their standard errors"
+    )
     capacity = match["capacity"]
     off = abs(capacity["value"] - 1.5e6) / capacity["standard_error"]
     quality = match["match_quality"]
@@ -78,13 +89,35 @@ def main() -> None:
         "",
         f"warnings: {'; '.join(match['warnings']) or 'none'}",
         "",
-        f"{match['evaluations']} runs on {match['grid']['cells']} cells, {seconds:.1f} s on {args.processes} "
-        "processes (goal: 30 s on 2 cores)",
+        speed,
     ]
     text = "\n".join(lines)
     print(text)
+    sources = noise_sources(clean, guess, args.processes)
+    print(sources)
     if args.write:
         write_marked(ROOT / "docs" / "signal_matching.md", "signal match", text)
+        write_marked(ROOT / "docs" / "signal_matching.md", "signal match noise", sources)
+        write_marked(ROOT / "docs" / "performance.md", "signal match speed", speed)
+
+
+def noise_sources(clean: dict, guess: dict, processes: int) -> str:
+    """How far each unknown lands from the truth, in its standard errors, with the 2% noise on the
+    force and the velocity, on the force alone, and on the velocity alone, for three seeds."""
+    short = [path.replace("ultimate_resistance", "R_u").replace("damping_factor", "J") for path in TRUTH]
+    lines = [
+        "| noise on | seed | " + " | ".join(f"`{name}`" for name in short) + " | capacity |",
+        "|---|---|" + "---|" * (len(TRUTH) + 1),
+    ]
+    for label, force, velocity in (("force and velocity", 0.02, 0.02), ("force", 0.02, 0.0), ("velocity", 0.0, 0.02)):
+        for seed in (1, 2, 3):
+            match = signal_match({"case": guess, "record": with_noise(clean, force, velocity, seed)}, processes=processes)
+            found = match["parameters"]
+            offs = [(found[p]["value"] - truth) / found[p]["standard_error"] for p, truth in TRUTH.items()]
+            capacity = match["capacity"]
+            offs.append((capacity["value"] - 1.5e6) / capacity["standard_error"])
+            lines.append(f"| {label} | {seed} | " + " | ".join(f"{off:+.2f}" for off in offs) + " |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

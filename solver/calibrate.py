@@ -16,10 +16,12 @@ The method, in order:
    s² = Σr²/(m − n), covariance s²(JᵀJ)⁻¹ mapped from the cube to the parameters, standard errors,
    the correlation matrix and 95% confidence bounds (Student's t; on the logarithmic scale for a
    logarithmic parameter, so they stay positive).
-4. The grid: every run is on one grid chosen by the tolerance machinery (`evaluate.study_grid`);
-   the fit is repeated on a grid twice as fine, from its optimum, until the values move by less
-   than `GRID_SHARE` of their standard errors, so that the grid's error is a small part of the
-   answer's uncertainty.
+4. The grid: the fit climbs a ladder of its own. Steps 1–3 run on the tolerance ladder's first
+   grid (`evaluate.first_study_grid`: coarse, as a global look needs no more); the fit is then
+   repeated on a grid twice as fine, from its optimum, until the values move by less than
+   `GRID_SHARE` of their standard errors, so that the grid's error is a small part of the
+   answer's uncertainty. A fit is judged by its values, not by a summary's tolerance: a record of
+   a few hundred samples settles on far fewer cells than the summary's largest stress asks.
 
 The answer says, in `warnings`, when the fit is not unique: parameters strongly correlated, one at
 a bound, one the record does not determine, or starts that ended apart at the same misfit.
@@ -38,7 +40,7 @@ from scipy.stats import t as student
 
 from .case import Case, CaseError, FieldError
 from .errors import Cancelled
-from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
+from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, first_study_grid
 from .limits import Limits
 from .record import Record, record_noise
 from .result import CancelCheck, ProgressCallback
@@ -62,7 +64,7 @@ MAX_RUNS_PER_START = 60  # model runs a start may use (its Jacobians' included)
 STEP = 1e-4  # finite-difference step on the unit cube
 CONFIDENCE = 0.95
 GRID_SHARE = 1.0 / 3.0  # of a standard error: how far a finer grid may move the values
-MAX_REFINEMENTS = 3
+MAX_REFINEMENTS = 10  # doublings from the first grid: 1024× its cells, the limits permitting
 CORRELATED = 0.95  # |correlation| above which two parameters are not told apart
 UNDETERMINED = 0.5  # a 95% interval wider than this share of the bounds (on the unit cube)
 AT_BOUND = 1e-3  # on the unit cube
@@ -233,7 +235,7 @@ def _calibrate(
     base["outputs"] = record.outputs()
     problem = _Problem(base, space, record, evaluator, cancelled)
     own_case = problem.case_at(own)
-    problem.cells = study_grid(own_case, problem.case_space, None, limits)
+    problem.cells = first_study_grid(own_case, problem.case_space)
     check_grid(own_case, problem.cells, problem.duration, limits, field="record.time", remedy=GRID_REMEDY)
 
     n = len(space.paths)
@@ -268,7 +270,7 @@ def _calibrate(
         refined_fit = _uncertainty(finer, refined.x)
         moved = float(np.max(np.abs(refined.x - fit["unit"]) / np.maximum(refined_fit["unit_error"], 1e-300)))
         problem, fit, refinements = finer, refined_fit, refinements + 1
-        report(0.7 + 0.3 * refinements / MAX_REFINEMENTS)
+        report(0.7 + 0.3 * (1.0 - 0.5**refinements))
         if moved <= GRID_SHARE or refinements >= MAX_REFINEMENTS:
             break
 

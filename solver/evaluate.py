@@ -5,10 +5,11 @@ whose bounds are both positive on a logarithmic scale, so that six decades of a 
 well posed as one, any other linearly. Its cases are validated at every corner before anything
 runs, each refusal naming the path and bound it came from.
 
-Every run of a study is on one grid (`study_grid`), chosen by the tolerance machinery for the base
-case: the runs' answers are then smooth functions of the fields, which finite differences and
-least squares need (a grid chosen anew for each run would jump with it). The study checks its
-answer on a finer grid (fits) or under the tolerance (optimisations).
+Every run of a study's stage is on one grid: the runs' answers are then smooth functions of the
+fields, which finite differences and least squares need (a grid chosen anew for each run would
+jump with it). An optimisation's is chosen by the tolerance machinery for the base case
+(`study_grid`) and its answer checked under the tolerance; a fit starts on the tolerance ladder's
+first grid (`first_study_grid`) and doubles it until its values settle.
 
 A batch of runs is plain JSON (`Batch`: cases, the grid, what to read from each), so that it runs
 in this process, in a pool over every core (`LocalEvaluator`) or on the service's workers alike:
@@ -34,7 +35,7 @@ import numpy as np
 
 from .case import Case, CaseError, FieldError, Outputs, parse_case
 from .errors import NumericalFailure
-from .grid import DEFAULT_TOLERANCE, explicit_numerics, fewest_cells
+from .grid import DEFAULT_TOLERANCE, explicit_numerics, fewest_cells, first_cells
 from .limits import Limits, excesses
 from .paths import quantity, set_field, value_at
 from .record import series
@@ -293,6 +294,14 @@ def study_grid(case: Case, space: Space, tolerance: float | None, limits: Limits
     plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
     result, _ = solve_to_tolerance(plain, tol, limits=limits)
     return max(result.numerics.cells, space.fewest_cells(case))
+
+
+def first_study_grid(case: Case, space: Space) -> int:
+    """The tolerance ladder's first grid for `case` (`grid.first_cells` at its own tolerance, else
+    the default), and no fewer cells than every point of `space` takes: where a fit, which judges
+    its grid by how far a finer one moves its values, starts."""
+    tol = case.numerics.tolerance or DEFAULT_TOLERANCE
+    return max(first_cells(case, tol), space.fewest_cells(case))
 
 
 def check_grid(case: Case, cells: int, duration: float, limits: Limits, field: str, remedy: str) -> None:

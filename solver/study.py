@@ -107,8 +107,8 @@ def run_span(record: Record, space: Space) -> float:
 # What a user can change when a study's grid is over the limits: not the case's grid, which a study
 # sets aside (`study_case`).
 GRID_REMEDY = (
-    "the study chooses its grid for numerics.tolerance and the record's length sets the "
-    "runs': shorten the record, loosen numerics.tolerance, or raise the limit"
+    "the fit refines its grid until its values settle and the record's length sets the runs': "
+    "shorten the record, or raise the limit"
 )
 DURATION_REMEDY = (
     "the study chooses its grid for numerics.tolerance: shorten numerics.duration, "

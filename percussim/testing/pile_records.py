@@ -37,9 +37,21 @@ def head_record(
     h = simulate_rod(case, numerics=explicit_numerics(case, cells)).history
     velocity = np.gradient(h["tool/struck_end_displacement"], h["time"])
     samples = np.arange(0.0, case.numerics.duration, 1.0 / rate)
-    force = np.interp(samples, h["time"], h["contact/force"])
-    velocity = np.interp(samples, h["time"], velocity)
+    clean = {
+        "x": 0.0,
+        "time": samples.tolist(),
+        "force": np.interp(samples, h["time"], h["contact/force"]).tolist(),
+        "velocity": np.interp(samples, h["time"], velocity).tolist(),
+    }
+    return with_noise(clean, noise, noise, seed)
+
+
+def with_noise(record: dict, force_noise: float, velocity_noise: float, seed: int) -> dict:
+    """`record` with Gaussian noise of `force_noise` × the force's peak on its force and
+    `velocity_noise` × the velocity's peak on its velocity (`seed`)."""
     rng = np.random.default_rng(seed)
-    force = force + noise * np.max(np.abs(force)) * rng.standard_normal(samples.size)
-    velocity = velocity + noise * np.max(np.abs(velocity)) * rng.standard_normal(samples.size)
-    return {"x": 0.0, "time": samples.tolist(), "force": force.tolist(), "velocity": velocity.tolist()}
+    noisy = dict(record)
+    for name, share in (("force", force_noise), ("velocity", velocity_noise)):
+        values = np.asarray(record[name])
+        noisy[name] = (values + share * np.max(np.abs(values)) * rng.standard_normal(values.size)).tolist()
+    return noisy
