@@ -52,7 +52,9 @@ def main() -> None:
     args = parser.parse_args()
     warm_up()
     numerics = {"duration": 0.025}
-    clean = head_record(pile(tool=TOOL, shaft=SHAFT, medium=TOE, numerics=numerics), cells=20_000, peak=2.5e6, noise=0.0)
+    clean = head_record(
+        pile(tool=TOOL, shaft=SHAFT, medium=TOE, numerics=numerics), cells=20_000, peak=2.5e6, noise=0.0
+    )
     record = with_noise(clean, 0.02, 0.02, seed=1)
     guess = pile(
         tool=TOOL,
@@ -111,7 +113,9 @@ def noise_sources(clean: dict, guess: dict, processes: int) -> str:
     ]
     for label, force, velocity in (("force and velocity", 0.02, 0.02), ("force", 0.02, 0.0), ("velocity", 0.0, 0.02)):
         for seed in (1, 2, 3):
-            match = signal_match({"case": guess, "record": with_noise(clean, force, velocity, seed)}, processes=processes)
+            match = signal_match(
+                {"case": guess, "record": with_noise(clean, force, velocity, seed)}, processes=processes
+            )
             found = match["parameters"]
             offs = [(found[p]["value"] - truth) / found[p]["standard_error"] for p, truth in TRUTH.items()]
             capacity = match["capacity"]

@@ -21,6 +21,8 @@ from kombu.utils.json import dumps
 
 from .store import write_atomic
 
+DRAIN_SECONDS = 0.2
+
 
 class Channel(filesystem.Channel):
     def _put(self, queue, payload, **kwargs):
@@ -37,3 +39,11 @@ class Channel(filesystem.Channel):
 
 class Transport(filesystem.Transport):
     Channel = Channel
+
+    def drain_events(self, connection, timeout=None):
+        """Wait for a message at most `DRAIN_SECONDS` at a time: Celery's loop for a transport that
+        is polled asks for 2 s, and checks for a shutdown between waits only, so a worker took
+        seconds to stop."""
+        return super().drain_events(
+            connection, timeout=DRAIN_SECONDS if timeout is None else min(timeout, DRAIN_SECONDS)
+        )

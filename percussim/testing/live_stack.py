@@ -65,15 +65,27 @@ class Process:
         )
 
     def stop(self, sig=signal.SIGTERM, timeout: float = 15.0) -> None:
+        self.signal(sig)
+        self.wait(timeout)
+
+    def signal(self, sig=signal.SIGTERM) -> None:
+        """`sig` to the process and every process it started."""
         if self.popen.poll() is None:
             try:
                 os.killpg(self.popen.pid, sig)
-                self.popen.wait(timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(self.popen.pid, signal.SIGKILL)
-                self.popen.wait()
             except ProcessLookupError:
                 pass
+
+    def wait(self, timeout: float = 15.0) -> None:
+        """Until it has exited; killed, with what it started, after `timeout` s."""
+        try:
+            self.popen.wait(timeout)
+        except subprocess.TimeoutExpired:
+            try:
+                os.killpg(self.popen.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
+            self.popen.wait()
 
 
 class RedisServer:
@@ -264,6 +276,9 @@ class Stack:
         return "\n".join(f"--- {p.log.name}\n{p.log.read_text(errors='replace')[-3000:]}" for p in self.processes)
 
     def stop(self) -> None:
+        """Every process told to stop at once, then waited for: each stops in its own time."""
         self.client.close()
-        for p in reversed(self.processes):
-            p.stop()
+        for p in self.processes:
+            p.signal()
+        for p in self.processes:
+            p.wait()
