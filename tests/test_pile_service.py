@@ -58,31 +58,37 @@ def redis_url(tmp_path_factory):
         yield url
 
 
+ASKED = {"case": PILE, "capacity": [1.2e6, 1.5e6, 1.8e6, 2.1e6, 2.4e6, 2.7e6, 3.0e6, 3.3e6]}
+SHALLOW = {"case": PILE, "soil": merge(SOIL, {"depths": [3.0, 5.0]})}  # the deep depths' refusal is test_piling's
+
+
+@pytest.fixture(scope="module")
+def here():
+    """The library's bearing graph and drivability of the requests the services are sent."""
+    return bearing_graph(ASKED, processes=2), drivability(SHALLOW, processes=2)
+
+
 @pytest.mark.slow
 @pytest.mark.parametrize("deployment", ["redis", "embedded"])
-def test_pile_studies_spread_their_variants_over_the_workers_to_the_librarys_rows(request, tmp_path, deployment):
+def test_pile_studies_spread_their_variants_over_the_workers_to_the_librarys_rows(request, tmp_path, deployment, here):
     broker = request.getfixturevalue("redis_url") if deployment == "redis" else None
     stack = Stack(tmp_path, broker, workers=2)
+    graph_here, driven_here = here
     try:
         with Client(stack.url) as api:
-            asked = {"case": PILE, "capacity": [1.2e6, 1.5e6, 1.8e6, 2.1e6, 2.4e6, 2.7e6, 3.0e6, 3.3e6]}
-            graph = api.run_bearing_graph(asked, timeout=120)
-            here = bearing_graph(asked, processes=1)
-            for served, local in zip(graph["rows"], here["rows"], strict=True):
+            graph = api.run_bearing_graph(ASKED, timeout=120)
+            for served, local in zip(graph["rows"], graph_here["rows"], strict=True):
                 assert {k: served[k] for k in COMPARED} == {k: local[k] for k in COMPARED}
             assert graph["status"] == "succeeded" and graph["variable"] == "ultimate_resistance"
             print(f"{deployment}: bearing graph runs spread {graph['runs_spread']}")
             assert graph["runs_spread"]["other_workers"] > 0
             assert stack.client.get(graph["links"]["plot_png"]).content[:4] == b"\x89PNG"
 
-            # the shallow depths: the deep ones' refusal is tests/test_piling.py's to check; here
             # what a job spreads must come back as the library computes it
-            shallow = merge(SOIL, {"depths": [3.0, 5.0]})
-            driven = api.run_drivability({"case": PILE, "soil": shallow}, timeout=120)
-            local = drivability({"case": PILE, "soil": shallow}, processes=1)
+            driven = api.run_drivability(SHALLOW, timeout=120)
             for key in ("total_blows", "driving_time", "refusal_depth", "driven_to", "restrike_refusal_depth"):
-                assert driven[key] == local[key], key
-            assert [row["blow_count"] for row in driven["rows"]] == [row["blow_count"] for row in local["rows"]]
+                assert driven[key] == driven_here[key], key
+            assert [row["blow_count"] for row in driven["rows"]] == [row["blow_count"] for row in driven_here["rows"]]
             assert stack.client.get(driven["links"]["plot_svg"]).text.startswith("<?xml")
             with pytest.raises(Refused) as refused:
                 api.submit_drivability({"case": PILE, "soil": merge(SOIL, {"depths": [30.0]})})

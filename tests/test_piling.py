@@ -122,11 +122,13 @@ def test_the_embedded_length_carries_the_layers_it_passes_and_the_toe_the_layer_
 
 @pytest.mark.slow  # seconds
 def test_drivability_integrates_the_blow_count_and_stops_at_refusal():
-    answer = drivability({"case": PILE, "soil": SOIL}, processes=1)
+    # refusal at 7 m; 9 m is driven past it, and costs what a depth deep in refusal costs (11 m: 30 s)
+    soil = merge(SOIL, {"depths": [3.0, 5.0, 7.0, 9.0]})
+    answer = drivability({"case": PILE, "soil": soil}, processes=2)
     rows = answer["rows"]
     depths = np.array([row["depth"] for row in rows])
     counts = [row["blow_count"] for row in rows]
-    over = [k for k, b in enumerate(counts) if b is None or b > SOIL["refusal"]]
+    over = [k for k, b in enumerate(counts) if b is None or b > soil["refusal"]]
     assert over, counts  # the dense sand's toe is refusal within these depths
     stop = over[0]
     assert answer["refusal_depth"] == depths[stop]
@@ -135,11 +137,11 @@ def test_drivability_integrates_the_blow_count_and_stops_at_refusal():
     assert answer["total_blows"] == pytest.approx(
         np.sum(0.5 * (driven[1:] + driven[:-1]) * np.diff(depths[:stop])), rel=1e-12
     )
-    assert answer["driving_time"] == pytest.approx(answer["total_blows"] / SOIL["blow_rate"], rel=1e-12)
+    assert answer["driving_time"] == pytest.approx(answer["total_blows"] / soil["blow_rate"], rel=1e-12)
     # setup in the dense sand: the restrike needs more blows there, and the same in the sand above it
     assert rows[0]["restrike"]["blow_count"] == rows[0]["blow_count"]
     assert rows[2]["restrike"]["max_compressive_stress"] is not None
-    request = parse_drivability({"case": PILE, "soil": SOIL})
+    request = parse_drivability({"case": PILE, "soil": soil})
     _same_as_direct(rows[1], at_depth(request.case, request.soil, rows[1]["depth"]))
     assert answer["warnings"][0].startswith("the case's medium and shaft are set aside")
 
