@@ -23,8 +23,11 @@ from pathlib import Path
 
 from marked import write_marked
 
+from percussim.solver.adaptive import solve_to_tolerance
+from percussim.solver.case import Case
 from percussim.solver.controller import warm_up
-from percussim.solver.signal_match import signal_match
+from percussim.solver.grid import DEFAULT_TOLERANCE
+from percussim.solver.signal_match import driven_case, parse_signal_match, signal_match
 from percussim.testing.pile_records import head_record, pile, with_noise
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -77,7 +80,8 @@ def main() -> None:
     speed = (
         f"{match['evaluations']} runs, {seconds:.1f} s on {args.processes} processes (goal: 30 s on 2 cores); the "
         f"fit's grid {grid['cells']} cells after {grid['refinements']} doublings, the last moving the values by "
-        f"{grid['moved']:.2f} of their standard errors"
+        f"{grid['moved']:.2f} of their standard errors; the tolerance machinery's grid for the pile at its "
+        f"guesses: {tolerance_grid(guess, record)} cells"
     )
     capacity = match["capacity"]
     off = abs(capacity["value"] - 1.5e6) / capacity["standard_error"]
@@ -101,6 +105,14 @@ def main() -> None:
         write_marked(ROOT / "docs" / "signal_matching.md", "signal match", text)
         write_marked(ROOT / "docs" / "signal_matching.md", "signal match noise", sources)
         write_marked(ROOT / "docs" / "performance.md", "signal match speed", speed)
+
+
+def tolerance_grid(guess: dict, record: dict) -> int:
+    """The cells the tolerance machinery (1%) takes the record-driven pile to, on its summary."""
+    case = driven_case(parse_signal_match({"case": guess, "record": record}))
+    plain = Case.model_validate(case.model_dump() | {"outputs": {"history_stride": 2**62}})
+    result, _ = solve_to_tolerance(plain, DEFAULT_TOLERANCE)
+    return result.numerics.cells
 
 
 def noise_sources(clean: dict, guess: dict, processes: int) -> str:
