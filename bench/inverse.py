@@ -462,12 +462,13 @@ best design.
 
 Both vary fields named by dotted paths (`contact.stiffness`, `striker.length`) between bounds.
 A field whose bounds are both positive is searched on a logarithmic scale, so that six decades of
-a stiffness are as easy as one. Every run of a study is on one grid, chosen by the tolerance
-machinery for the starting case (`numerics.tolerance`, 1% when not given), so that the answers
+a stiffness are as easy as one. Every run of a study's stage is on one grid, so that the answers
 change smoothly with the fields: the explicit scheme at Courant number 1, on no fewer cells than
 any point within the bounds takes (an elastic striker's wave transit must span two time steps, so
 a piston a twelfth of its rod's length needs 24 cells, and one whose length is fitted, as many as
-its shortest bound asks). A fixed grid the case gives (`numerics.cells`, `time_step`, `scheme`) is
+its shortest bound asks). An optimisation's grid is the one the tolerance machinery chooses for
+the starting case (`numerics.tolerance`, 1% when not given); a fit climbs its own, from the
+tolerance ladder's first grid, doubling it until its values settle (step 5 below). A fixed grid the case gives (`numerics.cells`, `time_step`, `scheme`) is
 set aside, and the answer's warnings say so. The batch of runs of each step goes to a pool of
 processes (one a core by default), or to the service's workers. Runs of a few milliseconds, as in most fits, cost less in the calling process than the
 pipe to a pool: a batch goes to the pool only when its runs would take long enough to be worth
@@ -514,9 +515,12 @@ at rest.
    variance and from them the covariance: a standard error for each parameter, the correlation
    between them, and 95% confidence bounds (on the logarithmic scale for a positive parameter,
    so they stay positive).
-5. **The grid.** The fit is repeated on a grid twice as fine, from its optimum, until the values
+5. **The grid.** Steps 2–4 run on the tolerance ladder's first grid, coarse: a global look needs
+   no more. The fit is then repeated on a grid twice as fine, from its optimum, until the values
    move by less than a third of their standard errors: the grid's error is then a small part of
-   the answer's uncertainty.
+   the answer's uncertainty. A fit is judged by its values, not by a summary's tolerance: a
+   record of a few hundred samples settles on far fewer cells than a summary's largest stress
+   asks of its grid.
 
 The answer holds, for each parameter, its value, standard error and 95% bounds; the correlation
 matrix; the misfit (`nrmse`, the RMS difference over the record's range) beside the record's own
