@@ -11,7 +11,7 @@ import math
 import pytest
 from browser import drawn, fill_json, shown, shown_job
 from playwright.sync_api import expect
-from test_signal_match import guessed
+from test_signal_match import RESISTANCES, guessed
 
 from percussim.testing.pile_records import head_record, pile
 
@@ -63,6 +63,21 @@ def test_a_record_chosen_on_disk_is_matched_to_its_capacity_and_charts(page, sta
     (load,) = drawn(page, "match-load-test")
     assert load["x"][-1] == pytest.approx(match["capacity"]["value"] / 1e3, rel=1e-5)
     assert load["y"] == pytest.approx([s * 1e3 for s in match["static_load_test"]["settlement"]])  # mm
+
+    # unknowns of one's own: the resistances alone, the quakes and damping factors kept as guessed
+    first = shown_job(page)
+    for path, (low, high) in RESISTANCES.items():
+        page.click("[data-add=match-parameters]")
+        cells = page.locator("#match-parameters tbody tr").last.locator("input")
+        for cell, text in zip(cells.all(), (path, str(low), str(high))):
+            cell.fill(text)
+    page.click("#run-match")
+    page.wait_for_url(lambda url: first not in url)
+    second = shown_job(page)
+    stack.wait_status(second, ("succeeded",), timeout=240)
+    fitted = stack.client.get(f"/v1/signal-matches/{second}").json()["match"]["parameters"]
+    assert set(fitted) == set(RESISTANCES)
+    expect(page.locator("#study table.fit tbody tr")).to_have_count(2)
 
     # a sample that is not a number: the service names it, the page adds its line in the file
     lines = record_csv(record).splitlines()

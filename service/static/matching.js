@@ -8,7 +8,7 @@ import { $, card, fmt, h, showProblems, table, typed } from "./dom.js";
 import { editedCase, send } from "./editor.js";
 import { showJobError } from "./job.js";
 import { chooseRecordFile } from "./records.js";
-import { fitCards } from "./studies.js";
+import { fitCards, rows } from "./studies.js";
 import { shownUnit } from "./units.js";
 
 export const SIGNAL_MATCHES = "/v1/signal-matches";
@@ -58,7 +58,9 @@ async function submitMatch(event) {
     return;
   }
   const pile = Object.fromEntries(Object.entries(edited).filter(([name]) => !DRIVEN_BY_THE_RECORD.includes(name)));
-  await send(SIGNAL_MATCHES, JSON.stringify({ case: pile, record: chosen.measured.record }),
+  const parameters = rows("match-parameters");
+  const body = { case: pile, record: chosen.measured.record, ...(Object.keys(parameters).length ? { parameters } : {}) };
+  await send(SIGNAL_MATCHES, JSON.stringify(body),
              { button: $("run-match"), box, what: "signal match", where: chosen.line });
 }
 

@@ -14,11 +14,12 @@ const STARTING_ROWS = {
   "fit-parameters": [["contact.stiffness", "1e9", "1e15"], ["medium.stiffness", "1e7", "1e11"]],
   variables: [["striker.length", "0.1", "0.6"]],
   limits: [],
+  "match-parameters": [],
 };
 
 let chosen = null; // the record file's input (records.js): its record read, or null
 
-function addRow(tableId, [path, second, third] = ["", "", ""]) {
+export function addRow(tableId, [path, second, third] = ["", "", ""]) {
   const limit = tableId === "limits";
   const input = (value, label, className, list) =>
     h("input", { value, class: className, list, spellcheck: "false", "aria-label": label });
@@ -36,7 +37,7 @@ function addRow(tableId, [path, second, third] = ["", "", ""]) {
 }
 
 // A form's table as {path: [low, high]}, or for limits {quantity: {max or min: value}}.
-function rows(tableId) {
+export function rows(tableId) {
   const out = {};
   for (const row of $(tableId).tBodies[0].rows) {
     const [path, second, third] = [...row.querySelectorAll("input, select")].map((el) => el.value.trim());
