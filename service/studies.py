@@ -22,6 +22,7 @@ from percussim.common.store import (
     DRIVABILITY,
     OPTIMIZATION,
     SIGNAL_MATCH,
+    STUDY_PLOT,
     SUCCEEDED,
     JobStore,
     UnknownJob,
@@ -153,8 +154,7 @@ class Kind(NamedTuple):
     model: type[BaseModel]
     check: Callable[[BaseModel, Limits], object]  # refuses the request, naming the field
     checked: str  # what the check looks at, in words
-    plot: str
-    plotted: str  # what the plot shows, in words
+    plotted: str  # what the plot (`STUDY_PLOT`'s) shows, in words
     case: Callable[[BaseModel], dict] = _given_case  # the job's case, as its record lists it
 
 
@@ -166,7 +166,6 @@ KINDS: dict[str, Kind] = {
         Calibration,
         _on_its_grid(check_calibration),
         "the request's fields, the case's limits, the record against the case and its units",
-        "fit",
         "The record against the fitted model, and the residual.",
     ),
     OPTIMIZATION: Kind(
@@ -176,7 +175,6 @@ KINDS: dict[str, Kind] = {
         Optimization,
         _on_its_grid(check_optimization),
         "the request's fields, the case's limits, the variables and the summary quantities named",
-        "convergence",
         "Every evaluation of the objective, and the best so far.",
     ),
     BEARING_GRAPH: Kind(
@@ -186,7 +184,6 @@ KINDS: dict[str, Kind] = {
         BearingGraph,
         bearing_variants,
         "capacity or stroke, the toe's Smith soil, and every variant case against the limits",
-        "bearing_graph",
         "The blow count and the largest stresses against the capacity or the ram's stroke.",
     ),
     DRIVABILITY: Kind(
@@ -196,7 +193,6 @@ KINDS: dict[str, Kind] = {
         Drivability,
         drivability_variants,
         "the soil's layers and depths against the pile, and every depth's case against the limits",
-        "drivability",
         "The blow count (and the restrike's) and the largest stresses against the depth.",
     ),
     SIGNAL_MATCH: Kind(
@@ -206,7 +202,6 @@ KINDS: dict[str, Kind] = {
         SignalMatch,
         _checked_match,
         "the request's fields, the pile and its Smith toe, the gauges' station, the record's length and units",
-        "signal_match",
         "The force and the waves at the gauges, measured and computed; the fitted resistance along the pile; "
         "the static load test.",
         _driven_case,  # the pile as the record drives it
@@ -216,7 +211,8 @@ KINDS: dict[str, Kind] = {
 
 def studies_router(settings: Settings, queue: JobQueue, kind: str) -> APIRouter:
     """The routes of one kind of study for the results store and broker of `settings`."""
-    prefix, tag, answer_name, model, check, checked, plot, plotted, case_of = KINDS[kind]
+    prefix, tag, answer_name, model, check, checked, plotted, case_of = KINDS[kind]
+    plot = STUDY_PLOT[kind]
     router = APIRouter(prefix=prefix, tags=[tag])
     not_found = {404: {"model": Problem, "description": f"no {kind.replace('_', ' ')} with this id"}}
 

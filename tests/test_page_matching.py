@@ -36,7 +36,10 @@ def test_a_record_chosen_on_disk_is_matched_to_its_capacity_and_charts(page, sta
     )
     page.click("#run-match")
     expect(page.locator("#job-status")).to_have_text("succeeded", timeout=240_000)
-    match = stack.client.get(f"/v1/signal-matches/{shown_job(page)}").json()["match"]
+    study = stack.client.get(f"/v1/signal-matches/{shown_job(page)}").json()
+    match = study["match"]
+    # the worker drew the plot the API serves: the four panels the command line draws
+    assert stack.client.get(study["links"]["plot_png"]).content[:8] == b"\x89PNG\r\n\x1a\n"
     assert (
         "striker" not in match["case"] and len(match["parameters"]) == 6
     )  # the default unknowns: 3 for the shaft, 3 for the toe

@@ -28,6 +28,7 @@ from percussim.common.store import (
     OPTIMIZATION,
     RUN,
     SIGNAL_MATCH,
+    STUDY_PLOT,
     SUCCEEDED,
     JobStore,
     StoreUnavailable,
@@ -54,11 +55,11 @@ CANCEL_POLL_SECONDS = 0.1  # how often a running job asks whether it was cancell
 STORE_RETRY_SECONDS = 60.0  # how long a job's end waits for a database that went away
 ALIVE_WITHIN = 15.0  # s: workers whose heartbeat is this recent may take a study's parts
 STUDIES = {
-    CALIBRATION: (calibrate, "fit"),
-    OPTIMIZATION: (optimize, "convergence"),
-    BEARING_GRAPH: (bearing_graph, "bearing_graph"),
-    DRIVABILITY: (drivability, "drivability"),
-    SIGNAL_MATCH: (signal_match, "fit"),
+    CALIBRATION: calibrate,
+    OPTIMIZATION: optimize,
+    BEARING_GRAPH: bearing_graph,
+    DRIVABILITY: drivability,
+    SIGNAL_MATCH: signal_match,
 }
 
 
@@ -184,7 +185,8 @@ def _study(
 ) -> tuple[float, float]:
     """A study: its batches spread over the live workers."""
     s = settings()
-    solve, plot = STUDIES[_stored(lambda: store.get(job_id))["kind"]]
+    kind = _stored(lambda: store.get(job_id))["kind"]
+    solve, plot = STUDIES[kind], STUDY_PLOT[kind]
     workers = len(WorkerRegistry(s.results_dir).alive(within=ALIVE_WITHIN)) or 1
     evaluator = QueueEvaluator(
         store.batches(job_id),

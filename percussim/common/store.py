@@ -51,6 +51,15 @@ STATUSES = (QUEUED, RUNNING, *FINISHED)
 RUN, CALIBRATION, OPTIMIZATION = "run", "calibration", "optimization"  # a job's kind
 BEARING_GRAPH, DRIVABILITY = "bearing_graph", "drivability"  # the pile studies' kinds
 SIGNAL_MATCH = "signal_match"  # a pile's soil from its head's record
+# The plot a succeeded study of each kind keeps (a name of `solver.study_plots.STUDY_PLOTS`): the
+# worker draws it, the API serves it.
+STUDY_PLOT = {
+    CALIBRATION: "fit",
+    OPTIMIZATION: "convergence",
+    BEARING_GRAPH: "bearing_graph",
+    DRIVABILITY: "drivability",
+    SIGNAL_MATCH: "signal_match",
+}
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
 
