@@ -428,12 +428,13 @@ def _calibrate(args: argparse.Namespace) -> int:
 
 
 def _match(args: argparse.Namespace) -> int:
+    from .solver.case import read_case_json
     from .solver.signal_match import read_pile_record, signal_match
 
     def request() -> dict:
         source = _case_source(args.case)
         return {
-            "case": source if isinstance(source, dict) else json.loads(Path(source).read_text()),
+            "case": source if isinstance(source, dict) else read_case_json(source),
             "record": read_pile_record(Path(args.record).read_text()).model_dump(),
             "parameters": dict(args.fit) if args.fit else None,
         }

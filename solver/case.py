@@ -1015,8 +1015,18 @@ def as_case(case: Case | dict | str | os.PathLike) -> Case:
 def load_case(path: str | os.PathLike) -> Case:
     """Read and validate a case JSON file."""
     text = Path(path).read_text()
+    _decoded(text)
+    return parse_case(text)
+
+
+def read_case_json(path: str | os.PathLike) -> dict:
+    """A case JSON file's contents, not yet validated (a signal match's pile has no striker);
+    `CaseError` when it is not JSON."""
+    return _decoded(Path(path).read_text())
+
+
+def _decoded(text: str) -> Any:
     try:
-        json.loads(text)
+        return json.loads(text)
     except json.JSONDecodeError as error:
         raise CaseError([FieldError(field="case", message=f"is not valid JSON: {error}")]) from None
-    return parse_case(text)

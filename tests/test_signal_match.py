@@ -139,3 +139,6 @@ def test_the_command_line_matches_and_refuses(record, tmp_path, capsys):
     (tmp_path / "pile.json").write_text(json.dumps(guessed() | {"striker": {"mass": 1.0, "velocity": 1.0}}))
     assert main(["match", *common]) == 2
     assert "case.striker: the record drives the pile" in capsys.readouterr().err
+    (tmp_path / "pile.json").write_text("{not json")
+    assert main(["match", *common]) == 2
+    assert "case: is not valid JSON" in capsys.readouterr().err
