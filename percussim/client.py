@@ -357,7 +357,7 @@ class Client:
 
     def submit_signal_match(self, request: dict) -> dict:
         """Queue a signal match on the workers. `request` is that of a local
-        `percussim.signal_match`: `{"case": the pile (JSON, a file or a preset's name), "record":
+        `percussim.signal_match`: `{"case": the pile (case JSON or the path of its file), "record":
         {"x", "time", "force", "velocity"} or the path of a CSV record (read here), "parameters":
         {PATH: [low, high]} or none for the default}`. Returns the study's record; raises `Refused`
         naming each offending field."""
