@@ -14,7 +14,6 @@ const STARTING_ROWS = {
   "fit-parameters": [["contact.stiffness", "1e9", "1e15"], ["medium.stiffness", "1e7", "1e11"]],
   variables: [["striker.length", "0.1", "0.6"]],
   limits: [],
-  "match-parameters": [],
 };
 
 let chosen = null; // the record file's input (records.js): its record read, or null
