@@ -1,5 +1,7 @@
-"""Worked example of the Python client: run a preset on a running percussim service, print its
-pulse summary, read its full histories as arrays and download the HDF5 result.
+"""Worked example of the Python client: run a preset on a running percussim service at the default
+accuracy (1%, every quantity with its estimated error), print its pulse summary beside the same
+case on the paper's own numerics (what they cost and what they lose), read the full histories as
+arrays and download the HDF5 result.
 
     .venv/bin/python examples/submit.py [--url http://127.0.0.1:8000] [--preset fig3] [--output fig3.h5]
 
@@ -8,7 +10,8 @@ pulse summary, read its full histories as arrays and download the HDF5 result.
     from percussim.client import Client
 
     with Client("http://127.0.0.1:8000") as api:
-        summary = api.run(api.preset("fig3"))
+        paper = api.preset("fig3")
+        summary = api.run({**paper, "numerics": {"duration": paper["numerics"]["duration"]}})
 """
 
 from __future__ import annotations
@@ -16,8 +19,83 @@ from __future__ import annotations
 import argparse
 import json
 import os
+from datetime import datetime
 
 from percussim.client import Client
+
+# (label, where in the summary, unit, scale)
+QUANTITIES = (
+    ("co-impact time", ("co_impact_time",), "µs", 1e6),
+    ("peak contact force", ("peak_contact_force", "value"), "kN", 1e-3),
+    ("max compressive stress", ("max_compressive_stress", "value"), "MPa", 1e-6),
+    ("max tensile stress", ("max_tensile_stress", "value"), "MPa", 1e-6),
+    ("energy to the medium", ("energy", "to_medium"), "J", 1.0),
+    ("striker rebound velocity", ("striker_rebound_velocity",), "m/s", 1.0),
+)
+ESTIMATE_OF = {
+    "co-impact time": "co_impact_time",
+    "peak contact force": "peak_contact_force",
+    "max compressive stress": "max_compressive_stress",
+    "max tensile stress": "max_tensile_stress",
+    "energy to the medium": "energy.to_medium",
+    "striker rebound velocity": "striker_rebound_velocity",
+}
+
+
+def at_default_accuracy(case: dict) -> dict:
+    """The case with its grid, time step and scheme left out: the solver chooses the grid that
+    meets the default accuracy, 1%, and estimates every quantity's error."""
+    return {**case, "numerics": {"duration": case["numerics"]["duration"]}}
+
+
+def solved(api: Client, case: dict, label: str) -> tuple[str, dict, float]:
+    """`case` run on the service: its job's id, its summary and its running time (s)."""
+    job = api.submit(case)
+    print(f"submitted {case['name']} ({label}) as job {job['id']}")
+    # Raises JobFailed, with the job's error, if the job fails or is cancelled.
+    api.wait(job["id"], progress=lambda fraction, record: print(f"  {record['status']:9s} {100 * fraction:5.1f} %"))
+    record = api.job(job["id"])
+    seconds = (datetime.fromisoformat(record["finished"]) - datetime.fromisoformat(record["started"])).total_seconds()
+    return job["id"], api.summary(job["id"]), seconds
+
+
+def value(summary: dict, path: tuple[str, ...]) -> float:
+    for key in path:
+        summary = summary[key]
+    return summary
+
+
+def side_by_side(trusted: tuple[str, dict, float], paper: tuple[str, dict, float]) -> str:
+    """Each quantity at the default accuracy and on the paper's numerics, with each one's
+    estimated error; then what each cost (node-steps, the job's time) and the energy the scheme lost."""
+
+    def cell(summary: dict, label: str, path: tuple[str, ...], scale: float) -> str:
+        estimate = (summary["error_estimate"] or {}).get(ESTIMATE_OF[label])
+        shown = f"{value(summary, path) * scale:.4g}"
+        return f"{shown:>8s} ± {100 * estimate:.2g}%" if estimate is not None else f"{shown:>8s} (not estimated)"
+
+    def work(summary: dict) -> str:
+        return f"{sum((r['cells'] + 1) * (r['steps'] + 1) for r in summary['runs']) / 1e6:.2f}M node-steps"
+
+    def grids(summary: dict) -> str:
+        return ", ".join(str(r["cells"]) for r in summary["runs"])
+
+    def lost(summary: dict) -> str:
+        energy = summary["energy"]
+        return f"{energy['numerical']:.3g} J ({100 * energy['numerical'] / energy['initial']:.2g}%)"
+
+    rows = [("", "default accuracy (1%)", "paper numerics")]
+    rows += [
+        (f"{label} ({unit})", cell(trusted[1], label, path, scale), cell(paper[1], label, path, scale))
+        for label, path, unit, scale in QUANTITIES
+    ]
+    rows += [
+        ("work", work(trusted[1]), work(paper[1])),
+        ("grids (cells)", grids(trusted[1]), grids(paper[1])),
+        ("job time", f"{trusted[2] * 1e3:.0f} ms", f"{paper[2] * 1e3:.0f} ms"),
+        ("energy lost by the scheme", lost(trusted[1]), lost(paper[1])),
+    ]
+    return "\n".join(f"{a:32s} {b:24s} {c}" for a, b, c in rows)
 
 
 def main() -> None:
@@ -28,11 +106,9 @@ def main() -> None:
     args = parser.parse_args()
 
     with Client(args.url, api_key=os.environ.get("PERCUSSIM_API_KEY")) as api:
-        job = api.submit(api.preset(args.preset))
-        print(f"submitted {args.preset} as job {job['id']}")
-        # Raises JobFailed, with the job's error, if the job fails or is cancelled.
-        api.wait(job["id"], progress=lambda fraction, record: print(f"  {record['status']:9s} {100 * fraction:5.1f} %"))
-        summary = api.summary(job["id"])
+        paper_case = api.preset(args.preset)
+        trusted = solved(api, at_default_accuracy(paper_case), "the default accuracy")
+        job_id, summary, _ = trusted
         print(
             json.dumps(
                 {
@@ -44,15 +120,20 @@ def main() -> None:
                         "max_tensile_stress",
                         "striker_rebound_velocity",
                         "energy",
+                        "error_estimate",
                         "warnings",
                     )
                 },
                 indent=2,
             )
         )
+        # The preset as the paper solved it (its own grid, time step and γ), for comparison.
+        paper = solved(api, paper_case, "the paper's numerics")
+        print(side_by_side(trusted, paper))
+        print("the paper's numerics warn:", *paper[1]["warnings"], sep="\n  ")
 
         # The full histories, as NumPy arrays under their HDF5 paths: the same Result a local run gives.
-        result = api.result(job["id"])
+        result = api.result(job_id)
         time, force = result.history["time"], result.history["contact/force"]
         peak = force.argmax()
         print(
@@ -61,7 +142,7 @@ def main() -> None:
         )
 
         if args.output:
-            print(f"result written to {api.download(job['id'], args.output)}")
+            print(f"result written to {api.download(job_id, args.output)}")
 
 
 if __name__ == "__main__":

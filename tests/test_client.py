@@ -407,7 +407,21 @@ def test_the_worked_example_runs_a_preset_and_downloads_its_result(stack, tmp_pa
     )
     assert done.returncode == 0, done.stderr
     assert "succeeded" in done.stdout and f"result written to {output}" in done.stdout
-    assert read_result(output).summary["name"] == "fig3"
+    # the answer shown and downloaded is the trusted one: the default accuracy, its estimate within it
+    summary = read_result(output).summary
+    assert summary["name"] == "fig3" and summary["tolerance"] == 0.01 and summary["scheme"] == "explicit"
+    assert summary["error_estimate"]["worst"] <= 0.01 and not summary["warnings"]
+    # beside it, the paper's numerics: each quantity with its estimate, what each cost and lost
+    table = done.stdout[done.stdout.index("default accuracy (1%)") :]
+    for line in (
+        "peak contact force (kN)",
+        "energy to the medium (J)",
+        "work",
+        "job time",
+        "energy lost by the scheme",
+    ):
+        assert line in table
+    assert "the paper's numerics warn:" in done.stdout and "estimated errors over 1%" in done.stdout
 
 
 def test_a_signal_match_from_a_csv_record_gives_the_local_match(api, tmp_path):
