@@ -133,6 +133,9 @@ its last node, less than 2τ (its length is rarely a whole number of cells). Und
 striker's `weight` m1·g (N; 0 otherwise; an elastic one's nodes carry theirs, its `Tool`'s). With
 no striker a history drives the struck end (`struck_end`): `driver` (`DRIVEN_BY_…`; `NOT_DRIVEN`
 with a striker), the history's instants (s from the blow's start) and values, linear between them."""
+StrikerEnd = namedtuple("StrikerEnd", "elastic impedance mass weight")
+"""What the struck end's integration reads of the `Striker`: its scalars alone, so that the call
+passes no arrays."""
 Anvil = namedtuple("Anvil", "present mass velocity contact weight")
 """A lumped body between the striker and the tool (when `present`): its mass m_a, its velocity at
 impact and its `Contact` with the tool (the anvil as that contact's striker, the tool's end

@@ -81,6 +81,7 @@ from .bundles import (
     Overlaps,
     Recorded,
     StepConstants,
+    StrikerEnd,
     boundary_weights,
 )
 from .contact import contact_law, external_force, launched_at, pressed_to
@@ -365,8 +366,11 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     end_state[END_CONTACT_DEEPEST] = ends[S_CONTACT_DEEPEST]
     end_state[END_ANVIL_CONTACT_DEEPEST] = ends[S_ANVIL_CONTACT_DEEPEST]
     if striker.driver == NOT_DRIVEN:
+        striker_end = StrikerEnd(
+            elastic=striker.elastic, impedance=striker.impedance, mass=striker.mass, weight=striker.weight
+        )
         work, dissipated, crossings, contact_range, end_range = struck_end_step(
-            t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker, anvil, force, events
+            t - tau, tau, end_state, (v_in, v_slope, face_in, face_slope), contact, striker_end, anvil, force, events
         )
     else:
         work, dissipated, crossings, contact_range, end_range = driven_end_step(
