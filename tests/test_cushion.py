@@ -75,3 +75,30 @@ def test_a_cushion_is_refused_where_it_cannot_be_taken(change, field):
     with pytest.raises(CaseError) as refused:
         simulate(cushion_on_a_wall(0.8) | change)
     assert refused.value.errors[0].field == field
+
+
+@pytest.mark.parametrize("exponent", [0.0, 0.5])
+@pytest.mark.parametrize("target", [2e-4, 5e-4, 9e-4, 1.2e-3, 2e-3])
+def test_a_stage_of_a_cushion_balances_its_law_on_either_branch(exponent, target):
+    """`δ + C·Φ'(δ) = target` holds to rounding below the deepest overlap (the unloading line, whose
+    stiffness and offset are not the loading's), above it and across the turn, with C·c1 of order
+    one as a coarse step with a heavy anvil gives."""
+    from percussim.solver import kernel as K
+    from percussim.solver.kernel.contact import contact_spring
+    from percussim.solver.kernel.struck_end import solve_spring_balance
+
+    stiffness = 5.89e9 if exponent == 0.0 else 5.89e9 / 1e-3**0.5
+    cushion = K.Contact(
+        striker_mass=1.0,
+        striker_velocity=1.0,
+        stiffness=stiffness,
+        exponent=exponent,
+        tension_stiffness=0.0,
+        damping=0.0,
+        impedance=1.0,
+        restitution=0.8,
+        deepest=1e-3,
+    )
+    compliance = 1e-10
+    delta = solve_spring_balance(target, compliance, target, cushion)
+    assert abs(delta + compliance * contact_spring(delta, cushion)[0] - target) <= 1e-12 * target

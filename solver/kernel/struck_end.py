@@ -94,10 +94,11 @@ def solve_spring_balance(target, compliance, guess, contact):
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
         return target
-    # on one linear branch the root is direct (in separation, or for a linear contact)
+    # on one linear branch the root is direct: in separation, or pressed along a linear contact's
+    # loading (a cushion unloads along another line, below the deepest overlap it was pressed to)
     if hi <= 0.0:
         return target / (1.0 + compliance * c0)
-    if lo >= 0.0 and alpha == 0.0:
+    if lo >= 0.0 and alpha == 0.0 and (contact.restitution == 1.0 or lo >= contact.deepest):
         return target / (1.0 + compliance * c1)
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
