@@ -147,3 +147,41 @@ def test_energy_closes_with_an_anvil():
     assert s["energy"]["initial"] == pytest.approx(4 * 0.5 * 2.0 * V**2)
     with_velocity = percussim.simulate(cases[1]).summary["energy"]["initial"]
     assert with_velocity == pytest.approx(0.5 * 2.0 * V**2 + 0.5 * 0.5 * 1.0**2)
+
+
+@pytest.mark.parametrize("restitution", [1.0, 0.6])
+@pytest.mark.parametrize("guess", [(0.0, 0.0), (2e-4, 1e-4), (-1e-4, 3e-4), (6e-4, -1e-5)])
+@pytest.mark.parametrize("free", [(5e-4, 2e-4), (1e-4, 5e-4), (-2e-4, 1e-4), (8e-4, -3e-4)])
+def test_a_stage_of_two_linear_contacts_balances_them_on_any_branch(restitution, guess, free):
+    """`δ = free − C·F`, `F_i = Φ_i'(δ_i) + b_i·(δ_i − base_i)/g`: the stage's root holds its
+    definition to rounding, whether the guess lies on the root's lines (solved directly as a 2×2
+    system) or not (the bracketed iteration), with the striker's contact a cushion pressed to
+    0.5 mm, in tension, unloading, at its set or loading again."""
+    from percussim.solver import kernel as K
+    from percussim.solver.kernel.contact import contact_spring
+    from percussim.solver.kernel.struck_end import anvil_balance
+
+    def contact(stiffness, damping, restitution, deepest):
+        return K.Contact(
+            striker_mass=1.0,
+            striker_velocity=1.0,
+            stiffness=stiffness,
+            exponent=0.0,
+            tension_stiffness=1e6,
+            damping=damping,
+            impedance=1.0,
+            restitution=restitution,
+            deepest=deepest,
+        )
+
+    cushion, end = contact(5.89e9, 2e4, restitution, 5e-4), contact(2e10, 0.0, 1.0, 0.0)
+    gives, g, base = (1e-10, 2e-11, 5e-11), 1e-6, (1e-4, 5e-5)
+    f1, f2, d1, d2 = anvil_balance(free, base, gives, g, guess, cushion, end)
+    a, b, t = gives
+    assert f1 == pytest.approx(
+        contact_spring(d1, cushion)[0] + cushion.damping * (d1 - base[0]) / g, rel=1e-12, abs=1e-6
+    )
+    assert f2 == pytest.approx(contact_spring(d2, end)[0], rel=1e-12, abs=1e-6)
+    scale = max(abs(free[0]), abs(free[1]))
+    assert d1 == pytest.approx(free[0] - (a + b) * f1 + b * f2, abs=1e-12 * scale)
+    assert d2 == pytest.approx(free[1] + b * f1 - (b + t) * f2, abs=1e-12 * scale)

@@ -84,6 +84,25 @@ def substeps(rate, span, limit):
     return min(MAX_SUBSTEPS, max(1, math.ceil(rate * span / limit)))
 
 
+@compiled(inline="always")
+def linear_branch(delta, contact):
+    """For a linear contact (α = 0): the line its force follows at δ, `F = slope·δ + offset`, and
+    the overlaps it holds over (`laws.contact_spring`): c0·δ in tension; for a cushion pressed to
+    δ_m, nothing up to its set δ_p = (1 − e²)·δ_m and c1·(δ − δ_p)/e² from there to δ_m; c1·δ
+    beyond (from 0 for a contact that is no cushion)."""
+    c1 = contact.stiffness
+    if delta < 0.0:
+        return contact.tension_stiffness, 0.0, -math.inf, 0.0
+    e2 = contact.restitution * contact.restitution
+    deepest = contact.deepest
+    if e2 < 1.0 and delta <= deepest:
+        set_ = deepest * (1.0 - e2)
+        if delta < set_:
+            return 0.0, 0.0, 0.0, set_
+        return c1 / e2, -c1 / e2 * set_, set_, deepest
+    return c1, 0.0, deepest if e2 < 1.0 else 0.0, math.inf
+
+
 @compiled()
 def solve_spring_balance(target, compliance, guess, contact):
     """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
@@ -98,8 +117,12 @@ def solve_spring_balance(target, compliance, guess, contact):
     # loading (a cushion unloads along another line, below the deepest overlap it was pressed to)
     if hi <= 0.0:
         return target / (1.0 + compliance * c0)
-    if lo >= 0.0 and alpha == 0.0 and (contact.restitution == 1.0 or lo >= contact.deepest):
-        return target / (1.0 + compliance * c1)
+    if lo >= 0.0 and alpha == 0.0:
+        if contact.restitution == 1.0 or lo >= contact.deepest:
+            return target / (1.0 + compliance * c1)
+        slope, offset, low, high = linear_branch(lo, contact)  # a cushion below its deepest
+        if hi <= high:
+            return (target - compliance * offset) / (1.0 + compliance * slope)
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):
@@ -206,6 +229,22 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
     k22 = (a + b) / det_c + d2
     r1 = ((b + t) * free[0] + b * free[1]) / det_c + d1 * base[0]
     r2 = (b * free[0] + (a + b) * free[1]) / det_c + d2 * base[1]
+    if contact.exponent == 0.0 and end.exponent == 0.0:
+        # two linear contacts: on the lines the guess lies on, the balance is a 2×2 linear system;
+        # a root that lies on those lines is the root (the balance is a convex minimum's)
+        s1, o1, low1, high1 = linear_branch(guess[0], contact)
+        s2, o2, low2, high2 = linear_branch(guess[1], end)
+        a11, a22 = k11 + s1, k22 + s2
+        det = a11 * a22 - k12 * k12
+        delta1 = ((r1 - o1) * a22 - k12 * (r2 - o2)) / det
+        delta2 = (a11 * (r2 - o2) - k12 * (r1 - o1)) / det
+        if low1 <= delta1 <= high1 and low2 <= delta2 <= high2:
+            return (
+                s1 * delta1 + o1 + d1 * (delta1 - base[0]),
+                s2 * delta2 + o2 + d2 * (delta2 - base[1]),
+                delta1,
+                delta2,
+            )
     least_slope = ((1.0 + d1 * (a + b) + d2 * (b + t)) / det_c + d1 * d2) / k11
     delta1, delta2 = guess
     lo = hi = scale = 0.0
