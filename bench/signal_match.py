@@ -27,7 +27,6 @@ import numpy as np
 from marked import write_marked
 
 from percussim.solver.adaptive import solve_to_tolerance
-from percussim.solver.case import Case
 from percussim.solver.controller import warm_up
 from percussim.solver.grid import DEFAULT_TOLERANCE
 from percussim.solver.record import scatter
@@ -156,8 +155,7 @@ def refits(clean: dict, guess: dict, processes: int) -> str:
 def tolerance_grid(guess: dict, record: dict) -> int:
     """The cells the tolerance machinery (1%) takes the record-driven pile to, on its summary."""
     case = driven_case(parse_signal_match({"case": guess, "record": record}))
-    plain = Case.model_validate(case.model_dump() | {"outputs": {"history_stride": 2**62}})
-    result, _ = solve_to_tolerance(plain, DEFAULT_TOLERANCE)
+    result, _ = solve_to_tolerance(case.summary_only(), DEFAULT_TOLERANCE)
     return result.numerics.cells
 
 

@@ -18,7 +18,6 @@ from __future__ import annotations
 import argparse
 import time
 
-from percussim.solver.adaptive import _summary_only
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.grid import explicit_numerics, fewest_cells
@@ -54,7 +53,7 @@ def cost(name: str, cells: int, repeats: int) -> tuple[int, float, float]:
             update={"numerics": base.numerics.model_copy(update={"duration": base.numerics.duration * factor})}
         )
         numerics = explicit_numerics(case, cells)
-        case = _summary_only(case, numerics)
+        case = case.summary_only()
         found.append((numerics.steps, least_time(case, numerics, repeats)))
     (short_steps, short), (long_steps, long) = found
     per_step = (long - short) / (long_steps - short_steps)

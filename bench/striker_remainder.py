@@ -13,7 +13,6 @@ time. `LundbergRock` (a rigid contact) gives the rock's share of a rectangular w
 
 from __future__ import annotations
 
-from percussim.solver.adaptive import _summary_only
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.grid import explicit_numerics, striker_transit, wave_speed
@@ -40,7 +39,7 @@ def main() -> None:
         )
         for cells in grids:
             numerics = explicit_numerics(case, cells)
-            summary = simulate_rod(_summary_only(case, numerics), numerics=numerics).summary
+            summary = simulate_rod(case.summary_only(), numerics=numerics).summary
             energy = summary["energy"]
             supplied = energy["initial"]
             piston = cells * per_cell

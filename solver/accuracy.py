@@ -107,26 +107,32 @@ LOWEST_ORDER = 0.5
 UNCONFIRMED_ORDER = 1.0
 
 
+ORDERS = (1e-3, 12.0)  # the orders an observed one is sought within
+
+
 def observed_order(h: tuple[float, float, float], q: tuple[float, float, float]) -> float | None:
-    """The order p with `(h2^p − h1^p)/(h3^p − h2^p) = (q2 − q1)/(q3 − q2)` (h1 > h2 > h3), or None
-    when the differences change sign or the finer one is not smaller."""
+    """The order p with `(h2^p − h1^p)/(h3^p − h2^p) = (q2 − q1)/(q3 − q2)` (h1 > h2 > h3) within
+    `ORDERS`, or None when the differences change sign or the finer one is not smaller. With equal
+    refinements r (a doubling ladder's) the ratio is r^p, so p = ln((q2 − q1)/(q3 − q2))/ln r."""
     d1, d2 = q[1] - q[0], q[2] - q[1]
     if d1 == 0.0 or d2 == 0.0 or (d1 > 0.0) != (d2 > 0.0) or abs(d2) >= abs(d1):
         return None
     target = d1 / d2
+    lo, hi = ORDERS
+    coarse, fine = h[0] / h[1], h[1] / h[2]
+    if abs(coarse - fine) <= 1e-12 * fine:
+        return min(hi, max(lo, math.log(target) / math.log(fine)))
 
-    def ratio(p: float) -> float:
-        return (h[1] ** p - h[0] ** p) / (h[2] ** p - h[1] ** p)
+    def excess(p: float) -> float:  # grows with p
+        return (h[1] ** p - h[0] ** p) / (h[2] ** p - h[1] ** p) - target
 
-    lo, hi = 1e-3, 12.0  # the ratio grows with p
-    if ratio(hi) < target:
+    if excess(hi) < 0.0:
         return hi
-    if ratio(lo) > target:
+    if excess(lo) > 0.0:
         return lo
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if ratio(mid) < target else (lo, mid)
-    return 0.5 * (lo + hi)
+    from scipy.optimize import brentq  # loaded when grids refine unevenly, not with the summary's reader
+
+    return brentq(excess, lo, hi, xtol=1e-14)
 
 
 @dataclass(frozen=True)

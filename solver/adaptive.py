@@ -30,7 +30,7 @@ from __future__ import annotations
 import math
 
 from .accuracy import SAFETY_FACTOR, Accuracy, Estimate, assess, from_runs, modelled
-from .case import Case, CaseError, FieldError, Outputs
+from .case import Case, CaseError, FieldError
 from .controller import simulate_rod
 from .grid import (
     MIN_CELLS,
@@ -86,12 +86,6 @@ def _staged(progress: ProgressCallback | None, stage: int) -> ProgressCallback |
     return lambda fraction: progress(low + width * fraction)
 
 
-def _summary_only(case: Case, numerics: ResolvedNumerics) -> Case:
-    """The case with only what a summary needs kept: no probes, no fields, a sparse history."""
-    stride = max(1, numerics.steps // 2000)
-    return case.model_copy(update={"outputs": Outputs(history_stride=stride)})
-
-
 def _limit_refusal(tol: float, numerics: ResolvedNumerics, error: CaseError) -> CaseError:
     return CaseError(
         [
@@ -129,7 +123,7 @@ def solve_to_tolerance(
     for stage in range(MAX_RUNS):
         numerics = explicit_numerics(case, cells)
         final_candidate = stage >= MIN_RUNS - 1
-        run_case = case if final_candidate else _summary_only(case, numerics)
+        run_case = case if final_candidate else case.summary_only()
         try:
             check_limits(run_case, numerics, limits)
         except CaseError as error:
@@ -249,7 +243,7 @@ def fixed_grid(
                 cells=cells,
                 time_step=numerics.time_step * numerics.cells / cells,
             )
-            companion = simulate_rod(_summary_only(case, coarse), numerics=coarse, cancelled=cancelled)
+            companion = simulate_rod(case.summary_only(), numerics=coarse, cancelled=cancelled)
             refuse_chatter(companion.summary, coarse)
             companions.append((coarse, companion.summary))
         except CaseError as error:  # a grid too coarse for a stiff contact or medium

@@ -691,6 +691,11 @@ class Outputs(_Model):
     )
 
 
+SUMMARY_ONLY = Outputs(history_stride=2**62)
+"""What a run read for its summary alone keeps: no probes, no fields, no history beyond its first
+step (the summary's extremes, contacts and energies are observed as the run goes)."""
+
+
 class Case(_Model):
     """One impact case: striker, tool, contact, optional anvil, medium, force and blows, numerics,
     outputs."""
@@ -897,6 +902,10 @@ class Case(_Model):
         if self.anvil is not None and self.anvil.contact.restitution < 1.0:
             fields.append("anvil.contact.restitution")
         return fields
+
+    def summary_only(self) -> Case:
+        """The case keeping only what its summary needs (`SUMMARY_ONLY`)."""
+        return self.model_copy(update={"outputs": SUMMARY_ONLY})
 
 
 class FieldError(BaseModel):

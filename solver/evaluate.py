@@ -33,7 +33,7 @@ from typing import Any, NotRequired, TypedDict
 
 import numpy as np
 
-from .case import Case, CaseError, FieldError, Outputs, parse_case
+from .case import Case, CaseError, FieldError, parse_case
 from .errors import NumericalFailure
 from .grid import DEFAULT_TOLERANCE, explicit_numerics, fewest_cells, first_cells
 from .limits import Limits, excesses
@@ -291,7 +291,7 @@ def study_grid(case: Case, space: Space, tolerance: float | None, limits: Limits
     from .adaptive import solve_to_tolerance  # the kernel, loaded when a run needs it
 
     tol = case.numerics.tolerance or tolerance or DEFAULT_TOLERANCE
-    plain = case.model_copy(update={"outputs": Outputs(history_stride=2**62)})
+    plain = case.summary_only()
     result, _ = solve_to_tolerance(plain, tol, limits=limits)
     return max(result.numerics.cells, space.fewest_cells(case))
 

@@ -24,7 +24,7 @@ import time
 import numpy as np
 from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
-from .case import Case, CaseError, FieldError
+from .case import SUMMARY_ONLY, Case, CaseError, FieldError
 from .errors import Cancelled
 from .evaluate import Batch, Evaluator, Space, check_grid, evaluator_for, study_grid
 from .grid import DEFAULT_TOLERANCE
@@ -64,7 +64,7 @@ class _Study:
         self.request, self.space, self.cells, self.tolerance = request, space, cells, tolerance
         self.evaluator, self.cancelled = evaluator, cancelled
         self.base = study_case(request.case).model_dump(mode="json", exclude_none=True)
-        self.base["outputs"] = {"history_stride": 2**62}  # the summary is all a design needs
+        self.base["outputs"] = SUMMARY_ONLY.model_dump(mode="json")  # the summary is all a design needs
         self.names = [request.objective.quantity, *request.limits]
         self.history: list[dict] = []
         self._cache: dict[bytes, dict] = {}

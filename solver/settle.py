@@ -11,13 +11,12 @@ compare different blows, and different numbers of contacts).
 
 from __future__ import annotations
 
-from .case import Case, Outputs
+from .case import SUMMARY_ONLY, Case
 from .grid import DEFAULT_TOLERANCE, ResolvedNumerics, explicit_numerics, first_cells, tolerance_of
 from .limits import Limits, check_limits
 
 DEFAULT_BLOWS = 10  # blows at most, for a case that gives no blows.count
 COUNTING_CELLS = 64  # the counting run's grid, unless the case's first grid is finer
-SUMMARY_ONLY = Outputs(history_stride=2**62)  # a row needs the summary alone
 
 
 def settle_tolerance(case: Case) -> float:

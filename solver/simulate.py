@@ -19,7 +19,7 @@ from .io import ResultWriter
 from .limits import Limits
 from .result import CancelCheck, ProgressCallback, Recorder, Result
 from .summary import add_accuracy
-from .sweep import TABLE_OUTPUTS, Sweep, table_row, variants
+from .sweep import Sweep, table_row, variants
 
 
 def simulate(
@@ -85,7 +85,7 @@ def run_sweep(
             sweep = Sweep.model_validate(sweep)
         except ValidationError as error:
             raise CaseError(describe_errors(error)) from None
-    table_only = sweep.case.model_copy(update={"outputs": TABLE_OUTPUTS})
+    table_only = sweep.case.summary_only()
     found = variants(sweep.model_copy(update={"case": table_only}), limits=limits)
     processes = processes or os.cpu_count() or 1
     cases = [case for _, case in found]

@@ -15,14 +15,12 @@ from typing import Any
 
 from pydantic import BaseModel, Field
 
-from .case import INPUT, Case, CaseError, FieldError, Outputs, parse_case
+from .case import INPUT, Case, CaseError, FieldError, parse_case
 from .limits import Limits, check_case
 from .paths import set_field, value_at
 
 MAX_VARIANTS = 10_000
 MAX_ERRORS = 20  # bad variants named before giving up
-# A table row needs only the summary's extremes: no fields, no probes, no history beyond step 0.
-TABLE_OUTPUTS = Outputs(history_stride=2**62)
 
 # The table's columns after the parameters: (name, where in the summary; -1 is a list's last item).
 COLUMNS = (
