@@ -86,10 +86,10 @@ def substeps(rate, span, limit):
 
 @compiled(inline="always")
 def linear_branch(delta, contact):
-    """For a linear contact (α = 0): the line its force follows at δ, `F = slope·δ + offset`, and
-    the overlaps it holds over (`laws.contact_spring`): c0·δ in tension; for a cushion pressed to
-    δ_m, nothing up to its set δ_p = (1 − e²)·δ_m and c1·(δ − δ_p)/e² from there to δ_m; c1·δ
-    beyond (from 0 for a contact that is no cushion)."""
+    """The line a contact's force follows at δ, `F = slope·δ + offset`, and the overlaps it holds
+    over (`laws.contact_spring`): c0·δ in tension, any contact's; pressed, a linear one's (α = 0):
+    for a cushion pressed to δ_m, nothing up to its set δ_p = (1 − e²)·δ_m and c1·(δ − δ_p)/e²
+    from there to δ_m; c1·δ beyond (from 0 for a contact that is no cushion)."""
     c1 = contact.stiffness
     if delta < 0.0:
         return contact.tension_stiffness, 0.0, -math.inf, 0.0
@@ -108,19 +108,14 @@ def solve_spring_balance(target, compliance, guess, contact):
     """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
     `target` and `target − compliance·Φ'(target)`, where `bracketed_newton_step` finds it (on one
     linear branch, directly)."""
-    c1, alpha, c0 = contact.stiffness, contact.exponent, contact.tension_stiffness
     other = target - compliance * contact_spring(target, contact)[0]
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
         return target
-    # on one linear branch the root is direct: in separation, or pressed along a linear contact's
-    # loading (a cushion unloads along another line, below the deepest overlap it was pressed to)
-    if hi <= 0.0:
-        return target / (1.0 + compliance * c0)
-    if lo >= 0.0 and alpha == 0.0:
-        if contact.restitution == 1.0 or lo >= contact.deepest:
-            return target / (1.0 + compliance * c1)
-        slope, offset, low, high = linear_branch(lo, contact)  # a cushion below its deepest
+    # on one line of the law the root is direct: in separation, or pressed on a linear contact's
+    # (a cushion's set, unloading or loading line)
+    if hi <= 0.0 or (lo >= 0.0 and contact.exponent == 0.0):
+        slope, offset, _, high = linear_branch(lo, contact)
         if hi <= high:
             return (target - compliance * offset) / (1.0 + compliance * slope)
     x = min(max(guess, lo), hi)
