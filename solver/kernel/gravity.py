@@ -32,19 +32,25 @@ def no_gravity() -> Gravity:
     return Gravity(first=1, last=0, lift=empty, weight=empty)
 
 
+# The loops run over unsigned indices: a signed one makes Numba check each for wrapping around
+# from the end, which keeps LLVM from vectorising them.
+
+
 @compiled(inline="always")
 def weigh_rows(u, new, gravity):
     """The weight's lift on each node's explicit row, in row `new` of `u`."""
-    for i in range(gravity.first, gravity.last + 1):
+    for i in range(np.uint64(gravity.first), np.uint64(gravity.last + 1)):
         u[new, i] += gravity.lift[i]
 
 
-@compiled(inline="always")
+# A function of its own, its sum free to be reordered (`reassoc`, a change of rounding only): as a
+# chain of additions it cost a pile's step more than its tool's own rows.
+@compiled(fastmath={"contract", "reassoc"})
 def gravity_work(u, layer, gravity):
     """The weight's work over the step, `Σ W_i·(u^{n+1} − u^{n−1})/2`, the new layer final."""
     new, _, old, _ = layer
     work = 0.0
-    for i in range(gravity.first, gravity.last + 1):
+    for i in range(np.uint64(gravity.first), np.uint64(gravity.last + 1)):
         work += gravity.weight[i] * (u[new, i] - u[old, i])
     return 0.5 * work
 
