@@ -26,7 +26,7 @@ import math
 import os
 import time
 from collections.abc import Callable, Iterable, Iterator
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
 from typing import Any, NotRequired, TypedDict
@@ -63,14 +63,31 @@ def settled_batch(cases: list[dict], quantities: list[str], limits: Limits) -> B
     return Batch(cases=cases, cells=None, duration=None, series=None, quantities=quantities, limits=asdict(limits))
 
 
+# Told how many of a batch's cases are answered, as they are; raising stops the batch (a cancel).
+Answered = Callable[[int], None]
 # An evaluator runs a batch and returns per case {"series": [...]}, {"quantities": {...}} or
-# {"error": why}, in order. It may split the batch and run its parts anywhere.
-Evaluator = Callable[[Batch], list[dict]]
+# {"error": why}, in order. It may split the batch and run its parts anywhere (`parts_of`), and
+# calls `answered`, when given, as its cases are answered.
+Evaluator = Callable[..., list[dict]]
 
 
-def evaluate_batch(batch: Batch) -> list[dict]:
+def evaluate_batch(batch: Batch, answered: Answered | None = None) -> list[dict]:
     """Run every case of `batch` on its grid; per case what it asks, or why the run failed."""
-    return [_evaluate(tree, batch) for tree in batch["cases"]]
+    answers = []
+    for tree in batch["cases"]:
+        answers.append(_evaluate(tree, batch))
+        if answered is not None:
+            answered(len(answers))
+    return answers
+
+
+def parts_of(batch: Batch, pieces: int) -> list[Batch]:
+    """`batch` cut to be spread: into `pieces` runs of consecutive cases, or a case a part for
+    variants each solved to its own accuracy, whose costs are their ladders' finest grids, which
+    no case tells of the next (one can cost a thousand times its neighbour: parts taken one by one
+    as processes come free keep them all busy)."""
+    cases = batch["cases"]
+    return [Batch(batch, cases=part) for part in split(cases, len(cases) if batch["cells"] is None else pieces)]
 
 
 def _evaluate(tree: dict, batch: Batch) -> dict:
@@ -137,17 +154,22 @@ class LocalEvaluator:
             return False
         return batch["cells"] is None or len(batch["cases"]) * self.run_seconds >= self.SPREAD_SECONDS
 
-    def __call__(self, batch: Batch) -> list[dict]:
+    def __call__(self, batch: Batch, answered: Answered | None = None) -> list[dict]:
         if self.processes == 1 or not self.worth_spreading(batch):
             started = time.perf_counter()
-            answers = evaluate_batch(batch)
+            answers = evaluate_batch(batch, answered)
             per_run = (time.perf_counter() - started) / max(len(answers), 1)
             self.run_seconds = max(self.run_seconds, per_run)
             return answers
         if self.pool is None:
             self.pool = ProcessPoolExecutor(self.processes)
-        parts = [Batch(batch, cases=cases) for cases in split(batch["cases"], self.processes)]
-        return [answer for answers in self.pool.map(evaluate_batch, parts) for answer in answers]
+        futures = {self.pool.submit(evaluate_batch, part): k for k, part in enumerate(parts_of(batch, self.processes))}
+        answers: dict[int, list[dict]] = {}
+        for future in as_completed(futures):
+            answers[futures[future]] = future.result()
+            if answered is not None:
+                answered(sum(map(len, answers.values())))
+        return [answer for k in range(len(futures)) for answer in answers[k]]
 
 
 @contextmanager

@@ -3,10 +3,10 @@ graph (blow count against the pile's capacity), the inspector's chart (against t
 the drivability (against the toe's depth, with the total blows and the driving time).
 
 Every variant is one case driven until its set settles, solved to its own accuracy (so each row
-carries its own `error_estimate`), in batches an evaluator spreads over the processes or the
-workers (`evaluate.settled_batch`). A row's stresses are the largest of the blows run, its set and
-blow count the last blow's, its transferred energy the largest work through the pile's head over a
-blow (EMX).
+carries its own `error_estimate`), in one batch an evaluator spreads over the processes or the
+workers a variant at a time, saying as each is answered (`evaluate.settled_batch`, `parts_of`).
+A row's stresses are the largest of the blows run, its set and blow count the last blow's, its
+transferred energy the largest work through the pile's head over a blow (EMX).
 
 The drivability's total blows integrate the blow count over the depths driven, by the trapezoidal
 rule, from the first depth to the last before refusal (the first depth whose blow count exceeds
@@ -16,12 +16,11 @@ blow rate.
 
 from __future__ import annotations
 
-import math
 import time
 
 from .case import Case
 from .errors import Cancelled
-from .evaluate import Evaluator, evaluator_for, settled_batch, split
+from .evaluate import Evaluator, evaluator_for, settled_batch
 from .limits import Limits
 from .pile_requests import (
     BearingGraph,
@@ -44,8 +43,6 @@ COLUMNS = (
     ("transferred_energy", "energy.transferred"),
     ("error_estimate", "error_estimate.worst"),
 )
-PROGRESS_STEPS = 4  # batches the variants are run in at most, each reporting progress and asking for a cancel
-MIN_BATCH = 8  # variants a batch takes at least, so that it still spreads
 
 
 def run_variants(
@@ -58,22 +55,23 @@ def run_variants(
     """A row per case, in order: the `COLUMNS`, the `blows` it took and its `warnings`, or the
     `error` it failed with."""
     trees = [case.model_dump(mode="json", exclude_none=True) for case in cases]
-    batches = split(trees, min(PROGRESS_STEPS, math.ceil(len(trees) / MIN_BATCH)))
-    rows: list[dict] = []
-    for batch in batches:
-        if cancelled is not None and cancelled():
-            raise Cancelled(f"cancelled after {len(rows)} of {len(trees)} variants")
-        for answer in evaluator(settled_batch(batch, [path for _, path in COLUMNS], limits)):
-            if "error" in answer:
-                rows.append({"error": answer["error"]})
-                continue
-            found = answer["quantities"]
-            rows.append(
-                {name: found[path] for name, path in COLUMNS}
-                | {"blows": answer["blows"], "warnings": answer["warnings"]}
-            )
+
+    def answered(done: int) -> None:
         if progress is not None:
-            progress(len(rows) / len(trees))
+            progress(done / len(trees))
+        if cancelled is not None and cancelled():
+            raise Cancelled(f"cancelled after {done} of {len(trees)} variants")
+
+    answered(0)
+    rows: list[dict] = []
+    for answer in evaluator(settled_batch(trees, [path for _, path in COLUMNS], limits), answered=answered):
+        if "error" in answer:
+            rows.append({"error": answer["error"]})
+            continue
+        found = answer["quantities"]
+        rows.append(
+            {name: found[path] for name, path in COLUMNS} | {"blows": answer["blows"], "warnings": answer["warnings"]}
+        )
     return rows
 
 

@@ -14,6 +14,9 @@ import pytest
 
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod
+from percussim.solver.errors import Cancelled
+from percussim.solver.evaluate import Batch, parts_of, settled_batch
+from percussim.solver.limits import Limits
 from percussim.solver.pile_requests import (
     at_depth,
     bearing_variants,
@@ -88,6 +91,26 @@ def test_a_bearing_graph_row_is_the_direct_run_of_its_case_until_its_set_settles
         first = next(k + 1 for k in range(1, len(sets)) if abs(sets[k] - sets[k - 1]) <= 0.01 * sets[k])
         assert row["blows"] == first < DEFAULT_BLOWS
     assert answer["rows"][1]["blow_count"] > answer["rows"][0]["blow_count"]
+
+
+@pytest.mark.parametrize("processes", [1, 2])
+def test_a_pile_study_says_each_variant_answered_and_stops_at_a_cancel_between_them(processes):
+    request = {"case": PILE, "capacity": [1.2e6, 1.8e6, 2.4e6]}
+    seen = []
+    answer = bearing_graph(request, processes=processes, progress=seen.append)
+    assert seen == [0.0, 1 / 3, 2 / 3, 1.0]  # a variant at a time, in whatever order they finish
+    assert [row["ultimate_resistance"] for row in answer["rows"]] == request["capacity"]
+    told = []
+    with pytest.raises(Cancelled, match="cancelled after 1 of 3 variants"):
+        bearing_graph(request, processes=processes, progress=told.append, cancelled=lambda: len(told) > 1)
+
+
+def test_variants_solved_to_their_own_accuracy_are_spread_one_at_a_time():
+    trees = [{"n": k} for k in range(5)]
+    settled = settled_batch(trees, ["set"], Limits())
+    assert [part["cases"] for part in parts_of(settled, 2)] == [[tree] for tree in trees]
+    on_a_grid = Batch(settled, cells=64)
+    assert [part["cases"] for part in parts_of(on_a_grid, 2)] == [trees[:3], trees[3:]]
 
 
 def test_an_inspectors_chart_runs_the_case_at_each_stroke():
