@@ -12,8 +12,10 @@ For every case:
   Courant number 1 on grids 2^(1/4) apart, the coarsest from which every finer one is within the
   tolerance on every quantity the reference has (a grid that meets it by luck between two that
   do not is not counted);
-- a run under each tolerance (`numerics.tolerance`): its true error on every quantity it
-  estimates, its own estimate, and its work (node-steps over all its grids) against that grid's.
+- a run under each tolerance (`numerics.tolerance`, the limits raised): its true error on every
+  quantity it estimates, its own estimate, and its work (node-steps over all its grids) against
+  that grid's; a silent miss is a run whose estimate is below its true error while that is beyond
+  the tolerance.
 
 Then, for each of the paper's presets, the time to a 1%-accurate answer (the default accuracy)
 after compilation, least of several runs, and its true error.
@@ -42,6 +44,7 @@ from percussim.solver.adaptive import explicit_numerics
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.grid import wave_speed
+from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference, draw_cases, reference_cells
 from percussim.solver.presets import preset_json, preset_names
 from percussim.solver.simulate import simulate
@@ -60,6 +63,9 @@ FIXED_WORK_CAP = 5e8  # node-steps: the fixed-grid search stops there
 # What the cached fixed-grid runs depend on: raise it when the explicit scheme's results change.
 KERNEL_VERSION = 2
 PRESET_REPEATS = 20
+# The runs under a tolerance: the service's limits raised a thousandfold, so that a ladder stops on
+# its own account (met, or saying why not), not on a limit (one that does is counted apart).
+RAISED = Limits(max_cells=10**8, max_steps=2 * 10**10, max_node_steps=2e13, max_output_values=2e11)
 
 
 def _cached(kind: str, case: dict, depends_on: str) -> Path:
@@ -154,7 +160,7 @@ def cheapest_fixed(rows: list[dict]) -> dict[float, dict | None]:
 def tolerance_run(case, tol: float, ref: dict) -> dict:
     run_case = case.model_copy(update={"numerics": case.numerics.model_copy(update={"tolerance": tol})})
     start = time.process_time()
-    summary = simulate(run_case).summary
+    summary = simulate(run_case, limits=RAISED).summary
     seconds = time.process_time() - start
     estimate = summary["error_estimate"]
     errors = {name: e for name, e in true_errors(estimated_values(summary), ref).items() if name in estimate}
@@ -264,7 +270,10 @@ def summarise(results: list[dict]) -> dict:
             "beyond_tol": sum(w > 1.0 for w in worst),
             "beyond_1_5_tol": sum(w > 1.5 for w in worst),
             "estimate_below_truth": sum(r["estimated"] < r["worst"] for r in runs),
+            # the estimate below a truth beyond the tolerance: a miss the answer does not show
+            "silent_misses": sum(r["estimated"] < r["worst"] and r["worst"] > tol for r in runs),
             "said_not_met": sum(any("not met" in w for w in r["warnings"]) for r in runs),
+            "stopped_by_a_limit": sum(any("beyond the limits" in w for w in r["warnings"]) for r in runs),
             "cost_median": statistics.median(ratios) if ratios else None,
             "cost_worst": max(ratios) if ratios else None,
             "cost_counted": len(ratios),
@@ -280,17 +289,18 @@ def overview(stats: dict, preset_rows: list[dict], count: int, seed: int) -> str
         "in [matrix.md](matrix.md)); a case counts at a tolerance where its reference is 10× tighter. "
         "True error: a run's largest relative error over every quantity it estimates, against the "
         "reference. Cost: its work (node-steps over all its grids) against the cheapest fixed grid "
-        "that meets the same tolerance, found in hindsight.",
+        "that meets the same tolerance, found in hindsight. Each run has the service's limits raised "
+        "a thousandfold, so that its ladder stops on its own account.",
         "",
-        "| tolerance | cases | worst true error / tolerance | beyond it | beyond 1.5× | estimate below the truth | say 'not met' | cost: median | worst | cases with a cheapest grid |",
-        "|---|---|---|---|---|---|---|---|---|---|",
+        "| tolerance | cases | worst true error / tolerance | beyond it | beyond 1.5× | estimate below the truth | silent misses (that and beyond it) | say 'not met' | stopped by a limit | cost: median | worst | cases with a cheapest grid |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for tol in TOLERANCES:
         s = stats[str(tol)]
         lines.append(
             f"| {tol:g} | {s['cases']} | {s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | "
-            f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['said_not_met']} | "
-            f"{s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | {s['cost_counted']} |"
+            f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['silent_misses']} | {s['said_not_met']} | "
+            f"{s['stopped_by_a_limit']} | {s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | {s['cost_counted']} |"
         )
     lines += [
         "",
