@@ -585,12 +585,16 @@ def advance(
             if not weights.impedance_ends:
                 working_end_row(u, layer, rows, rod, weights, medium, step)
             right_hand_sides(u, layer, tool, rows, rod, weights, step)
-            # the explicit scheme's interior rows are final here (none has a shaft otherwise)
-            shaft_on_rows(u, layer, shaft, state.shaft_sets, energy, tau)
-            energy[0, E_GRAVITY_WORK] += gravity_work(u, layer, tool.gravity)
+            # the explicit scheme's interior rows are final here (none has a shaft otherwise); the
+            # soil's and the weight's loops are calls of their own, made only where they have nodes
+            if shaft.last >= shaft.first:
+                shaft_on_rows(u, layer, shaft, state.shaft_sets, energy, tau)
+            if tool.gravity.last >= tool.gravity.first:
+                energy[0, E_GRAVITY_WORK] += gravity_work(u, layer, tool.gravity)
             if striker.elastic:
                 explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
-                energy[0, E_GRAVITY_WORK] += gravity_work(striker_u, layer, striker.tool.gravity)
+                if striker.tool.gravity.last >= striker.tool.gravity.first:
+                    energy[0, E_GRAVITY_WORK] += gravity_work(striker_u, layer, striker.tool.gravity)
             if weights.impedance_ends:
                 finite, recorded, interior, balance = impedance_ends_step(
                     state, observed, layer, t, tool, rod, contact, striker, anvil, medium, force, scratch, step
