@@ -52,7 +52,7 @@ AIM = 0.75  # a predicted grid aims its bare estimate at this fraction of the to
 SURE_ORDER = 1.5  # below this observed order a predicted grid is at most `CLIMB` finer
 MAX_RUNS = 14
 ENERGY_CLOSURE = 0.5  # of the tolerance: how closely a ladder's energy audit must close
-UNSETTLED_GRIDS = 3  # contacts that change over this many grids, with no gain, stop a ladder
+UNSETTLED_GRIDS = 3  # contacts that change from grid to grid over this many, with no gain, stop a ladder
 COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
 LUMPED_ERROR = 1.0  # the lumped model's relative error is at most this × ε² (measured ≤ 0.58)
 FIXED_SHARE = 0.75  # of a fixed grid's progress: the run asked for; its companions the rest
@@ -184,13 +184,16 @@ def energy_closed(summary: dict, tol: float) -> bool:
 
 
 def unsettled(contacts: list[int], worst: list[float]) -> bool:
-    """Whether refining has stopped helping: the last `UNSETTLED_GRIDS` grids saw different numbers
-    of contacts (`contacts`, each grid's) and the estimate (`worst`, each estimate's) is no smaller
-    than `UNSETTLED_GRIDS − 1` grids before. Repeated impacts whose sequence turns on the smallest
-    change (a chaotic rattle) settle on no grid."""
+    """Whether refining has stopped helping: each of the last `UNSETTLED_GRIDS` grids saw a
+    different number of contacts from the grid before it (`contacts`, each grid's) and the estimate
+    (`worst`, each estimate's) is no smaller than `UNSETTLED_GRIDS − 1` grids before. Repeated
+    impacts whose sequence turns on the smallest change (a chaotic rattle) settle on no grid; a
+    count that changes and then holds is a rebound the coarser grids did not resolve yet (a pile's
+    helmet on 16–64 cells), which finer ones do."""
+    recent = contacts[-UNSETTLED_GRIDS:]
     return (
         len(worst) >= UNSETTLED_GRIDS
-        and len(set(contacts[-UNSETTLED_GRIDS:])) > 1
+        and all(coarse != fine for coarse, fine in zip(recent, recent[1:]))
         and worst[-1] >= worst[-UNSETTLED_GRIDS]
     )
 
