@@ -63,6 +63,22 @@ def contact_spring(delta, stiffness, exponent, tension_stiffness, restitution=1.
     return tension_stiffness * delta, tension_stiffness
 
 
+def linear_branch(delta, stiffness, tension_stiffness, restitution=1.0, deepest=0.0):
+    """`(slope, offset, low, high)`: the line a linear contact's force (α = 0) follows at δ,
+    `F = slope·δ + offset`, and the overlaps it holds over (`contact_spring`'s lines): c0·δ in
+    tension; pressed, for a cushion pressed to δ_m, nothing up to its set δ_p = (1 − e²)·δ_m and
+    c1·(δ − δ_p)/e² from there to δ_m; c1·δ beyond (from 0 for a contact that is no cushion)."""
+    if delta < 0.0:
+        return tension_stiffness, 0.0, -math.inf, 0.0
+    e2 = restitution * restitution
+    if e2 < 1.0 and delta <= deepest:
+        set_ = deepest * (1.0 - e2)
+        if delta < set_:
+            return 0.0, 0.0, 0.0, set_
+        return stiffness / e2, -stiffness / e2 * set_, set_, deepest
+    return stiffness, 0.0, deepest if e2 < 1.0 else 0.0, math.inf
+
+
 def cushion_loss(stiffness, exponent, restitution, deepest):
     """What a cushion pressed to `deepest` δ_m has lost (`contact_law`): `(1 − e²)·c1·δ_m^(α+2)/(α+2)`."""
     return (1.0 - restitution * restitution) * stiffness * deepest ** (exponent + 2.0) / (exponent + 2.0)

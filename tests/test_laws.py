@@ -37,3 +37,19 @@ def test_the_array_force_is_the_scalar_force(kind, amplitude, omega, start, dura
     times = np.linspace(0.0, 5e-4, 101)
     found = laws.external_force_on(times, kind, amplitude, omega, start, duration)
     assert found.tolist() == [laws.external_force(float(t), kind, amplitude, omega, start, duration) for t in times]
+
+
+@pytest.mark.parametrize(("restitution", "deepest"), [(1.0, 0.0), (1.0, 2e-4), (0.8, 2e-4), (0.5, 2e-4)])
+def test_a_linear_contacts_branch_is_the_line_its_law_follows_there(restitution, deepest):
+    # the direct roots of the kernel's contact solves rest on these lines (tests/test_anvil.py)
+    for delta in np.concatenate([DELTAS, np.linspace(0.0, 4e-4, 41)]):
+        slope, offset, low, high = laws.linear_branch(float(delta), 8e11, 3e6, restitution, deepest)
+        assert low <= delta <= high
+        ends = np.linspace(max(low, -1e-3), min(high, 1e-3), 7)
+        for k, x in enumerate(ends):
+            force, stiffness = laws.contact_spring(float(x), 8e11, 0.0, 3e6, restitution, deepest)
+            assert slope * x + offset == pytest.approx(force, rel=1e-12, abs=1e-9 * 8e11 * 1e-12)
+            # the stiffness where the law has no kink (a line's ends) and the force is not the
+            # cushion's flat set, where contact_spring gives Newton the unloading line's
+            if 0 < k < len(ends) - 1 and force != 0.0:
+                assert stiffness == pytest.approx(slope, rel=1e-12)

@@ -14,6 +14,7 @@ _external_force = compiled(inline="always")(laws.external_force)
 _contact_law = compiled(inline="always")(laws.contact_law)
 _contact_spring = compiled(inline="always")(laws.contact_spring)
 _cushion_loss = compiled(inline="always")(laws.cushion_loss)
+_linear_branch = compiled(inline="always")(laws.linear_branch)
 
 
 @compiled(inline="always")
@@ -36,6 +37,13 @@ def contact_spring(delta, contact):
     return _contact_spring(
         delta, contact.stiffness, contact.exponent, contact.tension_stiffness, contact.restitution, contact.deepest
     )
+
+
+@compiled(inline="always")
+def linear_branch(delta, contact):
+    """The line a linear `Contact`'s force follows at δ and the overlaps it holds over
+    (`laws.linear_branch`)."""
+    return _linear_branch(delta, contact.stiffness, contact.tension_stiffness, contact.restitution, contact.deepest)
 
 
 @compiled(inline="always")

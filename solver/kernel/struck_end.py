@@ -36,6 +36,7 @@ from .contact import (
     contact_spring,
     cushion_loss,
     external_force,
+    linear_branch,
     pressed_to,
     quotient_force,
     solve_overlap,
@@ -82,25 +83,6 @@ ANVIL_SUBSTEPS = 64
 def substeps(rate, span, limit):
     """Substeps of `span` that keep (`rate` × substep) within `limit`."""
     return min(MAX_SUBSTEPS, max(1, math.ceil(rate * span / limit)))
-
-
-@compiled(inline="always")
-def linear_branch(delta, contact):
-    """The line a contact's force follows at δ, `F = slope·δ + offset`, and the overlaps it holds
-    over (`laws.contact_spring`): c0·δ in tension, any contact's; pressed, a linear one's (α = 0):
-    for a cushion pressed to δ_m, nothing up to its set δ_p = (1 − e²)·δ_m and c1·(δ − δ_p)/e²
-    from there to δ_m; c1·δ beyond (from 0 for a contact that is no cushion)."""
-    c1 = contact.stiffness
-    if delta < 0.0:
-        return contact.tension_stiffness, 0.0, -math.inf, 0.0
-    e2 = contact.restitution * contact.restitution
-    deepest = contact.deepest
-    if e2 < 1.0 and delta <= deepest:
-        set_ = deepest * (1.0 - e2)
-        if delta < set_:
-            return 0.0, 0.0, 0.0, set_
-        return c1 / e2, -c1 / e2 * set_, set_, deepest
-    return c1, 0.0, deepest if e2 < 1.0 else 0.0, math.inf
 
 
 @compiled()
