@@ -29,7 +29,7 @@ from collections.abc import Callable, Iterable, Iterator
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from contextlib import contextmanager
 from dataclasses import asdict, dataclass
-from typing import Any, NotRequired, TypedDict
+from typing import Any, NotRequired, Protocol, TypedDict
 
 import numpy as np
 
@@ -65,10 +65,14 @@ def settled_batch(cases: list[dict], quantities: list[str], limits: Limits) -> B
 
 # Told how many of a batch's cases are answered, as they are; raising stops the batch (a cancel).
 Answered = Callable[[int], None]
-# An evaluator runs a batch and returns per case {"series": [...]}, {"quantities": {...}} or
-# {"error": why}, in order. It may split the batch and run its parts anywhere (`parts_of`), and
-# calls `answered`, when given, as its cases are answered.
-Evaluator = Callable[..., list[dict]]
+
+
+class Evaluator(Protocol):
+    """Runs a batch and returns per case {"series": [...]}, {"quantities": {...}} or {"error":
+    why}, in order. It may split the batch and run its parts anywhere (`parts_of`), and calls
+    `answered`, when given, as its cases are answered."""
+
+    def __call__(self, batch: Batch, answered: Answered | None = None) -> list[dict]: ...
 
 
 def evaluate_batch(batch: Batch, answered: Answered | None = None) -> list[dict]:
