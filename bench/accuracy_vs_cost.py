@@ -32,7 +32,7 @@ from percussim.solver.accuracy import estimated_values
 from percussim.solver.case import CaseError, parse_case
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.grid import resolve_numerics, wave_speed
-from percussim.solver.presets import preset_json
+from percussim.testing import at_default_accuracy
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -44,13 +44,6 @@ PRESETS = ("fig3", "fig5", "fig9")
 SCHEMES = ("paper", "sigma", "explicit")
 LADDER = [round(10 * 2 ** (k / 4)) for k in range(25)]  # 10 … 640 cells
 TARGETS = (1e-2, 1e-3, 1e-4)
-
-
-def preset(name: str) -> dict:
-    case = preset_json(name)
-    case["numerics"] = {"duration": case["numerics"]["duration"]}
-    case.pop("outputs", None)
-    return case
 
 
 def timed(case, numerics, budget: float = 0.05) -> tuple[dict, float]:
@@ -65,7 +58,7 @@ def timed(case, numerics, budget: float = 0.05) -> tuple[dict, float]:
 
 
 def measure(name: str) -> dict:
-    data = preset(name)
+    data = at_default_accuracy(name)
     case = parse_case(data)
     ref = matrix_bench.reference(data)
     ladder = {}

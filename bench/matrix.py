@@ -46,8 +46,9 @@ from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.grid import wave_speed
 from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference, draw_cases, reference_cells
-from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.presets import preset_names
 from percussim.solver.simulate import simulate
+from percussim.testing import at_default_accuracy
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -233,9 +234,7 @@ def presets() -> list[dict]:
     """Time to a 1%-accurate answer on each preset (the default accuracy), and its true error."""
     rows = []
     for name in preset_names():
-        data = preset_json(name)
-        data["numerics"] = {"duration": data["numerics"]["duration"]}
-        data.pop("outputs", None)
+        data = at_default_accuracy(name)
         case = parse_case(data)
         if case.beyond_paper:  # the characteristics reference solves the paper's model only
             continue

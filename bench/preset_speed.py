@@ -17,17 +17,11 @@ import math
 import time
 
 from percussim.solver.controller import warm_up
-from percussim.solver.presets import preset_json, preset_names
+from percussim.solver.presets import preset_names
 from percussim.solver.simulate import simulate
+from percussim.testing import at_default_accuracy
 
 GOAL_MS = 5.0
-
-
-def at_default_accuracy(name: str) -> dict:
-    data = preset_json(name)
-    data["numerics"] = {"duration": data["numerics"]["duration"]}
-    data.pop("outputs", None)
-    return data
 
 
 def main() -> None:

@@ -7,7 +7,6 @@ import shutil
 
 import pytest
 
-from percussim.solver.presets import preset_json
 from percussim.testing import merge
 from percussim.testing.reference import LinearImpact
 
@@ -80,14 +79,6 @@ def report(capsys, text: str) -> None:
 @pytest.fixture
 def linear_impact() -> LinearImpact:
     return LinearImpact()
-
-
-def duration_only(name: str) -> dict:
-    """Preset `name` with only its duration in `numerics` (the default accuracy) and no outputs."""
-    case = preset_json(name)
-    case["numerics"] = {"duration": case["numerics"]["duration"]}
-    case.pop("outputs", None)
-    return case
 
 
 @pytest.fixture(scope="session")

@@ -8,7 +8,7 @@ import subprocess
 import sys
 
 import pytest
-from conftest import duration_only, merge
+from conftest import merge
 
 from percussim.solver.accuracy import ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order, quantity_error
 from percussim.solver.adaptive import unsettled
@@ -17,6 +17,7 @@ from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import simulate
+from percussim.testing import at_default_accuracy
 from percussim.testing.reference import LinearImpact, true_errors
 
 
@@ -74,7 +75,7 @@ def test_grids_out_of_their_asymptotic_range_give_the_largest_change_and_say_so(
 @pytest.mark.parametrize("name", ["fig3", "fig9"])
 def test_a_case_that_gives_only_a_duration_is_within_one_percent_and_says_so(name):
     """The paper's scheme on its default grid was off by up to 23% here without a word."""
-    case = duration_only(name)
+    case = at_default_accuracy(name)
     summary = simulate(parse_case(case)).summary
     errors = errors_against(summary, truth_of(case))
     print(name, errors, summary["error_estimate"], [r["cells"] for r in summary["runs"]])
@@ -90,7 +91,7 @@ def test_a_pulse_from_rest_at_odd_times_is_within_the_tolerance():
     """A force that jumps at instants no grid falls on: each jump is placed where it is, so the
     order does not drop (it came back 1.4% off on the peak force under 1e-2)."""
     case = merge(
-        duration_only("fig3"),
+        at_default_accuracy("fig3"),
         {
             "striker": {"velocity": 0.0},
             "force": {"kind": "pulse", "amplitude": 2.2e5, "start": 1.234567e-5, "duration": 1.87654321e-4},
@@ -117,20 +118,20 @@ def test_the_papers_numerics_keep_the_paper_and_say_how_far_off_they_are():
 
 
 def test_a_fixed_grid_carries_an_estimate_from_two_companions_for_under_a_third_more_work():
-    case = merge(duration_only("fig3"), {"numerics": {"scheme": "explicit", "cells": 64}})
+    case = merge(at_default_accuracy("fig3"), {"numerics": {"scheme": "explicit", "cells": 64}})
     summary = simulate(parse_case(case)).summary
     runs = summary["runs"]
     assert [r["cells"] for r in runs] == [16, 32, 64]
     work = [(r["cells"] + 1) * (r["steps"] + 1) for r in runs]
     assert sum(work[:-1]) <= 0.32 * work[-1]
-    truth = truth_of(duration_only("fig3"))
+    truth = truth_of(at_default_accuracy("fig3"))
     errors = errors_against(summary, truth)
     for name, error in errors.items():  # the estimate is of the right size, not off by far
         assert error <= 2.0 * summary["error_estimate"][name] + 1e-6, name
 
 
 def test_what_has_no_relative_error_is_left_out_with_the_reason():
-    case = merge(duration_only("fig3"), {"medium": None})
+    case = merge(at_default_accuracy("fig3"), {"medium": None})
     summary = simulate(parse_case(case)).summary
     assert summary["not_estimated"]["energy.to_medium"] == "no medium"
     assert "energy.to_medium" not in summary["error_estimate"]
@@ -140,7 +141,7 @@ def test_what_has_no_relative_error_is_left_out_with_the_reason():
 
 
 def test_the_transfer_efficiency_is_the_energy_to_the_medium_over_the_energy_put_in():
-    energy = simulate(parse_case(duration_only("fig9"))).summary["energy"]
+    energy = simulate(parse_case(at_default_accuracy("fig9"))).summary["energy"]
     assert energy["transfer_efficiency"] == pytest.approx(
         energy["to_medium"] / (energy["initial"] + energy["external_work"])
     )
@@ -148,7 +149,7 @@ def test_the_transfer_efficiency_is_the_energy_to_the_medium_over_the_energy_put
 
 
 def test_a_tolerance_the_limits_stop_short_of_returns_the_finest_grid_and_says_so():
-    case = parse_case(merge(duration_only("fig3"), {"numerics": {"tolerance": 1e-4}}))
+    case = parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"tolerance": 1e-4}}))
     summary = simulate(case, limits=Limits(max_node_steps=2e6)).summary
     assert summary["tolerance"] == 1e-4 and summary["error_estimate"]["worst"] > 1e-4
     [warning] = [w for w in summary["warnings"] if "not met" in w]
@@ -158,7 +159,7 @@ def test_a_tolerance_the_limits_stop_short_of_returns_the_finest_grid_and_says_s
 def test_repeated_impacts_that_settle_on_no_grid_stop_the_ladder_and_say_why():
     # Fig. 6's forced rattle: 17, 21, 19, ... contacts on successive grids, and peak forces that
     # jump by tens of percent; refining to the limits (12 grids, 10240 cells) gains nothing
-    summary = simulate(parse_case(duration_only("fig6"))).summary
+    summary = simulate(parse_case(at_default_accuracy("fig6"))).summary
     counts = [r["cells"] for r in summary["runs"]]
     assert len(counts) < 8
     [warning] = [w for w in summary["warnings"] if "not met" in w]
@@ -179,7 +180,7 @@ def test_a_ladder_gives_up_on_contacts_that_change_at_every_grid_not_on_a_count_
 
 def test_a_tolerance_and_a_grid_together_are_refused():
     with pytest.raises(CaseError) as error:
-        parse_case(merge(duration_only("fig3"), {"numerics": {"tolerance": 1e-2, "cells": 50}}))
+        parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"tolerance": 1e-2, "cells": 50}}))
     assert error.value.errors[0].field == "numerics.tolerance"
 
 
@@ -222,11 +223,11 @@ def test_a_tolerance_whose_first_grid_is_beyond_the_limits_is_refused_naming_it(
 
 
 def test_fixed_grids_say_what_they_used_and_why():
-    plain = simulate(parse_case(merge(duration_only("fig3"), {"numerics": {"cells": 50}}))).summary
+    plain = simulate(parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"cells": 50}}))).summary
     assert plain["scheme"] == "paper" and "a grid was given" in plain["why"]
-    asked = simulate(parse_case(merge(duration_only("fig3"), {"numerics": {"scheme": "sigma"}}))).summary
+    asked = simulate(parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"scheme": "sigma"}}))).summary
     assert asked["scheme"] == "sigma" and "as asked" in asked["why"]
     assert asked["tolerance"] is None and asked["error_estimate"]["worst"] > 0
-    lumped = simulate(parse_case(merge(duration_only("fig3"), {"numerics": {"model": "lumped"}}))).summary
+    lumped = simulate(parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"model": "lumped"}}))).summary
     assert lumped["model"] == "lumped" and "ε²" in lumped["why"]
     assert set(lumped["error_estimate"]) - {"worst"} == set(ESTIMATED) - set(lumped["not_estimated"])

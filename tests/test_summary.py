@@ -1,19 +1,19 @@
 """Every summary a run can give is the documented `Summary`: no field missing, none unknown."""
 
 import pytest
-from conftest import duration_only
 
 import percussim
 from percussim.solver.summary import Summary
+from percussim.testing import at_default_accuracy
 
 
 @pytest.mark.parametrize(
     "how",
     [
         pytest.param(lambda: percussim.simulate(percussim.load_preset("fig5")), id="fixed grid"),
-        pytest.param(lambda: percussim.simulate(duration_only("fig3")), id="default accuracy"),
+        pytest.param(lambda: percussim.simulate(at_default_accuracy("fig3")), id="default accuracy"),
         pytest.param(lambda: percussim.simulate(percussim.load_preset("fig3"), model="lumped"), id="lumped"),
-        pytest.param(lambda: percussim.simulate(duration_only("fig6")), id="tolerance not met"),
+        pytest.param(lambda: percussim.simulate(at_default_accuracy("fig6")), id="tolerance not met"),
     ],
 )
 def test_a_summary_is_the_documented_model(how):

@@ -4,17 +4,17 @@
 from __future__ import annotations
 
 import pytest
-from conftest import duration_only
 
 import percussim
 from percussim.solver.presets import preset_json
+from percussim.testing import at_default_accuracy
 
 
 def test_the_energy_transferred_to_a_free_tool_is_what_the_tool_holds_after_the_blow():
     """Nothing but the struck end does work on a tool without a medium: once the striker has
     left, ∫F·v dt through that end is the tool's kinetic and strain energy, which the audit sums
     along the tool. EMX is its largest value, reached before the tool gave some back."""
-    case = duration_only("fig3")
+    case = at_default_accuracy("fig3")
     case.pop("medium", None)
     case["numerics"]["duration"] = 2e-3
     result = percussim.simulate(case)
@@ -54,6 +54,6 @@ def test_a_medium_the_blow_cannot_move_is_refusal():
 
 
 def test_a_medium_that_does_not_yield_has_no_set():
-    summary = percussim.simulate(duration_only("fig3")).summary
+    summary = percussim.simulate(at_default_accuracy("fig3")).summary
     assert summary["set"] is None and summary["blow_count"] is None
     assert not any(w.startswith("refusal:") for w in summary["warnings"])

@@ -11,6 +11,8 @@ from __future__ import annotations
 
 import copy
 
+from percussim.solver.presets import preset_json
+
 
 def merge(base: dict, changes: dict) -> dict:
     """`base` with `changes` merged in, recursively (a None value removes the key)."""
@@ -23,3 +25,11 @@ def merge(base: dict, changes: dict) -> dict:
         else:
             out[key] = value
     return out
+
+
+def at_default_accuracy(name: str) -> dict:
+    """Preset `name` with only its duration in `numerics` (the default accuracy) and no outputs."""
+    case = preset_json(name)
+    case["numerics"] = {"duration": case["numerics"]["duration"]}
+    case.pop("outputs", None)
+    return case
