@@ -128,6 +128,30 @@ def cycles() -> list[str]:
             max(abs(v / closed - 1) for v in velocities[1:]),
         )
     )
+    summary = simulate(parse_case(CF.lundberg_cycles(4))).summary
+    eta = CF.lundberg(CF.OPTIMUM)
+    shares = [blow["transfer_efficiency"] for blow in summary["blows"]]
+    rows.append(
+        _row(
+            "4 cycles of the equal piston on Lundberg's rock (x = 1.2564): each blow meets the tool at rest, "
+            "the rock's share of it, worst",
+            f"{eta:.6g}",
+            f"{min(shares):.6g}–{max(shares):.6g}",
+            max(abs(share / eta - 1) for share in shares),
+        )
+    )
+    mass = CF.STEEL["density"] * CF.AREA * CF.PISTON
+    reflected = (1 - eta) * sum(0.5 * mass * v * v for v in summary["cycle"]["impact_velocity"][:-1])
+    spent = summary["energy"]["dissipated_between_blows"]
+    rows.append(
+        _row(
+            "what the rock sent back, spent as the tool comes to rest between blows: (1 − η)·Σ½m·v² "
+            "of the blows but the last",
+            f"{reflected:.6g} J",
+            f"{spent:.6g} J",
+            abs(spent / reflected - 1),
+        )
+    )
     return rows
 
 
@@ -170,8 +194,8 @@ def cycle_sections() -> list[tuple[str, list[str]]]:
     started = perf_counter()
     table = ["| closed form | expected | found | relative error |", "|---|---|---|---|", *flights(), *cycles()]
     lines = [
-        "Between blows the striker flies under the drive, an ODE integrated to 1e-9 "
-        "(`solver/drive.py`); with ideal hydraulics (constant pressures, an instant valve, no "
+        "Between blows the tool comes to rest on the medium and the striker flies under the drive, an "
+        "ODE integrated to 1e-9 (`solver/drive.py`, `solver/kernel/flight.py`); with ideal hydraulics (constant pressures, an instant valve, no "
         "friction) its flight has a closed form (`closed_forms.ideal_flight`). Rebounds are "
         "velocities away from the tool.",
         "",

@@ -33,13 +33,17 @@ class BlowLog:
     """Each blow's observations, in order (`start` one, `finish` it)."""
 
     def __init__(self, launch_energy: float, set_at_rest: float = 0.0):
-        self.launch_energy = launch_energy
         self.blows: list[dict] = []
         self._start: np.ndarray | None = None
+        self._launched = launch_energy  # the blow under way's striker (and anvil) energy
         self._set = set_at_rest  # the medium's permanent penetration before the first blow
 
     def start(self, energy: np.ndarray) -> None:
-        """A blow starts with the energy terms `energy` (after its striker's launch)."""
+        """A blow starts with the energy terms `energy` (after its striker's launch): its striker's
+        energy is the first launch's, or what `E_LAUNCHED` gained since the blow before (a hammer
+        at work's drive strikes at a velocity of its own each blow)."""
+        if self._start is not None:
+            self._launched = energy[L.E_LAUNCHED] - self._start[L.E_LAUNCHED]
         self._start = energy.copy()
 
     def finish(self, energy: np.ndarray, observed, permanent_penetration: float) -> None:
@@ -47,7 +51,7 @@ class BlowLog:
         the medium's permanent penetration then `permanent_penetration`."""
         x = observed.extremes
         medium = to_medium(energy) - to_medium(self._start)
-        supplied = self.launch_energy + energy[L.E_EXTERNAL_WORK] - self._start[L.E_EXTERNAL_WORK]
+        supplied = self._launched + energy[L.E_EXTERNAL_WORK] - self._start[L.E_EXTERNAL_WORK]
         count = int(x[L.X_CONTACTS])
         self.blows.append(
             {

@@ -765,6 +765,23 @@ class Case(_Model):
             )
         if self.drive is not None and self.striker is None:
             raise field_error("Case", ("drive",), "drives a striker: give striker, not struck_end", None)
+        if self.cycles is not None:
+            # between blows the tool rests on the medium, unloaded (`kernel.rest_tool`): a rest that
+            # holds forces in the tool (its weight, a shaft's residual load) is not modelled
+            if self.medium is None:
+                raise field_error(
+                    "Case", ("medium",), "is required with cycles: between blows the tool rests on it", None
+                )
+            for name, value in (("gravity", self.gravity), ("shaft", self.shaft)):
+                if value:
+                    raise field_error(
+                        "Case",
+                        (name,),
+                        "cannot be given with cycles: between blows the tool comes to rest on the medium "
+                        "unloaded, and a rest under the tool's weight or a shaft's load is not modelled; "
+                        "give blows instead",
+                        None,
+                    )
         control = self.drive.control if self.drive is not None else None
         if control is not None and not self.medium_yields:
             raise field_error(

@@ -527,6 +527,7 @@ def simulate_rod(
             ended = state.energy[0].copy()
             velocity = case.impact_velocity
             if hammer is not None:
+                K.rest_tool(last, state, contact, anvil)
                 flight = fly_between(hammer, state, last, striker, contact, anvil, log, case.medium_yields)
                 flown = flight_history(kept_last, flight, last * tau + elapsed)
                 record_flight(recorder, paths, kept_last, flight, flown)

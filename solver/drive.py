@@ -14,22 +14,27 @@ p_0, polytropic exponent n: `p·V_gas^n = p_0·V_0^n`), and relieved at the supp
 starts from: what the chambers take, `(A_r·[rear on supply] − A_f)·y'`, and what the pump brings
 move the gas. Without a pump the supply holds its pressure.
 
-Between blows the tool's waves are spent and it is not stepped: the flight is an ODE in
-(y, y', V_gas), integrated by `scipy.integrate.solve_ivp` to a relative tolerance finer than the
-case's, with the valve's switch and the impact as events. `Flight` is what one flight gives the
-next blow and the records.
+Between blows the tool is at rest on the medium and is not stepped: the flight is an ODE in
+(y, y', V_gas), integrated compiled (`kernel.flight`) to a relative tolerance finer than the
+case's, until the valve's switch and the impact. `Flight` is what one flight gives the next blow
+and the records.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from functools import cached_property
 
 import numpy as np
-from scipy.integrate import solve_ivp
+
+from .kernel import flight as F
+from .kernel.flight import Valve
 
 FLIGHT_ROWS = 200  # records kept of each flight, evenly in time
 ODE_TOLERANCE = 1e-9  # the flight's relative tolerance: far below any case's
+ODE_FLOOR = (1e-12, 1e-12, 1e-15)  # and its absolute one on y (m), y' (m/s) and the gas (m³)
+MAX_STEPS = 100_000  # of a flight's integration: a flight that needs more is refused as stalled
 MAX_FLIGHT = 10.0  # s: a striker that has not struck by then never will (refused as stalled)
 
 
@@ -62,28 +67,30 @@ class Hydraulics:
 
     def pressure(self, gas_volume: float) -> float:
         """The supply's pressure with `gas_volume` of gas in the accumulator (p_s without one)."""
-        if self.accumulator_volume == 0.0:
-            return self.supply_pressure
-        return self.precharge * (self.accumulator_volume / gas_volume) ** self.polytropic_exponent
+        return F.supply_pressure(gas_volume, self.compiled)
 
-
-@dataclass
-class Valve:
-    """The rear chamber's connection: it moves from `start` (0: return, 1: supply) to `target`
-    from `since` over the valve's time; its state at t is the fraction on supply."""
-
-    target: float
-    since: float
-    start: float
-
-    def shifted(self, span: float) -> Valve:
-        """The same valve seen from `span` later (its time counted from then)."""
-        return Valve(target=self.target, since=self.since - span, start=self.start)
-
-    def on_supply(self, t: float, valve_time: float) -> float:
-        if valve_time <= 0.0 or t >= self.since + valve_time:
-            return self.target
-        return self.start + (self.target - self.start) * max(0.0, t - self.since) / valve_time
+    @cached_property
+    def compiled(self) -> F.FlightDrive:
+        """The drive as the compiled flight takes it (`kernel.flight`): with the gas volumes at the
+        relief's pressure and at emptying (all gas), between which the supply's gas is held."""
+        pumped = self.flow > 0.0 and self.accumulator_volume > 0.0
+        return F.FlightDrive(
+            mass=self.mass,
+            front_area=self.front_area,
+            rear_area=self.rear_area,
+            supply_pressure=self.supply_pressure,
+            return_pressure=self.return_pressure,
+            valve_time=self.valve_time,
+            friction=self.friction,
+            flow=self.flow,
+            accumulator_volume=self.accumulator_volume,
+            precharge=self.precharge,
+            polytropic_exponent=self.polytropic_exponent,
+            weight=self.weight,
+            relieved=self.gas_volume(self.supply_pressure),
+            emptied=self.accumulator_volume,
+            pumped=1.0 if pumped else 0.0,
+        )
 
 
 @dataclass
@@ -116,17 +123,9 @@ class Flight:
     valve: Valve = field(repr=False)
 
 
-def rear_pressure(drive: Hydraulics, on_supply: float, supply: float) -> float:
-    """The rear chamber's pressure, `on_supply` (0…1) of the way from return to supply."""
-    return drive.return_pressure + on_supply * (supply - drive.return_pressure)
-
-
-def push(drive: Hydraulics, velocity: float, rear: float, supply: float) -> float:
-    """The net force on the striker toward the tool (N): the rear's push, the front's pull back,
-    the weight, and friction against the motion (none at rest: it holds at most what the
-    pressures push with, which the flight never rests on)."""
-    force = rear * drive.rear_area - supply * drive.front_area + drive.weight
-    return force - math.copysign(drive.friction, velocity) if velocity != 0.0 else force
+def shifted(valve: Valve, span: float) -> Valve:
+    """The same valve seen from `span` later (its time counted from then)."""
+    return valve._replace(since=valve.since - span)
 
 
 def fly(
@@ -136,86 +135,43 @@ def fly(
     strikes at `impact_point`: back under the front's pull until it passes `stroke` from the
     impact point, where the valve turns the rear to supply, then in. `gas_volume` and `valve`:
     the supply's state when the flight starts (the valve turned to return at the last impact)."""
+    compiled = drive.compiled
     switch_at = impact_point - drive.stroke
-    pumped = drive.flow > 0.0 and drive.accumulator_volume > 0.0
-    relieved = drive.gas_volume(drive.supply_pressure)  # the gas volume at the relief's pressure
-    # an emptied accumulator (all gas) holds its precharge: a demand beyond it is not modelled
-    emptied = drive.accumulator_volume
-
-    def rates(t, x, valve):
-        # x: y, y', the gas volume, and the work on the striker of the supply, of the return line
-        # and of friction so far
-        y, w, gas = x[:3]
-        # relieved at the supply pressure: the gas is pressed no further (a trial stage of the
-        # integrator past it reads the relief's pressure), the pump's surplus goes over the valve
-        supply = drive.pressure(min(max(gas, relieved), emptied))
-        on = valve.on_supply(t, drive.valve_time)
-        taken = (on * drive.rear_area - drive.front_area) * w  # m³/s the chambers draw from the supply
-        gas_rate = 0.0
-        if drive.accumulator_volume > 0.0:
-            gas_rate = taken - (drive.flow if pumped else 0.0)
-            if (gas <= relieved and gas_rate < 0.0) or (gas >= emptied and gas_rate > 0.0):
-                gas_rate = 0.0
-        force = push(drive, w, rear_pressure(drive, on, supply), supply)
-        returned = (1.0 - on) * drive.return_pressure * drive.rear_area * w
-        return [w, force / drive.mass, gas_rate, supply * taken, returned, -drive.friction * abs(w)]
-
-    def passes_switch(t, x, valve):
-        return x[0] - switch_at
-
-    passes_switch.terminal, passes_switch.direction = True, -1.0
-
-    def strikes(t, x, valve):
-        return x[0] - impact_point
-
-    strikes.terminal, strikes.direction = True, 1.0
-
-    pieces = []
-    state = [start, velocity, gas_volume, 0.0, 0.0, 0.0]
-    t0, switched = 0.0, math.nan
+    state = (start, velocity, gas_volume, 0.0, 0.0, 0.0)
+    steps = np.empty((MAX_STEPS, F.STEP_ROWS))
+    t0, switched, rows = 0.0, math.nan, 0
+    valves, ends = [], []
     # a striker the blow left beyond the switch point (a stroke shorter than its rebound) has
     # passed it: the valve turns at once
     stages = ("back", "in") if start > switch_at else ("in",)
     if start <= switch_at:
         switched = 0.0
-        valve = Valve(target=1.0, since=0.0, start=valve.on_supply(0.0, drive.valve_time))
+        valve = F.Valve(target=1.0, since=0.0, start=F.on_supply(0.0, valve, drive.valve_time))
     for stage in stages:
-        events = [passes_switch] if stage == "back" else [strikes]
-        solution = solve_ivp(
-            rates,
-            (t0, t0 + MAX_FLIGHT),
-            state,
-            method="DOP853",
-            rtol=ODE_TOLERANCE,
-            atol=[1e-12, 1e-12, 1e-15, 1e-9, 1e-9, 1e-9],
-            events=events,
-            dense_output=True,
-            args=(valve,),
+        until, direction = (switch_at, -1.0) if stage == "back" else (impact_point, 1.0)
+        kept, t0, state = F.fly_to(
+            state, t0, until, direction, MAX_FLIGHT, compiled, valve, ODE_TOLERANCE, ODE_FLOOR, steps[rows:]
         )
-        if solution.status != 1:
+        if kept < 0:
             raise StalledStriker(stage, drive)
-        pieces.append((t0, solution.t_events[0][0], solution.sol, valve))
-        t0 = solution.t_events[0][0]
-        state = list(solution.y_events[0][0])
+        rows += kept
+        valves.append(valve)
+        ends.append(t0)
         if stage == "back":
             switched = t0
-            valve = Valve(target=1.0, since=t0, start=valve.on_supply(t0, drive.valve_time))
+            valve = F.Valve(target=1.0, since=t0, start=F.on_supply(t0, valve, drive.valve_time))
     times = np.linspace(0.0, t0, FLIGHT_ROWS + 1)[1:]  # its start is the blow's last record
-    rows = np.empty((6, FLIGHT_ROWS))
-    rear, supply = np.empty(FLIGHT_ROWS), np.empty(FLIGHT_ROWS)
-    for k, t in enumerate(times):
-        begin, end, dense, on_valve = next(p for p in pieces if t <= p[1] or p is pieces[-1])
-        rows[:, k] = dense(min(max(t, begin), end))
-        supply[k] = drive.pressure(min(max(rows[2, k], relieved), emptied))
-        rear[k] = rear_pressure(drive, on_valve.on_supply(t, drive.valve_time), supply[k])
+    displacement, velocities, gas = F.records(times, steps, rows)
+    supply, rear = F.pressures(times, gas, tuple(valves), np.array(ends), compiled)
+    pumped = compiled.pumped > 0.0
     return Flight(
         duration=t0,
         switched=switched,
         impact_velocity=state[1],
         impact_point=impact_point,
         time=times,
-        displacement=rows[0],
-        velocity=rows[1],
+        displacement=displacement,
+        velocity=velocities,
         rear_pressure=rear,
         supply_pressure=supply,
         supplied=state[3],
@@ -223,8 +179,8 @@ def fly(
         rubbed=state[5],
         lifted=drive.weight * (impact_point - start),
         pumped=drive.flow * drive.supply_pressure * t0 if pumped else 0.0,
-        gas_volume=min(max(state[2], relieved), emptied),
-        valve=Valve(target=0.0, since=0.0, start=valve.on_supply(t0, drive.valve_time)),
+        gas_volume=min(max(state[2], compiled.relieved), compiled.emptied),
+        valve=F.Valve(target=0.0, since=0.0, start=F.on_supply(t0, valve, drive.valve_time)),
     )
 
 

@@ -48,7 +48,8 @@ E_TO_SHAFT = 13  # the net work done on the soil along the tool's side (`shaft`)
 # Under gravity: the weights' work since impact, and what the tool, the medium and the contacts
 # stored at rest before it (`solver.rest`), with the medium's share
 E_GRAVITY_WORK, E_STORED_AT_REST, E_MEDIUM_AT_REST = 14, 15, 16
-ENERGY_SLOTS = 17
+E_BETWEEN_BLOWS = 17  # a hammer at work: what the tool's leftover waves held when it came to rest
+ENERGY_SLOTS = 18
 
 
 def new_extremes() -> np.ndarray:

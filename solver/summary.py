@@ -60,9 +60,15 @@ class Energy(_Part):
     stored_at_rest: float = Field(
         description="what the tool, the medium and the anvil's contact stored at rest under gravity before impact, J"
     )
-    numerical: float = Field(description="lost by the scheme (supplied − stored − dissipated − withdrawn), J")
+    numerical: float = Field(
+        description="lost by the scheme (supplied − stored − dissipated − withdrawn − dissipated between blows), J"
+    )
     striker_withdrawn: float = Field(
         description="what the striker still had when each blow ended and the next began, J"
+    )
+    dissipated_between_blows: float = Field(
+        description="a hammer at work's: what the tool's leftover waves (and the medium's and the contacts' "
+        "springs) held when each blow ended and the tool came to rest on the medium, J"
     )
     striker_kinetic: float = Field(description="J, at the end of the run")
     striker_strain: float = Field(description="an elastic striker's, J, at the end of the run")
@@ -254,6 +260,7 @@ def build_summary(
     dissipated_contact = energy[L.E_DISSIPATED_CONTACT]
     dissipated_medium = energy[L.E_DISSIPATED_MEDIUM]
     withdrawn = energy[L.E_WITHDRAWN]
+    between_blows = energy[L.E_BETWEEN_BLOWS]
     shaft = energy[L.E_TO_SHAFT]
     gravity_work, at_rest = energy[L.E_GRAVITY_WORK], energy[L.E_STORED_AT_REST]
     numerical = (
@@ -265,6 +272,7 @@ def build_summary(
         - dissipated_contact
         - dissipated_medium
         - withdrawn
+        - between_blows
         - shaft
     )
     budget = initial + max(external, 0.0)
@@ -313,6 +321,7 @@ def build_summary(
             "stored_at_rest": float(at_rest),
             "numerical": float(numerical),
             "striker_withdrawn": float(withdrawn),
+            "dissipated_between_blows": float(between_blows),
             **{k: float(v) for k, v in at_end.items()},
             "max_excess_fraction": float(excess),
         },

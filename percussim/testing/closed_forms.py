@@ -559,6 +559,16 @@ def hammer_at_work(**changes) -> dict:
     return {key: value for key, value in (case | changes).items() if value is not None}
 
 
+def lundberg_cycles(count: int = 4) -> dict:
+    """The equal piston on Lundberg's rock at its optimum, each blow over `MEDIUM_DURATION` (its
+    wave's first passage and the rock's reflection back to the struck end), driven `count` cycles
+    by `hammer_at_work`'s ideal drive: every blow from a tool at rest gives the rock `lundberg(OPTIMUM)`
+    of its energy, the piston stops dead, and the flight strikes from rest at √(2·p_s·A_r·s/m)."""
+    case = rock_case(OPTIMUM, {"scheme": "explicit", "cells": 1000})
+    case.pop("outputs")
+    return case | {"drive": hammer_at_work()["drive"], "cycles": {"count": count}}
+
+
 # The hammer's drive as `solver.drive.fly` takes it: ideal (constant pressures, an instant valve, no
 # friction), and with every loss and store (a return line, a valve's time, friction, a pump and
 # its accumulator, the striker's weight)
@@ -595,16 +605,17 @@ def ideal_flight(drive, start: float, velocity: float, impact_point: float) -> t
 def blow_ends(result) -> list[tuple[float, float, float]]:
     """Where each blow of a hammer at work (a `Result` of `cycles`) left the striker and the tool,
     from its history: `(striker's displacement, its velocity, the struck end's displacement)` at
-    each blow's last record before its flight."""
+    each blow's last record before its flight, once the tool has come to rest on the medium at its
+    permanent penetration (pushing back a striker it would overlap)."""
     cycle, h, grid = result.summary["cycle"], result.history, result.summary["runs"][-1]
     duration = grid["steps"] // len(cycle["impact_velocity"]) * grid["time_step"]  # a blow, in whole steps
     ends = [
         np.flatnonzero(h["time"] <= sum(cycle["cycle_time"][:k]) + duration * (1 + 1e-9))[-1]
         for k in range(len(cycle["cycle_time"]))
     ]
+    rests = [h["medium/permanent_penetration"][end] for end in ends]
     return [
-        (h["striker/displacement"][end], h["striker/velocity"][end], h["tool/struck_end_displacement"][end])
-        for end in ends
+        (min(h["striker/displacement"][end], rest), h["striker/velocity"][end], rest) for end, rest in zip(ends, rests)
     ]
 
 

@@ -130,7 +130,7 @@ from .bundles import (
 from .gravity import no_gravity, start_at_rest
 from .rows import factor_tool_rows, segment_layout, substitute_toward_working_end, sweep_toward_struck_end
 from .shaft import no_shaft
-from .step import advance, start_blow
+from .step import advance, rest_tool, start_blow
 from .struck_end import struck_end_step
 
 __all__ = [
@@ -197,6 +197,7 @@ __all__ = [
     "no_shaft",
     "segment_layout",
     "start_at_rest",
+    "rest_tool",
     "start_blow",
     "struck_end_step",
     "substitute_toward_working_end",

@@ -13,6 +13,7 @@ from numba.extending import intrinsic
 from ..compiled import compiled
 from ..layout import (
     E_ANVIL_KINETIC,
+    E_BETWEEN_BLOWS,
     E_CONTACT_POTENTIAL,
     E_DISSIPATED_CONTACT,
     E_DISSIPATED_MEDIUM,
@@ -223,6 +224,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
         - energy[0, E_GRAVITY_WORK]
         + 0.5 * lifted
         + energy[0, E_WITHDRAWN]
+        + energy[0, E_BETWEEN_BLOWS]
         - energy[0, E_LAUNCHED]
     )
     if striker.elastic:

@@ -12,6 +12,7 @@ from numba.extending import intrinsic
 from ..compiled import compiled
 from ..layout import (
     E_ANVIL_KINETIC,
+    E_BETWEEN_BLOWS,
     E_CONTACT_POTENTIAL,
     E_GRAVITY_WORK,
     E_LAUNCHED,
@@ -21,6 +22,8 @@ from ..layout import (
     E_STORED_AT_REST,
     E_STRIKER_KINETIC,
     E_STRIKER_STRAIN,
+    E_TOOL_KINETIC,
+    E_TOOL_STRAIN,
     E_WITHDRAWN,
     ENERGY_SLOTS,
     X_FAILED_TIME,
@@ -66,6 +69,9 @@ from .bundles import (
     S_INCOMING_BEFORE,
     S_LAUNCH_VELOCITY,
     S_MEDIUM_FORCE,
+    S_MEDIUM_FORCE_BEFORE,
+    S_MEDIUM_FORCE_EARLIER,
+    S_MEDIUM_SET,
     S_POTENTIAL_BEFORE,
     S_POTENTIAL_BEFORE_THAT,
     S_STRIKER_VELOCITY,
@@ -212,6 +218,48 @@ def rest_anvil(state, row, anvil):
     energy[0, E_WITHDRAWN] += before
     energy[0, E_LAUNCHED] += after
     energy[0, E_CONTACT_POTENTIAL] += after - before
+
+
+@compiled()
+def rest_tool(m, state, contact, anvil):
+    """Between a hammer's blows the tool comes to rest on the medium, its leftover waves spent
+    (as the feed that holds a drill's rod to the rock spends them in the flight): every node of
+    layer m and the two before at the medium's set, still and unstrained, the medium unloaded
+    there (`fresh_rock` then meets the next blow from it), an anvil on the struck end with no
+    overlap, pushing back a striker it would overlap. What the tool, the medium's spring and the
+    contacts held then (the striker's, as the struck end moved), is `E_BETWEEN_BLOWS`. Held so, the tool
+    had no weight or shaft to keep forces in it (`Case._a_hammer_at_work`)."""
+    u, y, ends, energy = state.u, state.y, state.ends, state.energy
+    row = m % 3
+    at = ends[S_MEDIUM_SET]
+    pressed = pressed_to(contact, ends[S_CONTACT_DEEPEST])
+    struck = ends[S_ANVIL_DISP] if anvil.present else u[row, 0]
+    contacts_before = contact_law(y[row] - struck, pressed)[1]
+    if anvil.present:
+        end = anvil.contact
+        contacts_before += contact_law(struck - u[row, 0], pressed_to(end, ends[S_ANVIL_CONTACT_DEEPEST]))[1]
+        ends[S_ANVIL_DISP] = at
+        ends[S_ANVIL_CONTACT_DEEPEST] = 0.0
+        ends[S_ANVIL_FORCE] = 0.0
+    # the tool, settling, pushes back a striker it would overlap: it starts its flight touching
+    behind = y[row] - at
+    if behind > 0.0:
+        y[:] -= behind
+        state.striker[:, :] -= behind
+    contacts_after = contact_law(y[row] - at, pressed)[1]
+    energy[0, E_BETWEEN_BLOWS] += (
+        energy[0, E_TOOL_KINETIC]
+        + energy[0, E_TOOL_STRAIN]
+        + energy[0, E_MEDIUM_POTENTIAL]
+        + contacts_before
+        - contacts_after
+    )
+    energy[0, E_TOOL_KINETIC] = energy[0, E_TOOL_STRAIN] = energy[0, E_MEDIUM_POTENTIAL] = 0.0
+    energy[0, E_CONTACT_POTENTIAL] += contacts_after - contacts_before
+    u[:, :] = at
+    for last, before in (INCOMING, FAR_INCOMING):  # no wave arrives at either end
+        ends[last] = ends[before] = 0.0
+    ends[S_MEDIUM_FORCE] = ends[S_MEDIUM_FORCE_BEFORE] = ends[S_MEDIUM_FORCE_EARLIER] = 0.0
 
 
 @compiled()
