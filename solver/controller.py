@@ -84,8 +84,10 @@ ANVIL_PATHS = {
 }
 
 
-# Blow after blow adds what the strikers launched after the first brought, and what each took away.
+# Blow after blow adds what the strikers launched after the first brought, and what each took away;
+# a hammer at work, what the tool held each time it came to rest between blows.
 BLOW_PATHS = {"energy/launched": L.H_LAUNCHED, "energy/striker_withdrawn": L.H_WITHDRAWN}
+CYCLE_PATHS = {"energy/dissipated_between_blows": L.H_BETWEEN_BLOWS}
 
 
 def history_paths(case: Case) -> dict[str, int]:
@@ -102,6 +104,8 @@ def history_paths(case: Case) -> dict[str, int]:
         paths.update(ANVIL_PATHS)
     if case.blows_run > 1:
         paths.update(BLOW_PATHS)
+    if case.cycles is not None:
+        paths.update(CYCLE_PATHS)
     if case.shaft:
         paths["energy/to_shaft"] = L.H_TO_SHAFT
     return paths
@@ -529,7 +533,7 @@ def simulate_rod(
             if hammer is not None:
                 K.rest_tool(last, state, contact, anvil)
                 flight = fly_between(hammer, state, last, striker, contact, anvil, log, case.medium_yields)
-                flown = flight_history(kept_last, flight, last * tau + elapsed)
+                flown = flight_history(kept_last, flight, last * tau + elapsed, state)
                 record_flight(recorder, paths, kept_last, flight, flown)
                 low, high = np.searchsorted(summary_rows, (row, row + FLIGHT_ROWS))
                 summary_table.append(flown[summary_columns].take(summary_rows[low:high] - row, axis=1))
@@ -597,11 +601,17 @@ def fly_between(hammer, state, last, striker, contact, anvil, log, has_set) -> F
     return hammer.between(state.y[row], velocity, impact_point, last_set)
 
 
-def flight_history(kept_last, flight: Flight, start: float) -> np.ndarray:
+def flight_history(kept_last, flight: Flight, start: float, state) -> np.ndarray:
     """A flight's rows of the history's columns from `start` (s): the striker's from the flight,
-    no contact force, the rest held at the last row kept (`kept_last`: the history's and the
-    probes'; the tool is not stepped)."""
+    no contact force, the tool at rest on the medium as `kernel.rest_tool` left it in `state`
+    (unstressed, no force on the medium), the rest held at the last row kept (`kept_last`: the
+    history's and the probes')."""
     rows = np.repeat(kept_last[0][:, None], FLIGHT_ROWS, axis=1)
+    rows[[L.H_STRUCK_END, L.H_WORKING_END]] = state.ends[K.S_MEDIUM_SET]
+    rows[[L.H_MEDIUM_FORCE, L.H_TOOL_KINETIC, L.H_TOOL_STRAIN, L.H_MEDIUM_POTENTIAL, L.H_ANVIL_FORCE]] = 0.0
+    rows[L.H_ANVIL_DISP] = state.ends[K.S_ANVIL_DISP]
+    rows[L.H_CONTACT_POTENTIAL] = state.energy[0, L.E_CONTACT_POTENTIAL]
+    rows[L.H_BETWEEN_BLOWS] = state.energy[0, L.E_BETWEEN_BLOWS]
     rows[L.H_TIME] = start + flight.time
     rows[L.H_STRIKER_DISP] = flight.displacement
     rows[L.H_STRIKER_VEL] = flight.velocity
@@ -612,12 +622,12 @@ def flight_history(kept_last, flight: Flight, start: float) -> np.ndarray:
 
 def record_flight(recorder, paths, kept_last, flight: Flight, rows: np.ndarray) -> None:
     """A flight's records (`rows`, `flight_history`'s) in every history, the drive's pressures,
-    and the probes held."""
+    and the probes on the tool at rest (unstressed)."""
     for path, column in paths.items():
         recorder.append(path, rows[column])
     recorder.append("drive/rear_pressure", flight.rear_pressure)
     recorder.append("drive/supply_pressure", flight.supply_pressure)
-    recorder.append("probes/stress", np.tile(kept_last[1], (FLIGHT_ROWS, 1)))
+    recorder.append("probes/stress", np.zeros((FLIGHT_ROWS, len(kept_last[1]))))
 
 
 def warm_up() -> None:

@@ -16,7 +16,8 @@ H_ANVIL_DISP, H_ANVIL_VEL, H_ANVIL_FORCE, H_ANVIL_KINETIC = 20, 21, 22, 23  # it
 H_LAUNCHED, H_WITHDRAWN = 24, 25  # blow after blow: `E_LAUNCHED`, `E_WITHDRAWN` so far
 H_TO_SHAFT = 26  # `E_TO_SHAFT` so far
 H_TRANSFERRED = 27  # the work done on the tool through its struck end in this blow
-HISTORY_COLUMNS = 28
+H_BETWEEN_BLOWS = 28  # a hammer at work: `E_BETWEEN_BLOWS` so far
+HISTORY_COLUMNS = 29
 
 # Extreme slots (`extremes[X_…]`): what a run reports beyond its recordings, kept up to date
 X_PEAK_FORCE, X_PEAK_FORCE_TIME = 0, 1

@@ -323,6 +323,7 @@ ENERGY_TERMS = {  # /energy/<name> -> label, in the order they are stacked (thos
     "to_shaft": "soil along the tool's side (stored, slipped, damped)",  # a shaft's
     "anvil_kinetic": "anvil kinetic",
     "striker_withdrawn": "withdrawn with the striker between blows",
+    "dissipated_between_blows": "spent as the tool came to rest between blows",  # a hammer at work
     "dissipated_contact": "dissipated in the contact",
     "dissipated_medium": "dissipated in the medium",
 }

@@ -192,7 +192,7 @@ def test_the_cycles_histories_are_written_with_their_units(tmp_path):
     import h5py
 
     path = tmp_path / "result.h5"
-    simulate(hammer(cycles={"count": 2}), result_path=path)
+    summary = simulate(hammer(cycles={"count": 2}), result_path=path).summary
     with h5py.File(path) as f:
         assert f["drive/rear_pressure"].attrs["units"] == "Pa"
         assert f["drive/supply_pressure"].attrs["units"] == "Pa"
@@ -200,6 +200,17 @@ def test_the_cycles_histories_are_written_with_their_units(tmp_path):
         assert len(f["drive/rear_pressure"]) == len(time)
         # the striker flew back beyond the stroke between the blows, in the same history
         assert y.min() < -0.05 and np.all(np.diff(time) > 0)
+        # in its flight the tool is at rest on the rock, unstressed, what it held spent
+        spent = f["energy/dissipated_between_blows"]
+        assert spent.attrs["units"] == "J" and spent[-1] == summary["energy"]["dissipated_between_blows"] > 0
+        grid = summary["runs"][-1]
+        blow = grid["steps"] // 2 * grid["time_step"]  # a blow, in whole steps
+        flying = (time > blow * (1 + 1e-9)) & (time <= summary["cycle"]["cycle_time"][0] * (1 + 1e-12))
+        assert flying.sum() == 200
+        for name in ("energy/tool_kinetic", "energy/tool_strain", "medium/force"):
+            assert np.all(f[name][:][flying] == 0.0), name
+        rest = f["medium/permanent_penetration"][:][flying]
+        assert np.all(f["tool/struck_end_displacement"][:][flying] == rest) and np.all(spent[:][flying] > 0)
 
 
 def adaptive(stiffness: float, count: int = 16) -> dict:

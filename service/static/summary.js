@@ -87,6 +87,7 @@ const ENERGY_TERMS = [
   ["dissipated_contact", "Dissipated in the contact"],
   ["dissipated_medium", "Dissipated in the medium"],
   ["striker_withdrawn", "Withdrawn with the striker", "rare"],
+  ["dissipated_between_blows", "Spent as the tool came to rest between blows", "rare"],
   ["numerical", "Lost by the scheme"],
 ];
 

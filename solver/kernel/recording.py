@@ -10,6 +10,7 @@ from ..compiled import compiled
 from ..layout import (
     COMPRESSION,
     E_ANVIL_KINETIC,
+    E_BETWEEN_BLOWS,
     E_CONTACT_POTENTIAL,
     E_DISSIPATED_CONTACT,
     E_DISSIPATED_MEDIUM,
@@ -27,6 +28,7 @@ from ..layout import (
     H_ANVIL_FORCE,
     H_ANVIL_KINETIC,
     H_ANVIL_VEL,
+    H_BETWEEN_BLOWS,
     H_CONTACT_FORCE,
     H_CONTACT_POTENTIAL,
     H_DISSIPATED_CONTACT,
@@ -281,6 +283,7 @@ def record_history(recorders, column, state, recorded, m_rec, force, anvil, step
     history[H_WITHDRAWN, column] = energy[0, E_WITHDRAWN]
     history[H_TO_SHAFT, column] = energy[0, E_TO_SHAFT]
     history[H_TRANSFERRED, column] = state.ends[S_TRANSFERRED]
+    history[H_BETWEEN_BLOWS, column] = energy[0, E_BETWEEN_BLOWS]
     if m_rec == 0:
         history[H_STRIKER_KINETIC, column] = step.initial_energy
         for c in (H_TOOL_KINETIC, H_TOOL_STRAIN, H_CONTACT_POTENTIAL, H_MEDIUM_POTENTIAL, H_MEDIUM_PLASTIC):
