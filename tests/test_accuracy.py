@@ -231,3 +231,51 @@ def test_fixed_grids_say_what_they_used_and_why():
     lumped = simulate(parse_case(merge(at_default_accuracy("fig3"), {"numerics": {"model": "lumped"}}))).summary
     assert lumped["model"] == "lumped" and "ε²" in lumped["why"]
     assert set(lumped["error_estimate"]) - {"worst"} == set(ESTIMATED) - set(lumped["not_estimated"])
+
+
+def ladder_runs(monkeypatch, case: dict, path) -> tuple[dict, list[tuple[int, bool]]]:
+    """`case` solved to its tolerance, streamed to `path`, with each run of its ladder: its cells
+    and whether it recorded its outputs (took the case's, not a summary's alone)."""
+    from percussim.solver import adaptive
+    from percussim.solver.case import SUMMARY_ONLY
+
+    runs, simulate_rod = [], adaptive.simulate_rod
+
+    def counted(run_case, numerics, **kwargs):
+        runs.append((numerics.cells, run_case.outputs != SUMMARY_ONLY))
+        return simulate_rod(run_case, numerics=numerics, **kwargs)
+
+    monkeypatch.setattr(adaptive, "simulate_rod", counted)
+    return simulate(parse_case(case), result_path=path).summary, runs
+
+
+def test_long_outputs_are_written_only_by_the_run_that_may_be_the_result(monkeypatch, tmp_path):
+    """A hammer's 10 cycles, their outputs counted long: the grids whose estimate before them says
+    they will not meet the tolerance even at the scheme's order 2 do not record (100 cycles wrote
+    1.24 million rows for three runs where one was the result), the last does, none runs twice."""
+    from percussim.solver import adaptive
+
+    monkeypatch.setattr(adaptive, "LONG_OUTPUTS", 1e5)
+    summary, runs = ladder_runs(monkeypatch, at_default_accuracy("rock_drill_cycle"), tmp_path / "cycles.h5")
+    assert runs == [(26, False), (52, False), (104, False), (208, False), (416, False), (832, True)]
+    assert summary["error_estimate"]["worst"] <= 0.01
+
+
+def test_a_result_that_was_not_recorded_is_run_again_to_the_same_outputs(monkeypatch, tmp_path):
+    """Every run's outputs counted long and no margin: no run of the ladder records, so the one
+    that meets the tolerance runs again, recording, to the results it had (and the file's)."""
+    import h5py
+
+    from percussim.solver import adaptive
+
+    case = at_default_accuracy("fig3")
+    expected = simulate(parse_case(case), result_path=tmp_path / "recorded.h5").summary
+    grids = [run["cells"] for run in expected["runs"]]
+    monkeypatch.setattr(adaptive, "LONG_OUTPUTS", 0.0)
+    monkeypatch.setattr(adaptive, "RECORD_MARGIN", 0.0)
+    summary, runs = ladder_runs(monkeypatch, case, tmp_path / "again.h5")
+    assert runs == [(cells, False) for cells in grids] + [(grids[-1], True)]
+    assert {k: v for k, v in summary.items() if k != "seconds"} == {k: v for k, v in expected.items() if k != "seconds"}
+    with h5py.File(tmp_path / "recorded.h5") as a, h5py.File(tmp_path / "again.h5") as b:
+        for name in ("time", "contact/force", "energy/tool_strain"):
+            assert (a[name][:] == b[name][:]).all(), name
