@@ -11,7 +11,7 @@ import numpy as np
 import pytest
 
 from percussim.solver.case import CaseError, parse_case
-from percussim.solver.drive import Valve, fly
+from percussim.solver.drive import StalledStriker, Valve, fly
 from percussim.solver.simulate import simulate
 from percussim.testing import closed_forms as CF
 from percussim.testing.closed_forms import blow_ends, hammer_at_work, ideal_flight, supply_work_per_cycle
@@ -31,6 +31,17 @@ def test_ideal_hydraulics_strike_at_the_closed_forms_velocity_after_its_times(re
     assert flight.duration == pytest.approx(t_back + t_in, rel=1e-8)
     assert flight.displacement[-1] == pytest.approx(0.0, abs=1e-12)
     assert flight.displacement.min() < -IDEAL.stroke  # it turned beyond the switch point
+
+
+def test_a_drive_weaker_than_its_friction_is_refused_as_stalled():
+    """Friction of 5 kN against the ideal drive's 1.5-kN pull back and 3-kN push in: a rebound at
+    3 m/s stops 1.4 mm back, short of the 50-mm stroke, and a striker at the switch point is never
+    pushed in; each refused, naming the stage and the fields to check."""
+    drive = replace(IDEAL, friction=5e3)
+    with pytest.raises(StalledStriker, match="back past the stroke .* friction"):
+        fly(drive, 0.0, -3.0, 0.0, 0.0, RETURNING)
+    with pytest.raises(StalledStriker, match="in to the tool"):
+        fly(drive, -IDEAL.stroke - 1e-3, 0.0, 0.0, 0.0, RETURNING)
 
 
 def test_the_flights_work_is_its_kinetic_energys_change():
