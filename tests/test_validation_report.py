@@ -91,10 +91,13 @@ def test_the_report_and_its_figures_are_made_from_the_solver(tmp_path):
     assert len(smith) == 5 and all(float(row[3]) < 3e-3 for row in smith), smith
     residual = re.search(r"^\| the residual \(`numerical`\), over what was supplied \| (\S+) \|$", text, re.M)
     assert residual and abs(float(residual.group(1))) < 5e-3
-    # A hammer at work: the drive's closed forms as tests/test_drive.py holds them, the adaptive
-    # stroke at its target and longer on the harder rock
+    # A hammer at work: the drive's closed forms as tests/test_drive.py holds them (what is spent
+    # between blows within the scheme's loss, under 1%), the adaptive stroke at its target and
+    # longer on the harder rock
     drive = _rows(text, "| closed form | expected | found | relative error |")
-    assert len(drive) == 11 and all(float(row[3]) < 1e-4 for row in drive), drive
+    spent = [row for row in drive if "spent as the tool comes to rest" in row[0]]
+    assert len(drive) == 13 and len(spent) == 1 and float(spent[0][3]) < 1e-2, drive
+    assert all(float(row[3]) < 1e-4 for row in drive if row not in spent), drive
     adaptive = _rows(text, "| rock's loading stiffness | last blow's set |")
     assert len(adaptive) == 2 and all(float(row[2]) < 0.03 for row in adaptive), adaptive
     last_stroke = [float(row[3].split("→")[1].split()[0]) for row in adaptive]
