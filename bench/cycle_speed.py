@@ -92,7 +92,7 @@ def parts() -> None:
 
     K.advance = timed
     for cells in LADDER:
-        # as the ladder runs them: only the result records its long outputs (`adaptive.may_be_result`)
+        # as the ladder runs them: only the result records its long outputs (`adaptive.records_long_outputs`)
         run_case = case if cells == LADDER[-1] else case.summary_only()
         numerics = explicit_numerics(run_case, cells)
         best = (math.inf, 0.0)

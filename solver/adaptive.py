@@ -53,8 +53,9 @@ SURE_ORDER = 1.5  # below this observed order a predicted grid is at most `CLIMB
 MAX_RUNS = 14
 ENERGY_CLOSURE = 0.5  # of the tolerance: how closely a ladder's energy audit must close
 UNSETTLED_GRIDS = 3  # contacts that change from grid to grid over this many, with no gain, stop a ladder
-# A run whose outputs are this many numbers or more (24 MB: a hammer's many cycles, fields) records
-# them only when it may be the result (`may_be_result`); a smaller one from the fourth grid on
+# A run from the fourth grid on may be the result and records its outputs; one whose outputs are
+# this many numbers or more (24 MB: a hammer's many cycles, fields) only when it is expected to be
+# (`records_long_outputs`)
 LONG_OUTPUTS = 3e6
 RECORD_MARGIN = 2.0  # of the tolerance: the most a run that may be the result is expected to miss it by
 COMPANIONS = (4, 2)  # a fixed grid's companions, this many times coarser
@@ -126,8 +127,9 @@ def solve_to_tolerance(
     stopped = ""
     for stage in range(MAX_RUNS):
         numerics = explicit_numerics(case, cells)
+        may_be_result = stage >= MIN_RUNS - 1  # from the fourth grid on, a run has an estimate
         try:
-            check_limits(case if stage >= MIN_RUNS - 1 else case.summary_only(), numerics, limits)
+            check_limits(case if may_be_result else case.summary_only(), numerics, limits)
         except CaseError as error:
             if result is None:
                 raise _limit_refusal(tol, numerics, error) from None
@@ -135,7 +137,7 @@ def solve_to_tolerance(
                 f"the next grid, {numerics.cells} cells and {numerics.steps} steps, is beyond the limits ({error})"
             )
             break
-        recording = may_be_result(case, numerics, runs, tol)
+        recording = may_be_result and records_long_outputs(case, numerics, runs, found, order, tol)
         candidate = simulate_rod(
             case if recording else case.summary_only(),
             numerics=numerics,
@@ -184,22 +186,24 @@ def solve_to_tolerance(
     return result, assess(found, result.summary, tolerance=tol, runs=[n for n, _ in runs], why=why, unmet=stopped)
 
 
-def may_be_result(
-    case: Case, numerics: ResolvedNumerics, runs: list[tuple[ResolvedNumerics, dict]], tol: float
+def records_long_outputs(
+    case: Case,
+    numerics: ResolvedNumerics,
+    runs: list[tuple[ResolvedNumerics, dict]],
+    found: Estimate | None,
+    order: float,
+    tol: float,
 ) -> bool:
-    """Whether the run on `numerics` may be the ladder's result, and so records its outputs: any
-    from the fourth grid on (`MIN_RUNS`), but one with long outputs (`LONG_OUTPUTS`: writing them
-    can cost more than the run) only when the estimate of the three grids before it, carried to its
-    grid at the scheme's order, 2, misses `tol` by at most `RECORD_MARGIN`. Should one that was not
+    """Whether a run that may be the ladder's result records its outputs: always, but one with long
+    outputs (`LONG_OUTPUTS`: writing them can cost more than the run) only when the ladder's
+    estimate before it (`found`; on the fourth grid, that of the three before it), carried to its
+    grid at the scheme's `order`, misses `tol` by at most `RECORD_MARGIN`. Should one that was not
     recorded meet the tolerance, it is run again to record: the same results, at the cost of a run.
     (A hammer's 100 cycles wrote 1.24 million rows for three runs where one was the result.)"""
-    if len(runs) < MIN_RUNS - 1:
-        return False
     if output_values(case, numerics) < LONG_OUTPUTS:
         return True
-    before = from_runs(case, runs[-3:], 2.0)
-    coarser = runs[-1][0].cells
-    return before.worst * (coarser / numerics.cells) ** 2 <= RECORD_MARGIN * tol
+    before = found if found is not None else from_runs(case, runs, order)
+    return before.worst * (runs[-1][0].cells / numerics.cells) ** order <= RECORD_MARGIN * tol
 
 
 def energy_closed(summary: dict, tol: float) -> bool:
