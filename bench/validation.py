@@ -889,7 +889,7 @@ def blows_report(figures: dict[str, Figure]) -> list[str]:
         "energy.initial / (6 launches) − 1 | withdrawn, share of initial |",
         "|---|---:|---:|---:|---:|",
     ]
-    launch = 0.5 * CF.STEEL["density"] * CF.AREA * CF.PISTON * CF.V**2
+    launch = 0.5 * CF.PISTON_MASS * CF.V**2
     for run in runs:
         s = run.summary
         sets = [b["set"] for b in s["blows"]]

@@ -140,7 +140,7 @@ def cycles() -> list[str]:
             max(abs(share / eta - 1) for share in shares),
         )
     )
-    mass = CF.STEEL["density"] * CF.AREA * CF.PISTON
+    mass = CF.PISTON_MASS
     reflected = (1 - eta) * sum(0.5 * mass * v * v for v in summary["cycle"]["impact_velocity"][:-1])
     spent = summary["energy"]["dissipated_between_blows"]
     rows.append(

@@ -190,7 +190,7 @@ def test_each_blow_meets_a_tool_at_rest_and_rock_takes_lundbergs_share_of_it():
     summary = simulate(parse_case(CF.lundberg_cycles(4))).summary
     eta = CF.lundberg(CF.OPTIMUM)
     assert [blow["transfer_efficiency"] for blow in summary["blows"]] == pytest.approx([eta] * 4, rel=1e-4)
-    mass = CF.STEEL["density"] * CF.AREA * CF.PISTON
+    mass = CF.PISTON_MASS
     velocities = summary["cycle"]["impact_velocity"]
     assert velocities[1:] == pytest.approx([math.sqrt(2 * 15e6 * 3e-4 * 0.05 / mass)] * 3, rel=1e-4)
     energy = summary["energy"]

@@ -22,6 +22,7 @@ from percussim.solver.case import CaseError
 from percussim.testing.closed_forms import (
     AREA,
     PISTON,
+    PISTON_MASS,
     SPEED,
     STEEL,
     STEPPED_DURATION,
@@ -88,7 +89,7 @@ def test_a_higher_impedance_piston_gives_the_stepped_pulse(accuracy):
 
 def test_a_lumped_striker_of_the_same_mass_is_not_the_piston():
     """The comparisons above tell the models apart: the lumped striker's force is no rectangle."""
-    mass = STEEL["density"] * AREA * PISTON
+    mass = PISTON_MASS
     lumped = piston_case(1.0, FINE)
     lumped["striker"] = {"mass": mass, "velocity": V}
     result = percussim.simulate(lumped)

@@ -39,6 +39,7 @@ AREA = 1e-3  # m², the tool's (and a piston of r = 1)
 SPEED = math.sqrt(STEEL["youngs_modulus"] / STEEL["density"])
 Z = STEEL["density"] * SPEED * AREA  # the tool's impedance, N·s/m
 PISTON, TOOL = 0.2, 1.0  # m
+PISTON_MASS = STEEL["density"] * AREA * PISTON  # kg, the equal piston's
 T = 2.0 * PISTON / SPEED  # the piston's wave there and back
 INCIDENT = Z * V / 2.0  # F_i: the wave an equal piston sends into the tool
 
