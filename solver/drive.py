@@ -179,7 +179,7 @@ def fly(
         rubbed=state[5],
         lifted=drive.weight * (impact_point - start),
         pumped=drive.flow * drive.supply_pressure * t0 if pumped else 0.0,
-        gas_volume=min(max(state[2], compiled.relieved), compiled.emptied),
+        gas_volume=F.held_gas(state[2], compiled),
         valve=F.Valve(target=0.0, since=0.0, start=F.on_supply(t0, valve, drive.valve_time)),
     )
 

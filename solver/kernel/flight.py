@@ -35,13 +35,18 @@ SAFETY = 0.9
 
 
 @compiled(inline="always")
+def held_gas(gas, drive):
+    """The accumulator's gas held between the relief (pressed no further) and emptying (all gas)."""
+    return min(max(gas, drive.relieved), drive.emptied)
+
+
+@compiled(inline="always")
 def supply_pressure(gas, drive):
-    """The supply's pressure with `gas` of gas in the accumulator, held between its relief and
-    its emptying (p_s without an accumulator)."""
+    """The supply's pressure with `gas` of gas in the accumulator (`held_gas`; p_s without an
+    accumulator)."""
     if drive.accumulator_volume == 0.0:
         return drive.supply_pressure
-    held = min(max(gas, drive.relieved), drive.emptied)
-    return drive.precharge * (drive.accumulator_volume / held) ** drive.polytropic_exponent
+    return drive.precharge * (drive.accumulator_volume / held_gas(gas, drive)) ** drive.polytropic_exponent
 
 
 @compiled(inline="always")
