@@ -41,15 +41,20 @@ def cache_folder() -> str:
 
 
 def compiled(**options):
-    """`numba.njit(cache=True, **options)` with its cache in `cache_folder()`. Numba reads the
-    cache's folder when a function is decorated, so it is set for that moment only: other Numba
-    code in the process keeps its own."""
+    """`numba.njit(cache=True, error_model="numpy", **options)` with its cache in
+    `cache_folder()`. Numba reads the cache's folder when a function is decorated, so it is set
+    for that moment only: other Numba code in the process keeps its own.
+
+    Divisions follow IEEE arithmetic (`error_model="numpy"`): Python's check for a zero divisor is
+    a branch on every division, and the ends' steps are chains of divisions. A zero divisor gives
+    an infinity or a NaN, which the kernel's checks for non-finite values report, where Python's
+    model raised an error no caller handles."""
 
     def decorate(function):
         previous = config.CACHE_DIR
         config.CACHE_DIR = cache_folder()
         try:
-            return njit(cache=True, **options)(function)
+            return njit(cache=True, **{"error_model": "numpy", **options})(function)
         finally:
             config.CACHE_DIR = previous
 
