@@ -167,13 +167,18 @@ def quantity_error(h: list[float], values: list[float | None], formal_order: flo
             abs(d1) / ((h3[0] / h3[1]) ** LOWEST_ORDER - 1.0), abs(d2) / ((h3[1] / h3[2]) ** LOWEST_ORDER - 1.0)
         )
         return QuantityError(SAFETY_FACTOR * rough / scale, order, False)
-    used, confirmed = min(order, formal_order), True
+    used, confirmed, finest = min(order, formal_order), True, abs(d2)
     if len(values) >= 4 and values[-4] is not None:
         # Three coarse grids can show order 2 by chance; the three before must confirm it.
         before = observed_order(tuple(h[-4:-1]), tuple(values[-4:-1]))
         confirmed = before is not None and before >= LOWEST_ORDER
         used = min(used, before if confirmed else UNCONFIRMED_ORDER)
-    bare = abs(d2) / ((h3[1] / h3[2]) ** used - 1.0)
+        if confirmed and order > formal_order:
+            # faster than the scheme converges: an oscillating error passing near zero on the
+            # finest grid (it swings back on the next); the difference before, carried at the
+            # order the grids confirm, bounds it
+            finest = max(finest, abs(d1) / (h3[0] / h3[1]) ** used)
+    bare = finest / ((h3[1] / h3[2]) ** used - 1.0)
     return QuantityError(SAFETY_FACTOR * bare / scale, order, confirmed)
 
 

@@ -69,6 +69,29 @@ def test_grids_out_of_their_asymptotic_range_give_the_largest_change_and_say_so(
     assert missing.error == math.inf and not missing.asymptotic
 
 
+def test_a_difference_that_drops_faster_than_the_scheme_converges_is_not_relied_on():
+    """The largest tension of matrix case 44 (a stepped tool) on 328 … 2624 cells, against the
+    characteristics solver's 46532915.70 Pa (±9e-7): its differences fall at order 0.9, then
+    by 4.8× on the last doubling, order 2.25, faster than the scheme's 2 (the next one grows
+    again). Read at order 0.9 the last difference alone gave 8.4e-4, under the true 1.06e-3; the
+    difference before, carried at that order, bounds it."""
+    h = [1.0 / 328, 1.0 / 656, 1.0 / 1312, 1.0 / 2624]
+    values = [4.60869816e7, 4.63272886e7, 4.64563495e7, 4.64833931e7]
+    found = quantity_error(h, values, formal_order=2.0)
+    true = abs(values[-1] / 46532915.70147561 - 1.0)
+    assert true == pytest.approx(1.064e-3, rel=1e-3)
+    assert found.asymptotic and found.order == pytest.approx(2.25, rel=1e-2)
+    assert found.error >= true
+    before = math.log((values[1] - values[0]) / (values[2] - values[1])) / math.log(2.0)  # 0.90
+    carried = (values[2] - values[1]) / 2.0**before
+    assert found.error == pytest.approx(SAFETY_FACTOR * carried / (2.0**before - 1.0) / values[-1])
+    # a sequence entering its asymptotic range (order 1, then 2, not above the scheme's) keeps
+    # the last difference at the order the grids before confirm
+    entering = quantity_error([0.8, 0.4, 0.2, 0.1], [1.0, 1.08, 1.12, 1.1325], formal_order=2.0)
+    assert entering.order == pytest.approx(math.log2(0.04 / 0.0125)) and entering.asymptotic
+    assert entering.error == pytest.approx(SAFETY_FACTOR * 0.0125 / (2.0 - 1.0) / 1.1325)
+
+
 # --- the default accuracy -------------------------------------------------------------------
 
 
