@@ -72,11 +72,14 @@ def main() -> None:
                     )
                 figures["service, Redis, 2 workers"] = through_service(stack, case, grid)
                 print(f"\nFig. 5, {label}:")
+                tolerance = case["numerics"].get("tolerance")
                 for how, (rows, seconds) in figures.items():
                     failed = [r for r in rows if r.get("error")]
+                    unmet = [r for r in rows if tolerance and (r.get("estimated_error") or 0.0) > tolerance]
                     print(
                         f"  {how:28s} {len(rows):5d} variants in {seconds:7.2f} s: "
                         f"{len(rows) / seconds:8.1f} variants/s, {len(failed)} failed"
+                        + (f", {len(unmet)} saying the tolerance is not met" if tolerance else "")
                     )
                     for row in failed[:3]:
                         values = row.get("values") or {k: row[k] for k in grid}
