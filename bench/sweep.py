@@ -8,7 +8,8 @@ impacts), run twice: with the preset's own numerics (the paper's 5 cells and τ 
 0.1 ms a variant, where the per-variant cost is all overhead) and with `numerics.tolerance` =
 1e-2 (the solver's own ladder to 1% accuracy: tens of milliseconds a variant). Times are wall
 clock from the call to the last row; the service's from the POST to the GET that shows the sweep
-finished (polled every 20 ms), with every variant a job that writes its HDF5 result.
+finished (polled every 20 ms), with every variant a job that writes its HDF5 result. Last, the
+ratio of the two sweeps' times, each way of running them, from this run.
 """
 
 from __future__ import annotations
@@ -60,6 +61,7 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
         stack = Stack(Path(tmp), url, workers=2)
         try:
+            seconds_by = {}  # (case, how) → seconds, for the same run's ratios
             for label, case in CASES.items():
                 sweep = Sweep(case=case, parameters=grid)
                 figures = {}
@@ -74,6 +76,7 @@ def main() -> None:
                 print(f"\nFig. 5, {label}:")
                 tolerance = case["numerics"].get("tolerance")
                 for how, (rows, seconds) in figures.items():
+                    seconds_by[label, how] = seconds
                     failed = [r for r in rows if r.get("error")]
                     unmet = [r for r in rows if tolerance and (r.get("estimated_error") or 0.0) > tolerance]
                     print(
@@ -84,6 +87,10 @@ def main() -> None:
                     for row in failed[:3]:
                         values = row.get("values") or {k: row[k] for k in grid}
                         print(f"    {values}: {row['error']}")
+            fixed, tolerant = CASES
+            print(f"\nThe sweep's cost at {tolerant} against {fixed}, this run's times:")
+            for how in figures:
+                print(f"  {how:28s} {seconds_by[tolerant, how] / seconds_by[fixed, how]:8.0f}×")
         finally:
             stack.stop()
 
