@@ -38,11 +38,11 @@ def no_shaft() -> Shaft:
 
 # A function of its own, written to be vectorised: unsigned indices (a signed one is checked for
 # wrapping around from the end), both of a node's outcomes computed and one selected, divisions
-# left to IEEE arithmetic (`error_model="numpy"`: Python's check for a zero divisor is a branch a
-# node; the one divisor that can be zero, a node without soil's k, only enters the outcome not
-# selected), and its work summed in any order (`reassoc`, a change of rounding only). A step on a
-# pile's shaft costs about a quarter of what it did node by node.
-@compiled(fastmath={"contract", "reassoc"}, error_model="numpy")
+# left to IEEE arithmetic as in all the kernel (`compiled()`; here the one divisor that can be
+# zero, a node without soil's k, only enters the outcome not selected), and its work summed in any
+# order (`reassoc`, a change of rounding only). A step on a pile's shaft costs about a quarter of
+# what it did node by node.
+@compiled(fastmath={"contract", "reassoc"})
 def shaft_on_rows(u, layer, shaft, sets, energy, tau):
     """The soil's force on each interior node of layer n in the explicit rows of row `new` of `u`
     (which hold the new layer without it), each node's set `sets[i]` moved where it slips; its
