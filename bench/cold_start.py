@@ -9,12 +9,15 @@
 2. A fresh `percussim worker` (Redis, the API running): the worker process is started, a Fig. 3
    job is submitted once the worker is ready, and the job's own record gives the time from the
    worker taking it to its result being stored; also from the worker's launch to that result.
+3. Compiling the kernel into an empty cache (after any change to the solver's sources), once in
+   one process and once with the flight compiled in a second (`percussim warmup` on two cores).
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import os
 import statistics
 import subprocess
 import sys
@@ -97,6 +100,20 @@ def fresh_worker(repeat: int) -> None:
     print(line("worker launched to job stored", from_launch))
 
 
+def compiling() -> None:
+    print("Compiling the kernel into an empty cache (warm_up):")
+    for processes in (1, 2):
+        with tempfile.TemporaryDirectory() as cache:
+            start = time.perf_counter()
+            subprocess.run(
+                [sys.executable, "-c", f"from percussim.solver.controller import warm_up; warm_up({processes})"],
+                cwd=ROOT,
+                env={**os.environ, "NUMBA_CACHE_DIR": cache},
+                check=True,
+            )
+            print(f"  {processes} process{'es' if processes > 1 else '':2s}  {time.perf_counter() - start:6.1f} s")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--repeat", type=int, default=5)
@@ -104,6 +121,7 @@ def main() -> None:
     warm_up()  # the cache as after install
     fresh_process(args.repeat)
     fresh_worker(args.repeat)
+    compiling()
 
 
 if __name__ == "__main__":

@@ -571,7 +571,7 @@ def _drivability(args: argparse.Namespace) -> int:
 def _warmup(args: argparse.Namespace) -> int:
     from .solver.controller import warm_up
 
-    warm_up()
+    warm_up(processes=min(2, os.cpu_count() or 1))  # the flight compiles beside the blow
     return 0
 
 

@@ -5,6 +5,10 @@ Numba checks a cached function against its own file's time stamp and size only (
 1833): a change to a module it reads constants from, such as `layout.py`'s slots, would leave the
 old machine code in use, and wrong numbers with no error. Here a change to any source of the
 solver moves the cache to a new folder, and the next run compiles again.
+
+Inside that folder each solver folder's machine code is kept under its path in the solver
+(`kernel`, `.`), where Numba would name it by a hash of its absolute path: a copy of the same
+sources (an installed wheel, a moved checkout) sharing `NUMBA_CACHE_DIR` finds it.
 """
 
 from __future__ import annotations
@@ -16,6 +20,7 @@ from pathlib import Path
 
 from numba import njit
 from numba.core import config
+from numba.core.caching import UserProvidedCacheLocator
 
 SOLVER = Path(__file__).resolve().parent
 
@@ -40,10 +45,26 @@ def cache_folder() -> str:
     return os.path.join(base, f"percussim-{sources_hash()}")
 
 
+class SolverCacheLocator(UserProvidedCacheLocator):
+    """Numba's locator for a folder the user gives (`config.CACHE_DIR`), with a function's machine
+    code under its file's folder relative to the solver rather than under a hash of the absolute
+    path. Numba still checks each function against a hash of its own file's content."""
+
+    def __init__(self, py_func, py_file):
+        super().__init__(py_func, py_file)
+        folder = Path(py_file).resolve().parent.relative_to(SOLVER).as_posix()
+        self._cache_path = os.path.join(config.CACHE_DIR, "solver" if folder == "." else folder)
+
+
+# Numba's own after it, for a cache folder that cannot be written
+LOCATORS = f"{__name__}.{SolverCacheLocator.__name__},InTreeCacheLocator,UserWideCacheLocator"
+
+
 def compiled(**options):
     """`numba.njit(cache=True, error_model="numpy", **options)` with its cache in
-    `cache_folder()`. Numba reads the cache's folder when a function is decorated, so it is set
-    for that moment only: other Numba code in the process keeps its own.
+    `cache_folder()`, laid out by `SolverCacheLocator`. Numba reads the cache's folder and locator
+    when a function is decorated, so they are set for that moment only: other Numba code in the
+    process keeps its own.
 
     Divisions follow IEEE arithmetic (`error_model="numpy"`): Python's check for a zero divisor is
     a branch on every division, and the ends' steps are chains of divisions. A zero divisor gives
@@ -51,11 +72,12 @@ def compiled(**options):
     model raised an error no caller handles."""
 
     def decorate(function):
-        previous = config.CACHE_DIR
+        previous = config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES
         config.CACHE_DIR = cache_folder()
+        config.CACHE_LOCATOR_CLASSES = LOCATORS
         try:
             return njit(cache=True, **{"error_model": "numpy", **options})(function)
         finally:
-            config.CACHE_DIR = previous
+            config.CACHE_DIR, config.CACHE_LOCATOR_CLASSES = previous
 
     return decorate

@@ -7,6 +7,8 @@ layers go to a `Recorder`: held in memory (`MemoryRecorder`), or streamed to an 
 
 from __future__ import annotations
 
+from contextlib import nullcontext
+
 import numpy as np
 
 from . import kernel as K
@@ -630,25 +632,43 @@ def record_flight(recorder, paths, kept_last, flight: Flight, rows: np.ndarray) 
     recorder.append("probes/stress", np.zeros((FLIGHT_ROWS, len(kept_last[1]))))
 
 
-def warm_up() -> None:
+WARM_UP_BLOW = {
+    "striker": {"mass": 1.0, "velocity": 1.0},
+    "tool": {"length": 1.0, "youngs_modulus": 1e9, "density": 1e3, "area": 1e-3},
+    "contact": {"stiffness": 1e8, "exponent": 0.5},
+    "force": {"kind": "pulse", "amplitude": 1.0, "duration": 1e-5},
+    "numerics": {"duration": 1e-4, "cells": 4},
+    "outputs": {"probes": [0.5], "fields": True},
+}
+WARM_UP_HAMMER = {key: value for key, value in WARM_UP_BLOW.items() if key != "force"} | {
+    "medium": {"kind": "linear", "stiffness": 1e6},
+    "drive": {"kind": "hydraulic", "supply_pressure": 1e6, "front_area": 1e-4, "rear_area": 2e-4, "stroke": 0.01},
+    "cycles": {"count": 2},
+    "numerics": {"duration": 1e-4, "cells": 4, "scheme": "explicit"},
+}
+
+
+def warm_up(processes: int = 1) -> None:
     """Compile the kernel into Numba's on-disk cache (a no-op when it is there already): a blow,
     and two of a hammer at work, whose rest between blows and flight are compiled functions of
-    their own."""
+    their own. With two `processes`, the flight (a third of the compiling) is compiled in a second
+    process meanwhile."""
+    from concurrent.futures import ProcessPoolExecutor  # here: a process pool only when compiling
+    from multiprocessing import get_context
+
     from .case import parse_case
 
-    blow = {
-        "striker": {"mass": 1.0, "velocity": 1.0},
-        "tool": {"length": 1.0, "youngs_modulus": 1e9, "density": 1e3, "area": 1e-3},
-        "contact": {"stiffness": 1e8, "exponent": 0.5},
-        "force": {"kind": "pulse", "amplitude": 1.0, "duration": 1e-5},
-        "numerics": {"duration": 1e-4, "cells": 4},
-        "outputs": {"probes": [0.5], "fields": True},
-    }
-    hammer = {key: value for key, value in blow.items() if key != "force"} | {
-        "medium": {"kind": "linear", "stiffness": 1e6},
-        "drive": {"kind": "hydraulic", "supply_pressure": 1e6, "front_area": 1e-4, "rear_area": 2e-4, "stroke": 0.01},
-        "cycles": {"count": 2},
-        "numerics": {"duration": 1e-4, "cells": 4, "scheme": "explicit"},
-    }
-    for case in (blow, hammer):
-        simulate_rod(parse_case(case))
+    with ProcessPoolExecutor(1, mp_context=get_context("spawn")) if processes > 1 else nullcontext() as other:
+        flight = other.submit(warm_up_flight) if other else None
+        simulate_rod(parse_case(WARM_UP_BLOW))
+        if flight:
+            flight.result()
+    simulate_rod(parse_case(WARM_UP_HAMMER))
+
+
+def warm_up_flight() -> None:
+    """The warm-up hammer's first flight alone, which compiles apart from the blow's kernel."""
+    from .case import parse_case
+
+    case = parse_case(WARM_UP_HAMMER)
+    HammerAtWork(case, blow_duration=1e-4).between(start=0.0, velocity=-1.0, impact_point=0.0, last_set=None)

@@ -88,31 +88,22 @@ def wait_finished(stack: ComposeStack, job_id: str, timeout: float = 120) -> dic
     return wait_for(finished, timeout, f"job {job_id} finished", interval=0.3)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def compiling_for_the_image(tmp_path_factory):
-    """The kernel compiled here for the image's CPU target, into a cache of its own, while the
-    image builds: its run here is then as quick as the containers'."""
-    folder = tmp_path_factory.mktemp("numba")
-    target = {"NUMBA_CPU_NAME": IMAGE_CPU, "NUMBA_CACHE_DIR": str(folder)}
-    warm_up = "from percussim.solver.controller import warm_up; warm_up()"
-    with (folder.parent / "compiling.log").open("wb") as log:
-        compiling = subprocess.Popen([sys.executable, "-c", warm_up], env=os.environ | target, stderr=log)
-    compiling.log = folder.parent / "compiling.log"
-    yield target, compiling
-    compiling.kill()
-    compiling.wait()
-
-
 @pytest.fixture(scope="module")
-def image_target(stack, compiling_for_the_image) -> dict[str, str]:
-    """The image's Numba CPU target, and a kernel cache of its own for it here. The image compiles
-    for a generic CPU, so that no container compiles again; this machine's own target may contract
-    multiplies and adds into FMAs and round differently in the last digits."""
+def image_target(stack, tmp_path_factory) -> dict[str, str]:
+    """The image's Numba CPU target, and the kernel the image compiled for it, copied out into a
+    cache folder here (a cache is named by its sources, not by where they are): the CLI here runs
+    the machine code the containers run. The image compiles for a generic CPU, so that no
+    container compiles again; this machine's own target may contract multiplies and adds into
+    FMAs and round differently in the last digits."""
     env = dict(e.split("=", 1) for e in stack.inspect(IMAGE)[0]["Config"]["Env"])
-    target, compiling = compiling_for_the_image
-    assert env["NUMBA_CPU_NAME"] == target["NUMBA_CPU_NAME"]
-    assert compiling.wait(timeout=300) == 0, compiling.log.read_text(errors="replace")
-    return target
+    assert env["NUMBA_CPU_NAME"] == IMAGE_CPU and env["NUMBA_CACHE_DIR"] == NUMBA_CACHE
+    folder = tmp_path_factory.mktemp("numba")
+    container = docker("create", IMAGE).strip()
+    try:
+        docker("cp", f"{container}:{NUMBA_CACHE}/.", str(folder))
+    finally:
+        docker("rm", container)
+    return {"NUMBA_CPU_NAME": IMAGE_CPU, "NUMBA_CACHE_DIR": str(folder)}
 
 
 def cli_run(case: dict, folder: Path, env: dict[str, str] | None = None) -> tuple[dict, Path]:
