@@ -23,7 +23,7 @@ import numpy as np
 
 from . import kernel as K
 from .case import Case
-from .drive import Flight, Hydraulics, Valve, fly, shifted
+from .drive import Flight, Hydraulics, Valve, fly, seen_later
 from .grid import striker_mass
 from .laws import FORCE_PULSE
 
@@ -92,7 +92,7 @@ class HammerAtWork:
             self.strokes.append(self.strokes[-1])
         drive = replace(self.drive, stroke=self.strokes[-1])
         # the valve began to turn at the blow's impact, a blow ago
-        flight = fly(drive, start, velocity, impact_point, self.gas, shifted(self.valve, self.blow_duration))
+        flight = fly(drive, start, velocity, impact_point, self.gas, seen_later(self.valve, self.blow_duration))
         self.gas, self.valve = flight.gas_volume, flight.valve
         self.flights.append(flight)
         self.impact_velocities.append(flight.impact_velocity)

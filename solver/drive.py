@@ -123,9 +123,14 @@ class Flight:
     valve: Valve = field(repr=False)
 
 
-def shifted(valve: Valve, span: float) -> Valve:
+def seen_later(valve: Valve, span: float) -> Valve:
     """The same valve seen from `span` later (its time counted from then)."""
     return valve._replace(since=valve.since - span)
+
+
+def turning(valve: Valve, at: float, target: float, valve_time: float) -> Valve:
+    """The valve turning toward `target` from `at`, from where `valve` has it then."""
+    return Valve(target=target, since=at, start=F.on_supply(at, valve, valve_time))
 
 
 def fly(
@@ -146,7 +151,7 @@ def fly(
     stages = ("back", "in") if start > switch_at else ("in",)
     if start <= switch_at:
         switched = 0.0
-        valve = F.Valve(target=1.0, since=0.0, start=F.on_supply(0.0, valve, drive.valve_time))
+        valve = turning(valve, 0.0, 1.0, drive.valve_time)
     for stage in stages:
         until, direction = (switch_at, -1.0) if stage == "back" else (impact_point, 1.0)
         kept, t0, state = F.fly_to(
@@ -159,7 +164,7 @@ def fly(
         ends.append(t0)
         if stage == "back":
             switched = t0
-            valve = F.Valve(target=1.0, since=t0, start=F.on_supply(t0, valve, drive.valve_time))
+            valve = turning(valve, t0, 1.0, drive.valve_time)
     times = np.linspace(0.0, t0, FLIGHT_ROWS + 1)[1:]  # its start is the blow's last record
     displacement, velocities, gas = F.records(times, steps, rows)
     supply, rear = F.pressures(times, gas, tuple(valves), np.array(ends), compiled)
@@ -180,7 +185,7 @@ def fly(
         lifted=drive.weight * (impact_point - start),
         pumped=drive.flow * drive.supply_pressure * t0 if pumped else 0.0,
         gas_volume=F.held_gas(state[2], compiled),
-        valve=F.Valve(target=0.0, since=0.0, start=F.on_supply(t0, valve, drive.valve_time)),
+        valve=seen_later(turning(valve, t0, 0.0, drive.valve_time), t0),
     )
 
 
