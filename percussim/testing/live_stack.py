@@ -69,23 +69,30 @@ class Process:
         self.wait(timeout)
 
     def signal(self, sig=signal.SIGTERM) -> None:
-        """`sig` to the process and every process it started."""
+        """`sig` to the process, which stops what it started in its own order, as a service
+        manager stopping it would (a signal to every process at once kills a Celery pool's child
+        mid-job, and its worker then waits for it); SIGKILL, a crash, to every process it started."""
         if self.popen.poll() is None:
             try:
-                os.killpg(self.popen.pid, sig)
+                if sig == signal.SIGKILL:
+                    os.killpg(self.popen.pid, sig)
+                else:
+                    self.popen.send_signal(sig)
             except ProcessLookupError:
                 pass
 
     def wait(self, timeout: float = 15.0) -> None:
-        """Until it has exited; killed, with what it started, after `timeout` s."""
+        """Until it has exited; killed, with what it started, after `timeout` s. Whatever it
+        started and left running is killed then too."""
         try:
             self.popen.wait(timeout)
         except subprocess.TimeoutExpired:
-            try:
-                os.killpg(self.popen.pid, signal.SIGKILL)
-            except ProcessLookupError:
-                pass
-            self.popen.wait()
+            pass
+        try:
+            os.killpg(self.popen.pid, signal.SIGKILL)
+        except ProcessLookupError:
+            pass
+        self.popen.wait()
 
 
 class RedisServer:
