@@ -9,7 +9,10 @@ Needs a running dockerd (scripts/test starts one). Figures in docs/deploy.md.
 1. scripts/local-images: with --remake-base, percussim-base:local is removed first and made again
    (debootstrap); otherwise the time to find it and rebuild Redis's and PostgreSQL's from cache.
 2. The image build with no layer cache (every dependency downloaded and installed, the kernel
-   compiled), then again with nothing changed (every layer from cache).
+   compiled), then with a change to the solver's code (a file added to it for the build, so the
+   dependencies come from cache and the kernel is compiled again), with that change undone (a
+   change again: the image a build replaces is removed, its layers with it), then with nothing
+   changed.
 3. `compose up` of the API, two workers, Redis, PostgreSQL and Flower until /readyz lists both
    workers, then `compose down -v`: each --repeat times.
 """
@@ -19,8 +22,11 @@ from __future__ import annotations
 import argparse
 import statistics
 import time
+from pathlib import Path
 
 from percussim.testing.compose_stack import ComposeStack, docker, local_images, require_docker
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def main() -> None:
@@ -36,6 +42,13 @@ def main() -> None:
 
     stack = ComposeStack()
     print(f"image build, no layer cache: {stack.build(no_cache=True):.1f} s")
+    change = ROOT / "solver" / "_bench_change.py"
+    change.write_text('"""A change to the solver\'s code, made by bench/deploy.py for one build."""\n')
+    try:
+        print(f"image build, a change to the solver's code: {stack.build():.1f} s")
+    finally:
+        change.unlink()
+    print(f"image build, that change undone: {stack.build():.1f} s")
     print(f"image build, nothing changed: {stack.build():.1f} s")
     stack.down()
 
