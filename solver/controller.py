@@ -14,7 +14,7 @@ import numpy as np
 from . import kernel as K
 from . import layout as L
 from .blows import BlowLog
-from .case import Case, Contact, Force, Medium
+from .case import Case, Contact, Force, Medium, parse_case
 from .cycle import HammerAtWork, blow_force
 from .drive import FLIGHT_ROWS, Flight
 from .errors import Cancelled, NumericalFailure
@@ -656,8 +656,6 @@ def warm_up(processes: int = 1) -> None:
     from concurrent.futures import ProcessPoolExecutor  # here: a process pool only when compiling
     from multiprocessing import get_context
 
-    from .case import parse_case
-
     with ProcessPoolExecutor(1, mp_context=get_context("spawn")) if processes > 1 else nullcontext() as other:
         flight = other.submit(warm_up_flight) if other else None
         simulate_rod(parse_case(WARM_UP_BLOW))
@@ -668,7 +666,5 @@ def warm_up(processes: int = 1) -> None:
 
 def warm_up_flight() -> None:
     """The warm-up hammer's first flight alone, which compiles apart from the blow's kernel."""
-    from .case import parse_case
-
     case = parse_case(WARM_UP_HAMMER)
     HammerAtWork(case, blow_duration=1e-4).between(start=0.0, velocity=-1.0, impact_point=0.0, last_set=None)
