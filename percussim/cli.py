@@ -569,9 +569,15 @@ def _drivability(args: argparse.Namespace) -> int:
 
 
 def _warmup(args: argparse.Namespace) -> int:
+    from .solver.compiled import prune_caches
     from .solver.controller import warm_up
 
     warm_up(processes=min(2, os.cpu_count() or 1))  # the flight compiles beside the blow
+    removed = prune_caches()
+    if removed:
+        print(
+            f"removed the compiled kernels of {len(removed)} other version(s) of the solver, unused for a day or more"
+        )
     return 0
 
 
@@ -838,7 +844,10 @@ def parser() -> argparse.ArgumentParser:
         help="times (s) of the stress_along curves (default: over the first contact)",
     )
     plot.set_defaults(handler=_plots)
-    warm = commands.add_parser("warmup", help="compile the kernel into Numba's cache (done at install)")
+    warm = commands.add_parser(
+        "warmup",
+        help="compile the kernel into Numba's cache (done at install); remove other versions' long unused",
+    )
     warm.set_defaults(handler=_warmup)
     work = commands.add_parser("worker", help="run a queue worker (PERCUSSIM_BROKER_URL; none: embedded)")
     work.add_argument("--concurrency", type=int, default=1, help="jobs run at once (processes)")

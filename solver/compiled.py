@@ -9,12 +9,18 @@ solver moves the cache to a new folder, and the next run compiles again.
 Inside that folder each solver folder's machine code is kept under its path in the solver
 (`kernel`, `.`), where Numba would name it by a hash of its absolute path: a copy of the same
 sources (an installed wheel, a moved checkout) sharing `NUMBA_CACHE_DIR` finds it.
+
+Each version of the sources leaves a folder of about 2 MB. `prune_caches` (run by `percussim
+warmup`) removes those of other versions that have not been used for a while.
 """
 
 from __future__ import annotations
 
 import hashlib
 import os
+import re
+import shutil
+import time
 from functools import lru_cache
 from pathlib import Path
 
@@ -23,6 +29,8 @@ from numba.core import config
 from numba.core.caching import UserProvidedCacheLocator
 
 SOLVER = Path(__file__).resolve().parent
+CACHE_PREFIX = "percussim-"  # and the sources' hash: one folder of compiled kernel a version
+_CACHE_NAME = re.compile(CACHE_PREFIX + "[0-9a-f]{16}")
 
 
 @lru_cache(maxsize=1)
@@ -42,7 +50,42 @@ def cache_folder() -> str:
     base = os.environ.get("NUMBA_CACHE_DIR") or (
         str(SOLVER / "__pycache__") if os.access(SOLVER, os.W_OK) else str(Path.home() / ".cache" / "percussim")
     )
-    return os.path.join(base, f"percussim-{sources_hash()}")
+    return os.path.join(base, f"{CACHE_PREFIX}{sources_hash()}")
+
+
+# Other versions' compiled kernels kept beside this one's: the most recently used, and any used
+# within a day (another checkout or install may be loading or compiling into it now)
+KEPT_CACHES = 8
+KEPT_SECONDS = 86_400.0
+
+
+def mark_cache_used() -> None:
+    """Record that this version's compiled kernel was used now (its folder's time stamp), so that
+    `prune_caches` run by another version keeps it."""
+    try:
+        os.utime(cache_folder())
+    except OSError:  # not made yet, or a folder this user cannot touch
+        pass
+
+
+def prune_caches(keep: int = KEPT_CACHES, kept_seconds: float = KEPT_SECONDS) -> list[Path]:
+    """Remove the compiled kernels of other versions of the solver's sources from the folder this
+    version's is in: all but the `keep` most recently used, and none used within `kept_seconds`.
+    Returns the folders removed."""
+    own = Path(cache_folder())
+    others = []
+    for folder in own.parent.glob(CACHE_PREFIX + "*"):
+        if folder != own and _CACHE_NAME.fullmatch(folder.name) and folder.is_dir():
+            try:
+                others.append((folder.stat().st_mtime, folder))
+            except OSError:  # removed meanwhile by another prune
+                pass
+    others.sort(reverse=True)
+    cutoff = time.time() - kept_seconds
+    removed = [folder for used, folder in others[keep:] if used < cutoff]
+    for folder in removed:
+        shutil.rmtree(folder, ignore_errors=True)
+    return removed
 
 
 class SolverCacheLocator(UserProvidedCacheLocator):

@@ -15,6 +15,7 @@ from . import kernel as K
 from . import layout as L
 from .blows import BlowLog
 from .case import Case, Contact, Force, Medium, parse_case
+from .compiled import mark_cache_used
 from .cycle import HammerAtWork, blow_force
 from .drive import FLIGHT_ROWS, Flight
 from .errors import Cancelled, NumericalFailure
@@ -652,7 +653,7 @@ def warm_up(processes: int = 1) -> None:
     """Compile the kernel into Numba's on-disk cache (a no-op when it is there already): a blow,
     and two of a hammer at work, whose rest between blows and flight are compiled functions of
     their own. With two `processes`, the flight (a third of the compiling) is compiled in a second
-    process meanwhile."""
+    process meanwhile. The cache is marked as used (`compiled.prune_caches` keeps it)."""
     from concurrent.futures import ProcessPoolExecutor  # here: a process pool only when compiling
     from multiprocessing import get_context
 
@@ -662,6 +663,7 @@ def warm_up(processes: int = 1) -> None:
         if flight:
             flight.result()
     simulate_rod(parse_case(WARM_UP_HAMMER))
+    mark_cache_used()
 
 
 def warm_up_flight() -> None:

@@ -5,11 +5,13 @@ import os
 import shutil
 import subprocess
 import sys
+import time
 from pathlib import Path
 
 import pytest
 
-from percussim.solver.compiled import cache_folder
+from percussim.solver import compiled
+from percussim.solver.compiled import CACHE_PREFIX, cache_folder
 from percussim.solver.controller import simulate_rod, warm_up
 from percussim.solver.presets import load_preset
 
@@ -88,3 +90,54 @@ def test_a_copy_loads_the_kernel_and_a_changed_slot_constant_recompiles_it(tmp_p
     swapped = probe()
     assert swapped["misses"] == 1 and swapped["hits"] == 0
     assert swapped["force"] == copied["force"] and swapped["peak"] == copied["peak"]
+
+
+def _folders(base: Path, ages_hours: list[float]) -> list[Path]:
+    """Compiled kernels of other versions in `base`, each last used `ages_hours` ago."""
+    now = time.time()
+    made = []
+    for k, age in enumerate(ages_hours):
+        folder = base / f"{CACHE_PREFIX}{k:016x}"
+        (folder / "kernel").mkdir(parents=True)
+        (folder / "kernel" / "step.nbi").write_bytes(b"\0" * 64)
+        os.utime(folder, (now - age * 3600, now - age * 3600))
+        made.append(folder)
+    return made
+
+
+def test_pruning_keeps_the_recent_versions_and_any_used_within_a_day(tmp_path, monkeypatch):
+    own = tmp_path / f"{CACHE_PREFIX}{'f' * 16}"
+    own.mkdir()
+    monkeypatch.setattr(compiled, "cache_folder", lambda: str(own))
+    # ten used within the day, three older: the eight most recent are kept, and the two recent
+    # beyond them too, since another checkout may be compiling into them
+    recent = _folders(tmp_path, [1, 2, 3, 4, 5, 6, 7, 8, 9, 10] + [50, 100, 200])
+    strangers = [tmp_path / "percussim-notahash", tmp_path / "numba"]
+    for folder in strangers:
+        folder.mkdir()
+    removed = compiled.prune_caches()
+    assert sorted(removed) == sorted(recent[10:])
+    assert all(f.is_dir() for f in recent[:10] + strangers + [own])
+    assert not any(f.exists() for f in recent[10:])
+    assert compiled.prune_caches() == []
+
+
+def test_warmup_prunes_old_versions_and_marks_its_own_used(tmp_path):
+    """`percussim warmup` with a cache of this tree's kernel and of eleven other versions, five
+    used within the day and six over two to seven days ago: it loads the kernel, keeps the eight
+    most recently used others and removes the three oldest, and marks its own as used now."""
+    warm_up()
+    here = Path(cache_folder())
+    own = tmp_path / here.name
+    shutil.copytree(here, own)
+    os.utime(own, (0, 0))
+    others = _folders(tmp_path, [1, 2, 3, 4, 5] + [48, 72, 96, 120, 144, 168])
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+    done = subprocess.run(
+        [sys.executable, "-m", "percussim", "warmup"], capture_output=True, text=True, env=env, timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert "removed the compiled kernels of 3 other version(s)" in done.stdout
+    assert [f.is_dir() for f in others] == [True] * 8 + [False] * 3
+    assert time.time() - own.stat().st_mtime < 300
+    assert sorted(p.name for p in own.iterdir()) == sorted(p.name for p in here.iterdir())
