@@ -8,7 +8,7 @@ Each time a fresh service gets 30 Fig. 3 jobs, and half a second later one of:
 - SIGINT to every process of its group at once (Ctrl-C in a terminal);
 - SIGTERM to every process of its group at once (systemd's default KillMode=control-group).
 Printed: the seconds until the service has exited, and how many times the running job was cut
-(its pool process killed mid-job; the queue hands the job out again).
+(its pool process killed mid-job, which Celery logs; the queue hands the job out again).
 """
 
 from __future__ import annotations

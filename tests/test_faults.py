@@ -121,7 +121,7 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
         messages = sorted((tmp_path / "results" / "broker" / "queue").glob("*.msg"))
         assert len(messages) == 3, messages  # the queued jobs' messages, on disk
-        s.crash_and_restart(while_down=messages[1].unlink)  # and one of them lost while down
+        s.restart(while_down=messages[1].unlink)  # and one of them lost while down
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         counts = wait_all_finished(s, queued, timeout=60)
         report(
@@ -133,6 +133,29 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
         assert counts == {"succeeded": 3}, s.logs()  # the lost message's job too
         assert "queued again 1 job(s)" in (tmp_path / "api-restarted.log").read_text()
+    finally:
+        s.stop()
+
+
+def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_finish_once(tmp_path, capsys):
+    """systemd's default stop: SIGTERM to the service, its worker and the worker's pool at once.
+    The worker shuts down warm and its pool's child, left running, finishes the job: it has
+    succeeded, on its first run, when the service starts again."""
+    s = Stack(tmp_path, None, workers=1)
+    try:
+        job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
+        s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
+        s.restart(signal.SIGTERM, timeout=60)
+        record = s.wait_status(job["id"], FINISHED, timeout=30)
+        log = (tmp_path / "api.log").read_text()  # the service stopped, before its restart
+        report(
+            capsys,
+            f"\nSIGTERM to every process of the embedded service mid-job: the job {record['status']} "
+            f"after {record['attempts']} attempt(s)",
+        )
+        assert record["status"] == "succeeded" and record["attempts"] == 1, (record, s.logs())
+        assert "Warm shutdown" in log and "Cold shutdown" not in log and "exited with 'signal" not in log
     finally:
         s.stop()
 

@@ -1,15 +1,18 @@
 """The Celery app, configured from the environment (`common.settings`).
 
 Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
-delivered again; each worker process takes one job at a time.
+delivered again; each worker process takes one job at a time. A pool's child stops on its own
+worker's SIGTERM alone (`_stop_on_the_workers_signal_alone`).
 """
 
 from __future__ import annotations
 
+import os
+import signal
 import threading
 
 from celery import Celery
-from celery.signals import worker_init, worker_ready, worker_shutdown
+from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown
 
 from percussim.common.broker import broker_config, queue_folder
 from percussim.common.settings import Settings, settings
@@ -49,6 +52,28 @@ def _load_kernel(**_):
     from percussim.solver.controller import warm_up
 
     warm_up()
+
+
+@worker_process_init.connect
+def _stop_on_the_workers_signal_alone(**_):
+    """A service manager may stop a service by SIGTERM to every one of its processes at once
+    (systemd's default `KillMode=control-group`, `kill -TERM -PGID`). The worker then shuts down
+    warm, letting its running job finish, but the pool's child running that job would die at once
+    by the same signal: the job cut, run again, and the stop seconds longer. So a child blocks
+    SIGTERM and a thread takes it: sent by the child's own worker (the pool's terminate, a hard
+    time limit) or once that worker is gone, the child dies of it as before; sent by anyone else,
+    it is left to the worker, which stops the child when its job is done."""
+    worker = os.getppid()
+    signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})  # in this thread and all it starts
+
+    def take_sigterm():
+        while True:
+            sender = signal.sigwaitinfo({signal.SIGTERM}).si_pid
+            if sender == worker or os.getppid() != worker:
+                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+                signal.raise_signal(signal.SIGTERM)  # its default action: the child dies of it
+
+    threading.Thread(target=take_sigterm, name="percussim-sigterm", daemon=True).start()
 
 
 @worker_ready.connect

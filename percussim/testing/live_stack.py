@@ -64,17 +64,17 @@ class Process:
             args, env=env, cwd=ROOT, stdout=log.open("wb"), stderr=subprocess.STDOUT, start_new_session=True
         )
 
-    def stop(self, sig=signal.SIGTERM, timeout: float = 15.0) -> None:
-        self.signal(sig)
+    def stop(self, sig=signal.SIGTERM, timeout: float = 15.0, everyone: bool = False) -> None:
+        self.signal(sig, everyone)
         self.wait(timeout)
 
-    def signal(self, sig=signal.SIGTERM) -> None:
-        """`sig` to the process, which stops what it started in its own order, as a service
-        manager stopping it would (a signal to every process at once kills a Celery pool's child
-        mid-job, and its worker then waits for it); SIGKILL, a crash, to every process it started."""
+    def signal(self, sig=signal.SIGTERM, everyone: bool = False) -> None:
+        """`sig` to the process, which stops what it started in its own order (`docker stop`,
+        systemd's `KillMode=mixed`); with `everyone`, or SIGKILL (a crash), to every process it
+        started too, at once (systemd's default)."""
         if self.popen.poll() is None:
             try:
-                if sig == signal.SIGKILL:
+                if sig == signal.SIGKILL or everyone:
                     os.killpg(self.popen.pid, sig)
                 else:
                     self.popen.send_signal(sig)
@@ -263,11 +263,11 @@ class Stack:
         self.processes[0] = Process(self.serve_api, self.env, self.folder / "api-restarted.log")
         wait_for(lambda: self.client.get("/healthz").status_code == 200, 60, "the restarted API")
 
-    def crash_and_restart(self, while_down=lambda: None) -> None:
-        """Embedded mode: kill the service and its workers at once (SIGKILL to the process group,
-        as a crash or a power cut would), call `while_down`, then start it again on the same port
-        and folder."""
-        self.processes[0].stop(signal.SIGKILL)
+    def restart(self, sig=signal.SIGKILL, while_down=lambda: None, timeout: float = 15.0) -> None:
+        """Embedded mode: `sig` to the service and its workers at once (SIGKILL: a crash or a power
+        cut; SIGTERM: a stop by systemd's default), wait up to `timeout` s for them to exit, call
+        `while_down`, then start the service again on the same port and folder."""
+        self.processes[0].stop(sig, timeout, everyone=True)
         while_down()
         self.processes[0] = Process(self.serve_embedded, self.env, self.folder / "api-restarted.log")
         wait_for(lambda: self.client.get("/readyz").status_code == 200, 60, "the restarted service")
