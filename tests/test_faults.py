@@ -8,6 +8,7 @@ from __future__ import annotations
 import os
 import resource
 import signal
+import subprocess
 import threading
 import time
 
@@ -156,6 +157,36 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
         )
         assert record["status"] == "succeeded" and record["attempts"] == 1, (record, s.logs())
         assert "Warm shutdown" in log and "Cold shutdown" not in log and "exited with 'signal" not in log
+    finally:
+        s.stop()
+
+
+def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(tmp_path, capsys):
+    """The same stop with a job longer than the service's grace (`STOP_SECONDS`): the service
+    then asks its worker for a cold shutdown, whose SIGTERM the pool's child does take. The
+    service exits by itself, leaving no process behind, and the job runs again when it starts."""
+    s = Stack(tmp_path, None, workers=1)
+    try:
+        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 15.0}})).json()
+        s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        service = s.processes[0].popen
+        os.killpg(service.pid, signal.SIGTERM)
+        assert service.wait(60) == 0, s.logs()
+        left = subprocess.run(["pgrep", "-g", str(service.pid)], capture_output=True, text=True).stdout.split()
+        assert left == [], (left, s.logs())
+        log = (tmp_path / "api.log").read_text()
+        assert "Cold shutdown" in log, log[-3000:]
+        s.restart()
+        record = wait_for(
+            lambda: (
+                (r := s.client.get(f"/v1/jobs/{job['id']}").json())["attempts"] == 2 and r["status"] == "running" and r
+            ),
+            60,
+            "the job running again",
+        )
+        report(capsys, f"\na job cut at a stop after the grace: running again, attempt {record['attempts']}")
+        assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
     finally:
         s.stop()
 
