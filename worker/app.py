@@ -62,7 +62,11 @@ def _stop_on_the_workers_signal_alone(**_):
     by the same signal: the job cut, run again, and the stop seconds longer. So a child blocks
     SIGTERM and a thread takes it: sent by the child's own worker (the pool's terminate, a hard
     time limit) or once that worker is gone, the child dies of it as before; sent by anyone else,
-    it is left to the worker, which stops the child when its job is done."""
+    it is left to the worker, which stops the child when its job is done. (Where the system
+    cannot tell a signal's sender, `sigwaitinfo` is missing, as on macOS, the child keeps
+    Celery's own handling.)"""
+    if not hasattr(signal, "sigwaitinfo"):
+        return
     worker = os.getppid()
     signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGTERM})  # in this thread and all it starts
 
