@@ -24,8 +24,7 @@ from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
 
 from .queue import JobQueue
 
-STOP_SECONDS = 10.0  # how long a worker may take to finish its running job when the service stops
-COLD_STOP_SECONDS = 5.0  # then how long it may take to stop that job and requeue it
+COLD_STOP_SECONDS = 5.0  # after the grace (`stop_grace`), how long a worker may take to stop its job
 WATCH_SECONDS = 1.0  # how often the service looks for a worker that died
 MAX_ATTEMPTS = 3  # runs of a job whose worker died under it, before the job is failed
 
@@ -134,16 +133,16 @@ class _Workers:
     def stop(self) -> None:
         self._stopping.set()
         self._watcher.join()
-        _stop_workers(list(self.processes.values()))
+        _stop_workers(list(self.processes.values()), grace=self.settings.stop_grace)
 
 
-def _stop_workers(workers: list[subprocess.Popen]) -> None:
-    """Celery's warm shutdown (SIGTERM) lets a running job finish; after STOP_SECONDS its cold
+def _stop_workers(workers: list[subprocess.Popen], grace: float) -> None:
+    """Celery's warm shutdown (SIGTERM) lets a running job finish; after `grace` s its cold
     shutdown (SIGQUIT) stops the job and puts it back on the queue for the next worker; SIGKILL
     only for a worker that still has not exited."""
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, signal.SIG_IGN)  # a second Ctrl-C must not cut the cleanup short
-    for signum, seconds in ((signal.SIGTERM, STOP_SECONDS), (signal.SIGQUIT, COLD_STOP_SECONDS)):
+    for signum, seconds in ((signal.SIGTERM, grace), (signal.SIGQUIT, COLD_STOP_SECONDS)):
         for worker in workers:
             if worker.poll() is None:
                 worker.send_signal(signum)

@@ -162,12 +162,13 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
 
 
 def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(tmp_path, capsys):
-    """The same stop with a job longer than the service's grace (`STOP_SECONDS`): the service
-    then asks its worker for a cold shutdown, whose SIGTERM the pool's child does take. The
-    service exits by itself, leaving no process behind, and the job runs again when it starts."""
-    s = Stack(tmp_path, None, workers=1)
+    """The same stop with a job longer than the service's grace (`PERCUSSIM_STOP_GRACE`, here
+    1 s): the service then asks its worker for a cold shutdown, whose SIGTERM the pool's child
+    does take. The service exits by itself, leaving no process behind, and the job runs again
+    when it starts."""
+    s = Stack(tmp_path, None, workers=1, env={"PERCUSSIM_STOP_GRACE": "1"})
     try:
-        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 15.0}})).json()
+        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
         s.wait_status(job["id"], ("running",), timeout=30)
         wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
         service = s.processes[0].popen

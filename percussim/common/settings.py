@@ -60,6 +60,12 @@ class Settings(BaseSettings):
         "files are deleted; none: kept until deleted",
     )
     job_time_limit: float = Field(default=900.0, gt=0, description="seconds a job may run")
+    stop_grace: float = Field(
+        default=10.0,
+        ge=0,
+        description="seconds `percussim serve` lets its workers finish their running jobs when it "
+        "stops; then it stops them and queues them again for its next start",
+    )
     redelivery_seconds: float | None = Field(
         default=None,
         gt=0,
