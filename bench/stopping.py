@@ -14,7 +14,6 @@ Printed: the seconds until the service has exited, and how many times the runnin
 from __future__ import annotations
 
 import argparse
-import os
 import signal
 import statistics
 import tempfile
@@ -38,13 +37,9 @@ def stop_once(sig: signal.Signals, group: bool) -> tuple[float, bool]:
             for _ in range(30):
                 stack.client.post("/v1/jobs", json=preset_json("fig3"))
             time.sleep(0.5)
-            service = stack.processes[0].popen
             start = time.monotonic()
-            if group:
-                os.killpg(service.pid, sig)
-            else:
-                service.send_signal(sig)
-            service.wait(60)
+            stack.processes[0].signal(sig, everyone=group)
+            stack.processes[0].popen.wait(60)
             took = time.monotonic() - start
         finally:
             stack.stop()

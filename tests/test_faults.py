@@ -172,7 +172,7 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
         s.wait_status(job["id"], ("running",), timeout=30)
         wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
         service = s.processes[0].popen
-        os.killpg(service.pid, signal.SIGTERM)
+        s.processes[0].signal(signal.SIGTERM, everyone=True)
         assert service.wait(60) == 0, s.logs()
         left = subprocess.run(["pgrep", "-g", str(service.pid)], capture_output=True, text=True).stdout.split()
         assert left == [], (left, s.logs())
