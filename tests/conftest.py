@@ -70,10 +70,28 @@ def succeeded_job(client, jobs, result: str, case: dict | None = None) -> str:
     return job_id
 
 
-def report(capsys, text: str) -> None:
-    """Print what a test saw past pytest's capture: the suite's output carries the counts."""
-    with capsys.disabled():
-        print(text)
+def report(record_property, text: str) -> None:
+    """Keep what a test saw for the suite's summary (`pytest_terminal_summary`): the output carries
+    the counts, whichever process ran the test."""
+    record_property(REPORTED, text.strip())
+
+
+REPORTED = "percussim-report"
+_reported: dict[str, str] = {}
+
+
+def pytest_runtest_logreport(report):
+    # a test's properties travel with its reports, from pytest-xdist's workers too
+    for name, text in report.user_properties:
+        if name == REPORTED:
+            _reported[text] = report.nodeid
+
+
+def pytest_terminal_summary(terminalreporter):
+    if _reported:
+        terminalreporter.section("what the tests saw")
+        for text, nodeid in _reported.items():
+            terminalreporter.write_line(f"{nodeid.split('::')[-1]}: {text}")
 
 
 @pytest.fixture

@@ -160,7 +160,7 @@ def test_the_image_as_built(stack):
     assert owners.split() == [config["User"], config["User"], "root"], "the environment is read-only for the user"
 
 
-def test_a_preset_gives_the_clis_summary_and_result(stack, image_target, tmp_path, capsys):
+def test_a_preset_gives_the_clis_summary_and_result(stack, image_target, tmp_path, record_property):
     job_id = submit(stack, preset_json("fig3"))
     record = wait_finished(stack, job_id)
     assert record["status"] == "succeeded", (record, stack.logs())
@@ -176,14 +176,14 @@ def test_a_preset_gives_the_clis_summary_and_result(stack, image_target, tmp_pat
     native, _ = cli_run(preset_json("fig3"), tmp_path / "native")
     peak = [s["peak_contact_force"]["value"] for s in (summary, cli, native)]
     report(
-        capsys,
+        record_property,
         f"\nfig3 peak force: {peak[0]!r} N in the containers, {peak[1]!r} N by `percussim run` here "
         f"for the image's CPU target ({image_target['NUMBA_CPU_NAME']}): every value of the summary equal; "
         f"{peak[2]!r} N for this CPU's own target (relative difference {abs(peak[2] / peak[0] - 1):.1e})",
     )
 
 
-def test_a_sweep_gives_the_clis_summary_for_every_variant(stack, image_target, tmp_path, capsys):
+def test_a_sweep_gives_the_clis_summary_for_every_variant(stack, image_target, tmp_path, record_property):
     answer = stack.client.post("/v1/sweeps", json=SWEEP)
     assert answer.status_code == 202, answer.text
     sweep_id = answer.json()["id"]
@@ -195,7 +195,10 @@ def test_a_sweep_gives_the_clis_summary_for_every_variant(stack, image_target, t
         case = stack.client.get(f"/v1/jobs/{row['job']}/case").json()
         cli, _ = cli_run(case, tmp_path / str(k), image_target)
         assert stack.client.get(f"/v1/jobs/{row['job']}/summary").json() == cli, row["values"]
-    report(capsys, f"sweep of {len(sweep['rows'])} variants over 2 workers: every summary equal to `percussim run`'s")
+    report(
+        record_property,
+        f"sweep of {len(sweep['rows'])} variants over 2 workers: every summary equal to `percussim run`'s",
+    )
 
 
 def test_no_container_compiles_the_kernel(stack):
@@ -212,7 +215,7 @@ def test_no_container_compiles_the_kernel(stack):
     assert out.split() == ["1", "0"], f"a new container's first run: {out}"
 
 
-def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(stack, capsys):
+def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(stack, record_property):
     job_id = submit(stack, SECONDS_OF_WORK)
     wait_for(
         lambda: (r := stack.client.get(f"/v1/jobs/{job_id}").json())["status"] == "running" and r["progress"] > 0.1,
@@ -230,13 +233,13 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(st
     jobs = stack.client.get("/v1/jobs", params={"limit": 100}).json()["jobs"]
     assert [j["id"] for j in jobs].count(job_id) == 1
     report(
-        capsys,
+        record_property,
         f"killed {victim} mid-job: the job then {record['status']} on {record['worker']} "
         f"after {record['attempts']} attempts",
     )
 
 
-def test_after_the_api_container_restarts_every_record_and_result_is_served(stack, capsys):
+def test_after_the_api_container_restarts_every_record_and_result_is_served(stack, record_property):
     ids = [j["id"] for j in stack.client.get("/v1/jobs", params={"limit": 100}).json()["jobs"]]
     ids = ids or [submit(stack, preset_json("fig3"))]
     for job_id in ids:
@@ -261,7 +264,7 @@ def test_after_the_api_container_restarts_every_record_and_result_is_served(stac
     for job_id, was in before.items():
         assert served(job_id) == was, job_id
     assert stack.client.get("/v1/jobs").json()["total"] == len(ids)
-    report(capsys, f"API container restarted: {len(ids)} records, summaries and results served as before")
+    report(record_property, f"API container restarted: {len(ids)} records, summaries and results served as before")
 
 
 def test_metrics_and_flower(stack):
@@ -272,13 +275,13 @@ def test_metrics_and_flower(stack):
     assert httpx.get(f"{stack.flower_url}/healthcheck", timeout=10).text == "OK"
 
 
-def test_down_removes_every_container_volume_and_network(stack, capsys):
+def test_down_removes_every_container_volume_and_network(stack, record_property):
     stack.down()
     stack.stopped = True
     assert stack.left_behind() == {"containers": [], "volumes": [], "networks": []}
     assert interfaces() == stack.before[0]
     report(
-        capsys,
+        record_property,
         f"compose stack: local images {TIMES['local images']:.1f} s, image build {TIMES['build']:.1f} s, "
         f"start to /readyz with 2 workers {TIMES['start']:.1f} s",
     )

@@ -56,7 +56,7 @@ def wait_all_finished(stack: Stack, ids: list[str], timeout: float) -> dict[str,
     return wait_for(finished, timeout, f"{len(ids)} jobs finished", interval=0.5)
 
 
-def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path, capsys):
+def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(redis, tmp_path, record_property):
     s = Stack(
         tmp_path,
         redis.url,
@@ -71,7 +71,7 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         s.workers[victim].stop(signal.SIGKILL)  # the worker and its pool, no chance to clean up
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         report(
-            capsys,
+            record_property,
             f"\nkilled {victim} mid-job; the job then {record['status']} on {record['worker']} "
             f"after {record['attempts']} attempts",
         )
@@ -85,7 +85,7 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         s.stop()
 
 
-def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(tmp_path, capsys):
+def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(tmp_path, record_property):
     """The default set-up: `percussim serve` with its own worker on the filesystem broker, which
     loses the message of a job whose worker dies; the service queues the job again."""
     s = Stack(tmp_path, None, workers=1)
@@ -99,7 +99,7 @@ def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(
             os.kill(pid, signal.SIGKILL)
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         report(
-            capsys,
+            record_property,
             f"\nembedded worker killed mid-job: the service started it again; the job then "
             f"{record['status']} after {record['attempts']} attempts",
         )
@@ -113,7 +113,7 @@ def test_the_embedded_service_starts_a_dead_worker_again_and_runs_its_job_again(
         s.stop()
 
 
-def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_restarts(tmp_path, capsys):
+def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_restarts(tmp_path, record_property):
     s = Stack(tmp_path, None, workers=1)
     try:
         job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
@@ -126,7 +126,7 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         record = s.wait_status(job["id"], FINISHED, timeout=90)
         counts = wait_all_finished(s, queued, timeout=60)
         report(
-            capsys,
+            record_property,
             f"\nembedded service killed mid-job and started again, one queued job's message "
             f"removed meanwhile: the job {record['status']} after {record['attempts']} "
             f"attempts; the 3 queued behind it {counts}",
@@ -138,7 +138,7 @@ def test_a_job_running_when_the_embedded_service_crashed_runs_again_when_it_rest
         s.stop()
 
 
-def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_finish_once(tmp_path, capsys):
+def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_finish_once(tmp_path, record_property):
     """systemd's default stop: SIGTERM to the service, its worker and the worker's pool at once.
     The worker shuts down warm and its pool's child, left running, finishes the job: it has
     succeeded, on its first run, when the service starts again."""
@@ -151,7 +151,7 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
         record = s.wait_status(job["id"], FINISHED, timeout=30)
         log = (tmp_path / "api.log").read_text()  # the service stopped, before its restart
         report(
-            capsys,
+            record_property,
             f"\nSIGTERM to every process of the embedded service mid-job: the job {record['status']} "
             f"after {record['attempts']} attempt(s)",
         )
@@ -161,7 +161,9 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
         s.stop()
 
 
-def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(tmp_path, capsys):
+def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(
+    tmp_path, record_property
+):
     """The same stop with a job longer than the service's grace (`PERCUSSIM_STOP_GRACE`, here
     1 s): the service then asks its worker for a cold shutdown, whose SIGTERM the pool's child
     does take. The service exits by itself, leaving no process behind, and the job runs again
@@ -186,13 +188,15 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
             60,
             "the job running again",
         )
-        report(capsys, f"\na job cut at a stop after the grace: running again, attempt {record['attempts']}")
+        report(record_property, f"\na job cut at a stop after the grace: running again, attempt {record['attempts']}")
         assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
     finally:
         s.stop()
 
 
-def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(redis, tmp_path, capsys):
+def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(
+    redis, tmp_path, record_property
+):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         accepted = [s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()["id"] for _ in range(3)]
@@ -209,7 +213,7 @@ def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_
         assert all(a.status_code == 202 for a in after), "the API recovers without a restart"
         counts = wait_all_finished(s, accepted + [a.json()["id"] for a in after], timeout=180)
         report(
-            capsys,
+            record_property,
             f"\nRedis restarted: {len(accepted)} accepted before, 5 refused with 503 while down, "
             f"5 accepted after; outcomes {counts}",
         )
@@ -219,7 +223,7 @@ def test_redis_restarted_during_a_burst_gives_503_with_retry_after_and_loses_no_
 
 
 def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_no_accepted_job(
-    redis, postgres, tmp_path, capsys
+    redis, postgres, tmp_path, record_property
 ):
     s = Stack(tmp_path, redis.url, workers=2, env={"PERCUSSIM_DATABASE_URL": postgres.database()})
     answers, done = [], threading.Event()
@@ -254,7 +258,7 @@ def test_postgresql_stopped_during_a_burst_gives_503_with_retry_after_and_loses_
         accepted = [a.json()["id"] for a in answers if a.status_code == 202]
         counts = wait_all_finished(s, accepted, timeout=180)
         report(
-            capsys,
+            record_property,
             f"\nPostgreSQL stopped for 2 s during a burst: {len(answers)} submissions, {len(accepted)} "
             f"accepted ({during} answered before it was down), {len(refused)} refused with 503 and Retry-After, "
             f"none answered otherwise; the accepted ones {counts}",
@@ -288,7 +292,7 @@ def _limit_file_size(pid: int, limit: int) -> None:
         _limit_file_size(child, limit)
 
 
-def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_recovers(redis, tmp_path, capsys):
+def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_recovers(redis, tmp_path, record_property):
     """A real limit, the file size limit (RLIMIT_FSIZE): on the worker, a job whose result is
     larger ends failed with the reason and nothing half-written, and the worker goes on; on the
     API, nothing can be written, new jobs get 507 while the rest of the API answers."""
@@ -318,7 +322,7 @@ def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_reco
         again = s.client.post("/v1/jobs", json=preset_json("fig3"))
         assert again.status_code == 202 and s.wait_status(again.json()["id"], FINISHED)["status"] == "succeeded"
         report(
-            capsys,
+            record_property,
             f"\nfile size limit: on the worker (3 MB) the 6.9-MB job {record['status']}: "
             f"{record['error']!r}, only its case left; on the API (0 bytes) a new job got "
             f"{refused.status_code}: {refused.json()['detail']!r}; limit lifted: the next job succeeded",
@@ -327,7 +331,7 @@ def test_a_store_that_cannot_write_fails_the_job_or_refuses_it_with_507_and_reco
         s.stop()
 
 
-def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_path, capsys):
+def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_path, record_property):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         ids = [s.client.post("/v1/jobs", json=preset_json(name)).json()["id"] for name in ("fig3", "fig9")]
@@ -346,18 +350,18 @@ def test_after_the_api_restarts_every_record_and_result_is_served(redis, tmp_pat
             assert s.client.get(f"/v1/jobs/{job_id}/summary").json() == summary
             assert s.client.get(f"/v1/jobs/{job_id}/result.h5").content == result
         assert s.client.get("/v1/jobs").json()["total"] == len(ids)
-        report(capsys, f"\nAPI restarted: {len(ids)} records, summaries and results served as before")
+        report(record_property, f"\nAPI restarted: {len(ids)} records, summaries and results served as before")
     finally:
         s.stop()
 
 
-def test_a_failure_as_it_runs_ends_the_job_failed_with_what_and_what_to_change(redis, tmp_path, capsys):
+def test_a_failure_as_it_runs_ends_the_job_failed_with_what_and_what_to_change(redis, tmp_path, record_property):
     s = Stack(tmp_path, redis.url, workers=1)
     try:
         job = s.client.post("/v1/jobs", json=CHATTERS)
         assert job.status_code == 202, job.text  # nothing to refuse up front
         record = s.wait_status(job.json()["id"], FINISHED, timeout=60)
-        report(capsys, f"\nfailure as it runs: {record['status']}: {record['error']}")
+        report(record_property, f"\nfailure as it runs: {record['status']}: {record['error']}")
         assert record["status"] == "failed"
         assert "the contact chattered on this grid (" in record["error"]
         assert "Leave numerics.cells, time_step and scheme out" in record["error"]
@@ -366,7 +370,7 @@ def test_a_failure_as_it_runs_ends_the_job_failed_with_what_and_what_to_change(r
         s.stop()
 
 
-def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path, capsys):
+def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path, record_property):
     s = Stack(tmp_path, redis.url, workers=2)
     try:
         start = time.monotonic()
@@ -374,7 +378,7 @@ def test_a_burst_of_1000_submissions_is_every_one_accounted_for(redis, tmp_path,
         assert all(a.status_code == 202 for a in answers), {a.status_code for a in answers}
         ids = [a.json()["id"] for a in answers]
         counts = wait_all_finished(s, ids, timeout=600)
-        report(capsys, f"\nburst: 1000 submitted, outcomes {counts} after {time.monotonic() - start:.1f} s")
+        report(record_property, f"\nburst: 1000 submitted, outcomes {counts} after {time.monotonic() - start:.1f} s")
         assert counts == {"succeeded": 1000}
         assert s.client.get("/v1/jobs").json()["total"] == 1000
     finally:

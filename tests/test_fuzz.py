@@ -142,14 +142,14 @@ def test_non_finite_numbers_deep_nesting_and_huge_arrays_get_4xx(stack, raw):
     assert response.status_code in (413, 422), response.text[:300]
 
 
-def test_print_the_counts(stack, capsys):
-    """Runs last in this module: what the generated requests got, printed past pytest's capture;
+def test_print_the_counts(stack, record_property):
+    """Runs last in this module: what the generated requests got, kept for the suite's summary;
     and no job the fuzzing queued failed other than for a reason in words."""
     total = sum(STATUSES.values())
     jobs = stack.client.get("/v1/jobs", params={"limit": 500}).json()
     outcomes = Counter(j["status"] for j in jobs["jobs"])
     report(
-        capsys,
+        record_property,
         f"\nfuzzing the live API: {total} requests, statuses {dict(sorted(STATUSES.items()))}; "
         f"{jobs['total']} jobs accepted, the last {len(jobs['jobs'])} {dict(outcomes)}",
     )

@@ -425,7 +425,7 @@ def test_a_case_filled_in_the_form_runs_and_shows_the_apis_numbers(page, stack):
     expect(page.locator("#f-striker-velocity")).to_have_value("6")
 
 
-def test_results_arrive_without_moving_what_is_on_view(page, stack, capsys):
+def test_results_arrive_without_moving_what_is_on_view(page, stack, record_property):
     """The summary, the tables and nine charts come in after the run: the layout-shift entries
     Chromium records while they do (those within 0.5 s of a click aside, as the metric has it)
     add up to nothing."""
@@ -442,7 +442,7 @@ def test_results_arrive_without_moving_what_is_on_view(page, stack, capsys):
     page.wait_for_function("() => !document.querySelector('.plot-area.loading')")
     page.wait_for_timeout(500)
     shifts = page.evaluate("window.shifts")
-    report(capsys, f"layout shifts while the results came in: {shifts}")
+    report(record_property, f"layout shifts while the results came in: {shifts}")
     assert sum(s["value"] for s in shifts) < 0.001, shifts
     # The observer does see a shift: a line pushed in above the job moves everything under it.
     page.evaluate(

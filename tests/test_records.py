@@ -222,7 +222,7 @@ def test_metrics_count_jobs_and_add_every_workers_histograms(records):
 
 
 @pytest.mark.slow
-def test_200_racing_cancels_and_finishes_never_both_win(records, capsys):
+def test_200_racing_cancels_and_finishes_never_both_win(records, record_property):
     """A worker finishing a job (summary written, then the transition) against a client's DELETE
     at the same moment: what DELETE answered, the final status and the files agree."""
     client = TestClient(create_app(records))
@@ -259,7 +259,7 @@ def test_200_racing_cancels_and_finishes_never_both_win(records, capsys):
             assert after.status_code == 404 and not jobs.folder(job_id).exists()
         outcomes[(answers["delete"], answers["worker"])] += 1
     report(
-        capsys,
+        record_property,
         f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: 200 cancel/finish races: "
         + ", ".join(f"DELETE {d} with the worker's {w}: {n}" for (d, w), n in sorted(outcomes.items())),
     )
@@ -268,7 +268,7 @@ def test_200_racing_cancels_and_finishes_never_both_win(records, capsys):
 
 
 @pytest.mark.slow
-def test_1000_concurrent_progress_writes_stop_at_the_finish(records, capsys):
+def test_1000_concurrent_progress_writes_stop_at_the_finish(records, record_property):
     """Eight threads write a running job's progress 1000 times in all while it is cancelled and
     its worker ends it: nothing is lost or contradicted, and no write changes it once finished."""
     jobs = JobStore(records)
@@ -301,7 +301,7 @@ def test_1000_concurrent_progress_writes_stop_at_the_finish(records, capsys):
     assert jobs.get(job_id) == frozen, "no progress write changed the finished record"
     total = sum(accepted.values()) + sum(refused.values())
     report(
-        capsys,
+        record_property,
         f"\n{records.database_url and 'PostgreSQL' or 'SQLite'}: {total} concurrent progress writes: "
         f"{sum(accepted.values())} while running, {sum(refused.values())} refused once finished; "
         f"final status {frozen['status']}, no summary",
