@@ -137,23 +137,19 @@ class _Workers:
 
 
 def _stop_workers(workers: list[subprocess.Popen], grace: float) -> None:
-    """Celery's warm shutdown (SIGTERM) lets a running job finish; after `grace` s its cold
-    shutdown (SIGQUIT) stops the job and puts it back on the queue for the next worker; SIGKILL
-    only for a worker that still has not exited."""
+    """Celery's warm shutdown (SIGTERM): each worker lets its running job finish for `grace` s,
+    then stops it and puts it back on the queue (`worker.app`); SIGKILL only for a worker that
+    has still not exited `COLD_STOP_SECONDS` after that."""
     for signum in (signal.SIGINT, signal.SIGTERM):
         signal.signal(signum, signal.SIG_IGN)  # a second Ctrl-C must not cut the cleanup short
-    for signum, seconds in ((signal.SIGTERM, grace), (signal.SIGQUIT, COLD_STOP_SECONDS)):
-        for worker in workers:
-            if worker.poll() is None:
-                worker.send_signal(signum)
-        deadline = time.monotonic() + seconds
-        for worker in workers:
-            try:
-                worker.wait(max(0.0, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                pass
     for worker in workers:
         if worker.poll() is None:
+            worker.send_signal(signal.SIGTERM)
+    deadline = time.monotonic() + grace + COLD_STOP_SECONDS
+    for worker in workers:
+        try:
+            worker.wait(max(0.0, deadline - time.monotonic()))
+        except subprocess.TimeoutExpired:
             worker.kill()
             worker.wait()
 

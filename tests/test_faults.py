@@ -164,10 +164,9 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
 def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(
     tmp_path, record_property
 ):
-    """The same stop with a job longer than the service's grace (`PERCUSSIM_STOP_GRACE`, here
-    1 s): the service then asks its worker for a cold shutdown, whose SIGTERM the pool's child
-    does take. The service exits by itself, leaving no process behind, and the job runs again
-    when it starts."""
+    """The same stop with a job longer than the grace (`PERCUSSIM_STOP_GRACE`, here 1 s): the
+    worker then shuts down cold, and its SIGTERM the pool's child does take. The service exits by
+    itself, leaving no process behind, and the job runs again when it starts."""
     s = Stack(tmp_path, None, workers=1, env={"PERCUSSIM_STOP_GRACE": "1"})
     try:
         job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
@@ -189,6 +188,47 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
             "the job running again",
         )
         report(record_property, f"\na job cut at a stop after the grace: running again, attempt {record['attempts']}")
+        assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
+    finally:
+        s.stop()
+
+
+def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_another_at_once(
+    redis, tmp_path, record_property
+):
+    """`docker stop` or systemd stopping a `percussim worker` (SIGTERM to its every process) in a
+    job longer than the grace (here 1 s): the worker stops the job and exits within seconds, and
+    the job goes back on the queue at once, where the next worker takes it, rather than waiting
+    for the redelivery time (17 min by default) as it would after the manager's SIGKILL."""
+    s = Stack(tmp_path, redis.url, workers=1, env={"PERCUSSIM_STOP_GRACE": "1"})
+    try:
+        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
+        s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        worker = s.workers["w0@percussim"]
+        start = time.monotonic()
+        worker.signal(signal.SIGTERM, everyone=True)
+        assert worker.popen.wait(30) == 0, s.logs()
+        stopped = time.monotonic() - start
+        left = subprocess.run(["pgrep", "-g", str(worker.popen.pid)], capture_output=True, text=True).stdout.split()
+        assert left == [], (left, s.logs())
+        assert "Cold shutdown" in worker.log.read_text(), s.logs()
+        s.add_worker("w1")
+        record = wait_for(
+            lambda: (
+                (r := s.client.get(f"/v1/jobs/{job['id']}").json())["attempts"] == 2
+                and r["status"] == "running"
+                and r["worker"] == "w1@percussim"
+                and r
+            ),
+            60,
+            "the job running again on the next worker",
+        )
+        report(
+            record_property,
+            f"\na worker stopped in a job after a 1-s grace: exited in {stopped:.1f} s; the job running "
+            f"again on {record['worker']}, attempt {record['attempts']}",
+        )
         assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
     finally:
         s.stop()

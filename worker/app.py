@@ -1,8 +1,10 @@
 """The Celery app, configured from the environment (`common.settings`).
 
 Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
-delivered again; each worker process takes one job at a time. A pool's child stops on its own
-worker's SIGTERM alone (`_stop_on_the_workers_signal_alone`).
+delivered again; each worker process takes one job at a time. A worker told to stop lets its
+running job finish for `PERCUSSIM_STOP_GRACE` s, then stops it and puts it back on the queue
+(`_cut_the_job_after_the_grace`). A pool's child stops on its own worker's SIGTERM alone
+(`_stop_on_the_workers_signal_alone`).
 """
 
 from __future__ import annotations
@@ -12,7 +14,7 @@ import signal
 import threading
 
 from celery import Celery
-from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown
+from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown, worker_shutting_down
 
 from percussim.common.broker import broker_config, queue_folder
 from percussim.common.settings import Settings, settings
@@ -43,6 +45,7 @@ def make_app(s: Settings) -> Celery:
 
 app = make_app(settings())
 _stop = threading.Event()
+_grace_started = threading.Event()
 
 
 @worker_init.connect
@@ -78,6 +81,22 @@ def _stop_on_the_workers_signal_alone(**_):
                 signal.raise_signal(signal.SIGTERM)  # its default action: the child dies of it
 
     threading.Thread(target=take_sigterm, name="percussim-sigterm", daemon=True).start()
+
+
+@worker_shutting_down.connect
+def _cut_the_job_after_the_grace(how: str, **_):
+    """Celery's warm shutdown (SIGTERM, a first Ctrl-C) waits for the running job however long it
+    takes. After `stop_grace` s the worker asks itself for a cold shutdown (SIGQUIT): the job is
+    stopped and, acknowledged late, goes back on the queue at once, for another worker or the
+    service's next start. A service manager's own limit (systemd's `TimeoutStopSec`, Docker's
+    `stop_grace_period`) longer than the grace then never kills a worker in its job, whose message
+    would wait for the redelivery time."""
+    if how != "Warm" or _grace_started.is_set():  # a second SIGTERM (the group's and the service's)
+        return
+    _grace_started.set()
+    cut = threading.Timer(settings().stop_grace, os.kill, (os.getpid(), signal.SIGQUIT))
+    cut.daemon = True  # an idle worker exits at once, not at the grace
+    cut.start()
 
 
 @worker_ready.connect

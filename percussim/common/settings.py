@@ -63,8 +63,8 @@ class Settings(BaseSettings):
     stop_grace: float = Field(
         default=10.0,
         ge=0,
-        description="seconds `percussim serve` lets its workers finish their running jobs when it "
-        "stops; then it stops them and queues them again for its next start",
+        description="seconds a worker told to stop lets its running job finish; then it stops the job, "
+        "which goes back on the queue (for another worker, or for the embedded service's next start)",
     )
     redelivery_seconds: float | None = Field(
         default=None,
