@@ -111,17 +111,17 @@ def _submit(args: argparse.Namespace) -> int:
         return EXIT_INVALID
     try:
         with Client(args.url, api_key=args.api_key) as api:
-            job = api.submit(_case_source(args.case))
+            case = _case_source(args.case)
             if args.no_wait:
-                print(json.dumps(job, indent=2))
+                print(json.dumps(api.submit(case), indent=2))
                 return 0
             try:
-                _wait(api, job["id"], args.progress)
+                job_id = _submit_and_wait(api, lambda: api.submit(case), args.progress)
             except KeyboardInterrupt:
                 return EXIT_INTERRUPTED
             if args.output:
-                api.download(job["id"], args.output)
-            summary = api.summary(job["id"])
+                api.download(job_id, args.output)
+            summary = api.summary(job_id)
     except FileNotFoundError:
         return _no_such_file(args.case)
     except Refused as error:
@@ -132,16 +132,37 @@ def _submit(args: argparse.Namespace) -> int:
     return _print_summary(summary, args.summary)
 
 
-def _wait(api, job_id: str, progress: bool) -> None:
-    """Wait for a job (or a study) on the service with a progress bar; Ctrl-C cancels it, as it
-    stops a local run, rather than leave it running unseen, and raises KeyboardInterrupt."""
+@contextmanager
+def _ctrl_c_after_the_answer() -> Iterator[None]:
+    """Ctrl-C while a submission is on its way takes effect once the service has answered (as
+    KeyboardInterrupt, where the block ends): only the answer names what to cancel, and a job
+    whose submission was cut off would run on unseen."""
+    import signal
+
+    pressed = []
+    previous = signal.signal(signal.SIGINT, lambda *_: pressed.append(True))
     try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
+    if pressed:
+        raise KeyboardInterrupt
+
+
+def _submit_and_wait(api, submit: Callable[[], dict], progress: bool) -> str:
+    """Submit a job (or a study) to the service and wait for it with a progress bar; Ctrl-C
+    cancels it, as it stops a local run, rather than leave it running unseen, and raises
+    KeyboardInterrupt. The job's id."""
+    try:
+        with _ctrl_c_after_the_answer():
+            job_id = submit()["id"]
         with _progress_bar(progress) as advance:
             api.wait(job_id, progress=lambda fraction, record: advance(fraction))
     except KeyboardInterrupt:
         api.cancel(job_id)
         print(f"percussim: cancelled job {job_id}", file=sys.stderr)
         raise
+    return job_id
 
 
 def _presets(args: argparse.Namespace) -> int:
@@ -237,8 +258,10 @@ def _sweep_on_service(args: argparse.Namespace) -> list[dict]:
     from .client import FINISHED, Client
 
     with Client(args.url, api_key=args.api_key) as api:
-        sweep = api.submit_sweep(_case_source(args.case), dict(args.vary))
+        case = _case_source(args.case)
         try:
+            with _ctrl_c_after_the_answer():
+                sweep = api.submit_sweep(case, dict(args.vary))
             done = api.wait_sweep(
                 sweep["id"],
                 progress=lambda fraction, s: _variants_done(
@@ -383,8 +406,7 @@ def _study_on_service(args: argparse.Namespace, what: str, request: dict) -> dic
 
     submit, view, answer = ON_SERVICE[what]
     with Client(args.url, api_key=args.api_key) as api:
-        study_id = getattr(api, submit)(request)["id"]
-        _wait(api, study_id, args.progress)
+        study_id = _submit_and_wait(api, lambda: getattr(api, submit)(request), args.progress)
         found = getattr(api, view)(study_id)
         return found if answer is None else found[answer]
 

@@ -1,11 +1,13 @@
 """`percussim run`: prints the summary, writes files, exit 2 naming the field on a bad case."""
 
 import json
+import signal
 import subprocess
 import sys
 from pathlib import Path
 
 import h5py
+import pytest
 from conftest import BASE_CASE, merge
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -132,3 +134,16 @@ def test_a_bad_setting_is_one_line_naming_the_variable_with_exit_2(tmp_path):
     assert percussim({"PERCUSSIM_MAX_STEPS": "1e8"}, "run", "fig3").returncode == 0
     small = percussim({"PERCUSSIM_MAX_STEPS": "1e3"}, "run", "fig3")
     assert small.returncode == 2 and "exceed the limit of 1000 (PERCUSSIM_MAX_STEPS raises it)" in small.stderr
+
+
+def test_ctrl_c_during_a_submission_takes_effect_once_the_answer_is_in():
+    """The client's submission to a service is not cut by Ctrl-C: the answer, which names the job
+    to cancel, is kept, then KeyboardInterrupt comes, and Ctrl-C is Python's own again."""
+    from percussim.cli import _ctrl_c_after_the_answer
+
+    answered = []
+    with pytest.raises(KeyboardInterrupt), _ctrl_c_after_the_answer():
+        signal.raise_signal(signal.SIGINT)
+        answered.append({"id": "the job"})
+    assert answered == [{"id": "the job"}]
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler

@@ -241,7 +241,10 @@ def test_ctrl_c_during_submit_cancels_the_job_on_the_service(stack, tmp_path):
     assert stack.wait_status(job["id"], ("cancelled", "succeeded", "failed"))["status"] == "cancelled"
 
 
-def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_path):
+@pytest.mark.parametrize("when", ["recorded", "running"])
+def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_path, when):
+    """Ctrl-C once a variant runs, or as soon as the service has recorded one: often before the
+    sweep's id has reached the client, which then cancels it once it has."""
     case = tmp_path / "long.json"
     case.write_text(json.dumps(merge(preset_json("fig3"), LONG)))
     sweep = subprocess.Popen(
@@ -253,12 +256,13 @@ def test_ctrl_c_during_a_sweep_on_the_service_cancels_its_variants(stack, tmp_pa
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )
     try:
+        statuses = ("queued", "running") if when == "recorded" else ("running",)
 
-        def newest_running():
+        def a_variant():
             jobs = stack.client.get("/v1/jobs", params={"limit": 2}).json()["jobs"]
-            return any(j["status"] == "running" and j["name"] == "fig3" for j in jobs)
+            return any(j["status"] in statuses and j["name"] == "fig3" for j in jobs)
 
-        wait_for(newest_running, 30, "a variant running")
+        wait_for(a_variant, 30, f"a variant {when}", interval=0.01)
         sweep.send_signal(signal.SIGINT)
         out, err = sweep.communicate(timeout=30)
     finally:
