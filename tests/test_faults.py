@@ -212,7 +212,8 @@ def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_anothe
         stopped = time.monotonic() - start
         left = subprocess.run(["pgrep", "-g", str(worker.popen.pid)], capture_output=True, text=True).stdout.split()
         assert left == [], (left, s.logs())
-        assert "Cold shutdown" in worker.log.read_text(), s.logs()
+        log = worker.log.read_text()
+        assert "the running job outlasted PERCUSSIM_STOP_GRACE (1 s)" in log and "Cold shutdown" in log, s.logs()
         s.add_worker("w1")
         record = wait_for(
             lambda: (

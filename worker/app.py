@@ -15,12 +15,14 @@ import threading
 
 from celery import Celery
 from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown, worker_shutting_down
+from celery.utils.log import get_logger
 
 from percussim.common.broker import broker_config, queue_folder
 from percussim.common.settings import Settings, settings
 from percussim.common.store import WorkerRegistry
 
 HEARTBEAT_SECONDS = 5.0
+logger = get_logger(__name__)
 
 
 def make_app(s: Settings) -> Celery:
@@ -94,9 +96,17 @@ def _cut_the_job_after_the_grace(how: str, **_):
     if how != "Warm" or _grace_started.is_set():  # a second SIGTERM (the group's and the service's)
         return
     _grace_started.set()
-    cut = threading.Timer(settings().stop_grace, os.kill, (os.getpid(), signal.SIGQUIT))
-    cut.daemon = True  # an idle worker exits at once, not at the grace
-    cut.start()
+    grace = settings().stop_grace
+
+    def cut():
+        logger.warning(
+            "the running job outlasted PERCUSSIM_STOP_GRACE (%g s): stopping it; it goes back on the queue", grace
+        )
+        os.kill(os.getpid(), signal.SIGQUIT)
+
+    timer = threading.Timer(grace, cut)
+    timer.daemon = True  # an idle worker exits at once, not at the grace
+    timer.start()
 
 
 @worker_ready.connect
