@@ -22,7 +22,6 @@ import math
 import time
 
 import numpy as np
-from scipy.optimize import NonlinearConstraint, differential_evolution, minimize
 
 from .case import SUMMARY_ONLY, Case, CaseError, FieldError
 from .errors import Cancelled
@@ -165,6 +164,8 @@ def _optimize(
     cancelled: CancelCheck | None,
     limits: Limits,
 ) -> dict:
+    from scipy.optimize import NonlinearConstraint, differential_evolution  # where a search runs, as in calibrate
+
     started = time.monotonic()
     case = study_case(request.case)
     space = check_optimization(request, limits)
@@ -275,6 +276,8 @@ def _check_quantities(study: _Study, own: np.ndarray) -> None:
 def _local_stage(study: _Study, start: np.ndarray, budget: int):
     """SLSQP from the global stage's best point, its gradients from batched differences, until
     it converges or the runs reach `budget`."""
+    from scipy.optimize import minimize
+
     memo: dict[bytes, tuple] = {}
 
     def at(u: np.ndarray) -> tuple:

@@ -16,7 +16,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import solve_banded
 
 from .case import Case
 from .grid import Grid, node_weights, shaft_nodes
@@ -72,6 +71,8 @@ def balance(grid: Grid, load: np.ndarray, soil: Soil) -> tuple[np.ndarray, np.nd
     """The tool's displacements under the nodal `load` (N, toward the toe positive), loaded once
     from rest on `soil`: `(u, which shaft nodes slip, whether the toe slips)`, or None where the
     soil cannot hold it (everything slips and the tool moves off)."""
+    from scipy.linalg import solve_banded  # where a tool rests on soil: not in the API, as in calibrate
+
     n = grid.cells
     cell = grid.youngs_modulus * grid.area_mid / grid.h  # S·E/h of each cell
     slipping = np.zeros(n + 1, bool)

@@ -90,8 +90,10 @@ def loaded_after(statement: str) -> set[str]:
         "from percussim.solver.limits import check_case",
     ],
 )
-def test_validating_input_loads_no_kernel(statement):
-    heavy = {"numba", "percussim.solver.kernel", "percussim.solver.controller"} & loaded_after(statement)
+def test_validating_input_loads_neither_the_kernel_nor_scipy(statement):
+    """The API validates cases and study requests and reads results: neither Numba (the kernel)
+    nor scipy (the studies' searches and fits, the soil's rest), which the workers load."""
+    heavy = {"numba", "scipy", "percussim.solver.kernel", "percussim.solver.controller"} & loaded_after(statement)
     assert not heavy, sorted(heavy)
 
 
