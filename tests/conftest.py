@@ -77,21 +77,22 @@ def report(record_property, text: str) -> None:
 
 
 REPORTED = "percussim-report"
-_reported: dict[str, str] = {}
+_reported: dict[tuple[str, str], None] = {}  # (test, text), in the order they came
 
 
 def pytest_runtest_logreport(report):
-    # a test's properties travel with its reports, from pytest-xdist's workers too
+    # a test's properties travel with each of its reports (call, teardown), from pytest-xdist's
+    # workers too
     for name, text in report.user_properties:
         if name == REPORTED:
-            _reported[text] = report.nodeid
+            _reported[report.nodeid, text] = None
 
 
 def pytest_terminal_summary(terminalreporter):
     if _reported:
         terminalreporter.section("what the tests saw")
-        for text, nodeid in _reported.items():
-            terminalreporter.write_line(f"{nodeid.split('::')[-1]}: {text}")
+        for nodeid, text in _reported:
+            terminalreporter.write_line(f"{nodeid}: {text}")
 
 
 @pytest.fixture
