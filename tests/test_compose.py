@@ -58,8 +58,11 @@ def stack():
         pytest.fail(str(error))  # not a skip: scripts/test installs and starts what this needs
     TIMES["local images"] = local_images()
     before = (interfaces(), docker("network", "ls", "-q").split())
-    # A short time limit, so that the job of a killed worker is delivered again within seconds.
-    s = ComposeStack({"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"})
+    # A short time limit, so that the job of a killed worker is delivered again within seconds;
+    # a short grace, so that a worker stopped mid-job stops it within seconds.
+    s = ComposeStack(
+        {"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12", "PERCUSSIM_STOP_GRACE": "1"}
+    )
     s.before = before
     s.stopped = False
     try:
@@ -236,6 +239,40 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(st
         record_property,
         f"killed {victim} mid-job: the job then {record['status']} on {record['worker']} "
         f"after {record['attempts']} attempts",
+    )
+
+
+def test_a_worker_container_stopped_mid_job_hands_the_job_back_and_exits_by_itself(stack, record_property):
+    """`docker stop` of a worker mid-job: after its grace (`PERCUSSIM_STOP_GRACE`, 1 s here, 50 s
+    in the compose file) the worker stops the job and exits by itself, status 0, long before
+    Docker would kill it; the job goes back on the queue and the other worker runs it."""
+    for service in WORKERS:  # both up, the one killed above too (a no-op for a running container)
+        docker("start", stack.container(service))
+    stack.wait_ready()
+    job_id = submit(stack, SECONDS_OF_WORK)
+    wait_for(
+        lambda: (r := stack.client.get(f"/v1/jobs/{job_id}").json())["status"] == "running" and r["progress"] > 0.1,
+        60,
+        "the job running",
+        interval=0.1,
+    )
+    stopped = stack.client.get(f"/v1/jobs/{job_id}").json()["worker"]
+    service = {name: s for s, name in WORKERS.items()}[stopped]
+    container = stack.container(service)
+    docker("stop", "--time", "60", container)
+    (state,) = stack.inspect(container)
+    logs = subprocess.run(["docker", "logs", container], capture_output=True, text=True).stderr
+    assert state["State"]["ExitCode"] == 0, (state["State"], logs[-3000:])
+    assert "the running job outlasted PERCUSSIM_STOP_GRACE (1 s)" in logs, logs[-3000:]
+    record = wait_finished(stack, job_id, timeout=120)
+    assert record["status"] == "succeeded" and record["attempts"] == 2, (record, stack.logs())
+    assert record["worker"] != stopped, record
+    docker("start", container)
+    stack.wait_ready()
+    report(
+        record_property,
+        f"docker stop of {stopped} mid-job: it exited with status 0 after its grace; the job then "
+        f"{record['status']} on {record['worker']} after {record['attempts']} attempts",
     )
 
 
