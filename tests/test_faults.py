@@ -11,6 +11,7 @@ import signal
 import subprocess
 import threading
 import time
+from pathlib import Path
 
 import h5py
 import pytest
@@ -231,6 +232,41 @@ def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_anothe
             f"again on {record['worker']}, attempt {record['attempts']}",
         )
         assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
+    finally:
+        s.stop()
+
+
+def gone(pid: int) -> bool:
+    """The process has exited (a zombie not yet reaped counts as exited)."""
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
+    except FileNotFoundError:
+        return True
+
+
+def test_a_pool_process_sent_sigterm_alone_dies_and_its_job_runs_again(redis, tmp_path, record_property):
+    """Someone stopping a runaway job's process by hand (`kill PID` on the pool's child): while its
+    worker is not stopping, the child dies of it as a process does, and the job, its worker lost,
+    runs again. (A SIGTERM to every process of a worker that stops is left to the worker: the
+    stops above.)"""
+    s = Stack(tmp_path, redis.url, workers=1)
+    try:
+        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
+        s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        (child,) = children(s.workers["w0@percussim"].popen.pid)
+        os.kill(child, signal.SIGTERM)
+        wait_for(lambda: gone(child), 10, "the pool's process gone")
+        record = wait_for(
+            lambda: (r := s.client.get(f"/v1/jobs/{job['id']}").json())["attempts"] == 2 and r,
+            60,
+            "the job taken again",
+        )
+        report(
+            record_property,
+            f"\nSIGTERM to a pool process alone mid-job: it died; the job {record['status']}, attempt {record['attempts']}",
+        )
+        assert s.client.delete(f"/v1/jobs/{job['id']}").status_code in (202, 204)
     finally:
         s.stop()
 

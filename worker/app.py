@@ -12,6 +12,7 @@ from __future__ import annotations
 import os
 import signal
 import threading
+from multiprocessing import get_context
 
 from celery import Celery
 from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown, worker_shutting_down
@@ -48,6 +49,9 @@ def make_app(s: Settings) -> Celery:
 app = make_app(settings())
 _stop = threading.Event()
 _grace_started = threading.Event()
+# Set by the worker once it is stopping, seen by its pool's children (who inherit it at the fork).
+_worker_stopping = get_context("fork").Event()
+FOREIGN_SIGTERM_WAIT = 1.0  # seconds a child, sent SIGTERM by another process, waits to see its worker stop too
 
 
 @worker_init.connect
@@ -66,10 +70,12 @@ def _stop_on_the_workers_signal_alone(**_):
     warm, letting its running job finish, but the pool's child running that job would die at once
     by the same signal: the job cut, run again, and the stop seconds longer. So a child blocks
     SIGTERM and a thread takes it: sent by the child's own worker (the pool's terminate, a hard
-    time limit) or once that worker is gone, the child dies of it as before; sent by anyone else,
-    it is left to the worker, which stops the child when its job is done. (Where the system
-    cannot tell a signal's sender, `sigwaitinfo` is missing, as on macOS, the child keeps
-    Celery's own handling.)"""
+    time limit) or once that worker is gone, the child dies of it as before; sent by anyone else
+    while the worker is stopping too (within `FOREIGN_SIGTERM_WAIT`), it is left to the worker,
+    which stops the child when its job is done; sent by anyone else alone (someone stopping a
+    runaway job's process by hand), the child dies of it. (Where the system cannot tell a
+    signal's sender, `sigwaitinfo` is missing, as on macOS, the child keeps Celery's own
+    handling.)"""
     if not hasattr(signal, "sigwaitinfo"):
         return
     worker = os.getppid()
@@ -78,11 +84,19 @@ def _stop_on_the_workers_signal_alone(**_):
     def take_sigterm():
         while True:
             sender = signal.sigwaitinfo({signal.SIGTERM}).si_pid
-            if sender == worker or os.getppid() != worker:
-                signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
-                signal.raise_signal(signal.SIGTERM)  # its default action: the child dies of it
+            if sender != worker and os.getppid() == worker and _worker_stopping.wait(FOREIGN_SIGTERM_WAIT):
+                continue  # a stop sent to every process: the worker's own
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGTERM})
+            signal.raise_signal(signal.SIGTERM)  # its default action: the child dies of it
 
     threading.Thread(target=take_sigterm, name="percussim-sigterm", daemon=True).start()
+
+
+@worker_shutting_down.connect
+def _tell_the_pool(**_):
+    """A SIGTERM the pool's children get from elsewhere meanwhile is this same stop's
+    (`_stop_on_the_workers_signal_alone`)."""
+    _worker_stopping.set()
 
 
 @worker_shutting_down.connect
