@@ -218,7 +218,9 @@ def test_no_container_compiles_the_kernel(stack):
     assert out.split() == ["1", "0"], f"a new container's first run: {out}"
 
 
-def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(stack, record_property):
+def a_job_running(stack: ComposeStack) -> tuple[str, str, str]:
+    """A job of seconds submitted and running, a tenth done: its id, its worker and that worker's
+    compose service."""
     job_id = submit(stack, SECONDS_OF_WORK)
     wait_for(
         lambda: (r := stack.client.get(f"/v1/jobs/{job_id}").json())["status"] == "running" and r["progress"] > 0.1,
@@ -226,8 +228,12 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(st
         "the job running",
         interval=0.1,
     )
-    victim = stack.client.get(f"/v1/jobs/{job_id}").json()["worker"]
-    service = {name: s for s, name in WORKERS.items()}[victim]
+    worker = stack.client.get(f"/v1/jobs/{job_id}").json()["worker"]
+    return job_id, worker, {name: s for s, name in WORKERS.items()}[worker]
+
+
+def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(stack, record_property):
+    job_id, victim, service = a_job_running(stack)
     docker("kill", stack.container(service))  # SIGKILL: the worker and its pool, no chance to clean up
     record = wait_finished(stack, job_id, timeout=120)
     assert record["status"] == "succeeded", (record, stack.logs())
@@ -249,15 +255,7 @@ def test_a_worker_container_stopped_mid_job_hands_the_job_back_and_exits_by_itse
     for service in WORKERS:  # both up, the one killed above too (a no-op for a running container)
         docker("start", stack.container(service))
     stack.wait_ready()
-    job_id = submit(stack, SECONDS_OF_WORK)
-    wait_for(
-        lambda: (r := stack.client.get(f"/v1/jobs/{job_id}").json())["status"] == "running" and r["progress"] > 0.1,
-        60,
-        "the job running",
-        interval=0.1,
-    )
-    stopped = stack.client.get(f"/v1/jobs/{job_id}").json()["worker"]
-    service = {name: s for s, name in WORKERS.items()}[stopped]
+    job_id, stopped, service = a_job_running(stack)
     container = stack.container(service)
     docker("stop", "--time", "60", container)
     (state,) = stack.inspect(container)
