@@ -162,6 +162,23 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
         s.stop()
 
 
+# About 13 s of work: far longer than the 1-s grace the stop tests give.
+LONG_WORK = merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})
+
+
+def a_long_job_running(stack: Stack) -> dict:
+    """A job of `LONG_WORK` submitted and running, some progress made: its record as submitted."""
+    job = stack.client.post("/v1/jobs", json=LONG_WORK).json()
+    stack.wait_status(job["id"], ("running",), timeout=30)
+    wait_for(lambda: stack.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+    return job
+
+
+def left_in_group(pid: int) -> list[str]:
+    """The processes still in the process group `pid` leads."""
+    return subprocess.run(["pgrep", "-g", str(pid)], capture_output=True, text=True).stdout.split()
+
+
 def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at_the_next_start(
     tmp_path, record_property
 ):
@@ -170,13 +187,11 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
     itself, leaving no process behind, and the job runs again when it starts."""
     s = Stack(tmp_path, None, workers=1, env={"PERCUSSIM_STOP_GRACE": "1"})
     try:
-        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
-        s.wait_status(job["id"], ("running",), timeout=30)
-        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        job = a_long_job_running(s)
         service = s.processes[0].popen
         s.processes[0].signal(signal.SIGTERM, everyone=True)
         assert service.wait(60) == 0, s.logs()
-        left = subprocess.run(["pgrep", "-g", str(service.pid)], capture_output=True, text=True).stdout.split()
+        left = left_in_group(service.pid)
         assert left == [], (left, s.logs())
         log = (tmp_path / "api.log").read_text()
         assert "Cold shutdown" in log, log[-3000:]
@@ -203,15 +218,13 @@ def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_anothe
     for the redelivery time (17 min by default) as it would after the manager's SIGKILL."""
     s = Stack(tmp_path, redis.url, workers=1, env={"PERCUSSIM_STOP_GRACE": "1"})
     try:
-        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
-        s.wait_status(job["id"], ("running",), timeout=30)
-        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        job = a_long_job_running(s)
         worker = s.workers["w0@percussim"]
         start = time.monotonic()
         worker.signal(signal.SIGTERM, everyone=True)
         assert worker.popen.wait(30) == 0, s.logs()
         stopped = time.monotonic() - start
-        left = subprocess.run(["pgrep", "-g", str(worker.popen.pid)], capture_output=True, text=True).stdout.split()
+        left = left_in_group(worker.popen.pid)
         assert left == [], (left, s.logs())
         log = worker.log.read_text()
         assert "the running job outlasted PERCUSSIM_STOP_GRACE (1 s)" in log and "Cold shutdown" in log, s.logs()
@@ -251,9 +264,7 @@ def test_a_pool_process_sent_sigterm_alone_dies_and_its_job_runs_again(redis, tm
     stops above.)"""
     s = Stack(tmp_path, redis.url, workers=1)
     try:
-        job = s.client.post("/v1/jobs", json=merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})).json()
-        s.wait_status(job["id"], ("running",), timeout=30)
-        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.02, 30, "some progress")
+        job = a_long_job_running(s)
         (child,) = children(s.workers["w0@percussim"].popen.pid)
         os.kill(child, signal.SIGTERM)
         wait_for(lambda: gone(child), 10, "the pool's process gone")

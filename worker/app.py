@@ -3,7 +3,7 @@
 Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
 delivered again; each worker process takes one job at a time. A worker told to stop lets its
 running job finish for `PERCUSSIM_STOP_GRACE` s, then stops it and puts it back on the queue
-(`_cut_the_job_after_the_grace`). A pool's child stops on its own worker's SIGTERM alone
+(`_stopping`). A pool's child stops on its own worker's SIGTERM alone
 (`_stop_on_the_workers_signal_alone`).
 """
 
@@ -48,7 +48,6 @@ def make_app(s: Settings) -> Celery:
 
 app = make_app(settings())
 _stop = threading.Event()
-_grace_started = threading.Event()
 # Set by the worker once it is stopping, seen by its pool's children (who inherit it at the fork).
 _worker_stopping = get_context("fork").Event()
 FOREIGN_SIGTERM_WAIT = 1.0  # seconds a child, sent SIGTERM by another process, waits to see its worker stop too
@@ -93,23 +92,19 @@ def _stop_on_the_workers_signal_alone(**_):
 
 
 @worker_shutting_down.connect
-def _tell_the_pool(**_):
-    """A SIGTERM the pool's children get from elsewhere meanwhile is this same stop's
-    (`_stop_on_the_workers_signal_alone`)."""
-    _worker_stopping.set()
-
-
-@worker_shutting_down.connect
-def _cut_the_job_after_the_grace(how: str, **_):
-    """Celery's warm shutdown (SIGTERM, a first Ctrl-C) waits for the running job however long it
-    takes. After `stop_grace` s the worker asks itself for a cold shutdown (SIGQUIT): the job is
+def _stopping(how: str, **_):
+    """The worker starts stopping. Its pool's children learn it: a SIGTERM they get from elsewhere
+    meanwhile is this same stop's (`_stop_on_the_workers_signal_alone`). And Celery's warm
+    shutdown (SIGTERM, a first Ctrl-C), which waits for the running job however long it takes, is
+    given `stop_grace` s: then the worker asks itself for a cold shutdown (SIGQUIT), the job is
     stopped and, acknowledged late, goes back on the queue at once, for another worker or the
     service's next start. A service manager's own limit (systemd's `TimeoutStopSec`, Docker's
     `stop_grace_period`) longer than the grace then never kills a worker in its job, whose message
     would wait for the redelivery time."""
-    if how != "Warm" or _grace_started.is_set():  # a second SIGTERM (the group's and the service's)
+    first = not _worker_stopping.is_set()  # not a second SIGTERM (the group's and the service's)
+    _worker_stopping.set()
+    if how != "Warm" or not first:
         return
-    _grace_started.set()
     grace = settings().stop_grace
 
     def cut():
