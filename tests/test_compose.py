@@ -261,7 +261,7 @@ def test_a_worker_container_stopped_mid_job_hands_the_job_back_and_exits_by_itse
     (state,) = stack.inspect(container)
     logs = subprocess.run(["docker", "logs", container], capture_output=True, text=True).stderr
     assert state["State"]["ExitCode"] == 0, (state["State"], logs[-3000:])
-    assert "the running job outlasted PERCUSSIM_STOP_GRACE (1 s)" in logs, logs[-3000:]
+    assert f"the running job {job_id} outlasted PERCUSSIM_STOP_GRACE (1 s)" in logs, logs[-3000:]
     record = wait_finished(stack, job_id, timeout=120)
     assert record["status"] == "succeeded" and record["attempts"] == 2, (record, stack.logs())
     assert record["worker"] != stopped, record

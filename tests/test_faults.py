@@ -5,6 +5,7 @@ Each test prints the counts it saw."""
 
 from __future__ import annotations
 
+import logging
 import os
 import resource
 import signal
@@ -194,6 +195,7 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
         left = left_in_group(service.pid)
         assert left == [], (left, s.logs())
         log = (tmp_path / "api.log").read_text()
+        assert f"the running job {job['id']} outlasted PERCUSSIM_STOP_GRACE (1 s)" in log, log[-3000:]
         assert "Cold shutdown" in log, log[-3000:]
         s.restart()
         record = wait_for(
@@ -227,7 +229,8 @@ def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_anothe
         left = left_in_group(worker.popen.pid)
         assert left == [], (left, s.logs())
         log = worker.log.read_text()
-        assert "the running job outlasted PERCUSSIM_STOP_GRACE (1 s)" in log and "Cold shutdown" in log, s.logs()
+        assert f"the running job {job['id']} outlasted PERCUSSIM_STOP_GRACE (1 s)" in log, s.logs()
+        assert "Cold shutdown" in log, s.logs()
         s.add_worker("w1")
         record = wait_for(
             lambda: (
@@ -255,6 +258,23 @@ def gone(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().rsplit(")", 1)[1].split()[0] == "Z"
     except FileNotFoundError:
         return True
+
+
+def test_a_worker_past_its_grace_with_no_job_running_blames_none_and_stops_cold(caplog):
+    """A worker still there when its grace ends, its jobs done (slow to exit for another reason),
+    says so rather than name a job it would cut, and asks itself for the cold shutdown."""
+    from percussim.worker.app import _cut_after_the_grace
+
+    quits = []
+    before = signal.signal(signal.SIGQUIT, lambda *_: quits.append(True))
+    try:
+        with caplog.at_level(logging.WARNING):
+            _cut_after_the_grace(0.5)
+    finally:
+        signal.signal(signal.SIGQUIT, before)
+    assert quits == [True]
+    assert "no job running, yet not stopped after PERCUSSIM_STOP_GRACE (0.5 s): stopping now" in caplog.text
+    assert "outlasted" not in caplog.text
 
 
 def test_a_pool_process_sent_sigterm_alone_dies_and_its_job_runs_again(redis, tmp_path, record_property):

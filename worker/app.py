@@ -17,6 +17,7 @@ from multiprocessing import get_context
 from celery import Celery
 from celery.signals import worker_init, worker_process_init, worker_ready, worker_shutdown, worker_shutting_down
 from celery.utils.log import get_logger
+from celery.worker.state import active_requests
 
 from percussim.common.broker import broker_config, queue_folder
 from percussim.common.settings import Settings, settings
@@ -105,17 +106,24 @@ def _stopping(how: str, **_):
     _worker_stopping.set()
     if how != "Warm" or not first:
         return
-    grace = settings().stop_grace
-
-    def cut():
-        logger.warning(
-            "the running job outlasted PERCUSSIM_STOP_GRACE (%g s): stopping it; it goes back on the queue", grace
-        )
-        os.kill(os.getpid(), signal.SIGQUIT)
-
-    timer = threading.Timer(grace, cut)
+    timer = threading.Timer(settings().stop_grace, _cut_after_the_grace, args=(settings().stop_grace,))
     timer.daemon = True  # an idle worker exits at once, not at the grace
     timer.start()
+
+
+def _cut_after_the_grace(grace: float):
+    """The grace is over and the worker still runs: say why, by the jobs it still runs (a study's
+    part is its study's), then shut down cold."""
+    running = sorted({str(request.args[0]) for request in list(active_requests) if request.args})
+    if running:
+        logger.warning(
+            "the running job %s outlasted PERCUSSIM_STOP_GRACE (%g s): stopping it; it goes back on the queue",
+            ", ".join(running),
+            grace,
+        )
+    else:
+        logger.warning("no job running, yet not stopped after PERCUSSIM_STOP_GRACE (%g s): stopping now", grace)
+    os.kill(os.getpid(), signal.SIGQUIT)
 
 
 @worker_ready.connect
