@@ -106,7 +106,8 @@ def _stopping(how: str, **_):
     _worker_stopping.set()
     if how != "Warm" or not first:
         return
-    timer = threading.Timer(settings().stop_grace, _cut_after_the_grace, args=(settings().stop_grace,))
+    grace = settings().stop_grace
+    timer = threading.Timer(grace, _cut_after_the_grace, args=(grace,))
     timer.daemon = True  # an idle worker exits at once, not at the grace
     timer.start()
 
@@ -115,13 +116,13 @@ def _cut_after_the_grace(grace: float):
     """The grace is over and the worker still runs: say why, by the jobs it still runs (a study's
     part is its study's), then shut down cold."""
     running = sorted({str(request.args[0]) for request in list(active_requests) if request.args})
-    if running:
+    for job_id in running:
         logger.warning(
             "the running job %s outlasted PERCUSSIM_STOP_GRACE (%g s): stopping it; it goes back on the queue",
-            ", ".join(running),
+            job_id,
             grace,
         )
-    else:
+    if not running:
         logger.warning("no job running, yet not stopped after PERCUSSIM_STOP_GRACE (%g s): stopping now", grace)
     os.kill(os.getpid(), signal.SIGQUIT)
 
