@@ -1,4 +1,4 @@
-"""Shared case builders for the tests."""
+"""Shared case builders, jobs and waits for the tests."""
 
 from __future__ import annotations
 
@@ -7,7 +7,9 @@ import shutil
 
 import pytest
 
+from percussim.solver.presets import preset_json
 from percussim.testing import merge
+from percussim.testing.live_stack import wait_for
 from percussim.testing.reference import LinearImpact
 
 pytest_plugins = ["browser"]  # the job page's fixtures (stack, browser, open_page, page)
@@ -23,6 +25,30 @@ BASE_CASE = {
     "medium": {"stiffness": 2e8, "damping": 1e3},
     "numerics": {"duration": 1e-3, "time_step": 8.3e-7, "cells": 100, "gamma": 0.5},
 }
+
+# About 3 s of work on a live stack's worker: long enough to kill its worker, or cut it off, in
+# the middle.
+SECONDS_OF_WORK = merge(
+    preset_json("fig3"),
+    {
+        "numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
+        "outputs": {"history_stride": 100, "probes": []},
+    },
+)
+# Ten times as long: far longer than the 1-s grace the stop tests give, so that a job stopped
+# mid-way has seconds left, not one that may end within the grace's last instant.
+LONG_WORK = merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})
+
+
+def running_again(client, job_id: str, timeout: float = 60) -> dict:
+    """The record of a job delivered a second time, once it runs (attempt 2)."""
+
+    def again():
+        record = client.get(f"/v1/jobs/{job_id}").json()
+        return record if record["status"] == "running" and record["attempts"] == 2 else None
+
+    return wait_for(again, timeout, f"job {job_id} running again")
+
 
 # A contact stiff in tension that the σ-scheme's end masses ring against on 60 cells: it passes
 # every check made up front and is refused as it runs, once it has chattered.

@@ -22,24 +22,15 @@ import h5py
 import httpx
 import numpy as np
 import pytest
-from conftest import report
+from conftest import LONG_WORK, SECONDS_OF_WORK, report, running_again
 
+from percussim.client import FINISHED
 from percussim.solver.presets import preset_json
-from percussim.testing import merge
 from percussim.testing.compose_stack import IMAGE, WORKERS, ComposeStack, docker, local_images, require_docker
 from percussim.testing.live_stack import wait_for
 
 pytestmark = pytest.mark.slow  # an image build and a stack of six containers
 
-FINISHED = ("succeeded", "failed", "cancelled")
-# About 3 s of work: long enough to kill its worker in the middle.
-SECONDS_OF_WORK = merge(
-    preset_json("fig3"),
-    {
-        "numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
-        "outputs": {"history_stride": 100, "probes": []},
-    },
-)
 SWEEP = {"case": preset_json("fig5"), "parameters": {"striker.velocity": [3, 7], "contact.stiffness": [4e11, 8e11]}}
 NUMBA_CACHE = "/var/cache/percussim/numba"
 IMAGE_CPU = "generic"  # the image's NUMBA_CPU_NAME (docker/Dockerfile), checked against the built image
@@ -218,11 +209,6 @@ def test_no_container_compiles_the_kernel(stack):
     assert out.split() == ["1", "0"], f"a new container's first run: {out}"
 
 
-# Far longer than the workers' grace here (1 s): a job stopped after it has seconds left, not one
-# that may end within the grace's last instant
-LONG_WORK = merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})
-
-
 def a_job_running(stack: ComposeStack, case: dict = SECONDS_OF_WORK) -> tuple[str, str, str]:
     """A job of `case` submitted and running, a tenth done: its id, its worker and that worker's
     compose service."""
@@ -267,16 +253,8 @@ def test_a_worker_container_stopped_mid_job_hands_the_job_back_and_exits_by_itse
     logs = subprocess.run(["docker", "logs", container], capture_output=True, text=True).stderr
     assert state["State"]["ExitCode"] == 0, (state["State"], logs[-3000:])
     assert f"the running job {job_id} outlasted PERCUSSIM_STOP_GRACE (1 s)" in logs, logs[-3000:]
-    record = wait_for(
-        lambda: (
-            (r := stack.client.get(f"/v1/jobs/{job_id}").json())["status"] == "running"
-            and r["attempts"] == 2
-            and r["worker"] != stopped
-            and r
-        ),
-        60,
-        "the job running again on the other worker",
-    )
+    record = running_again(stack.client, job_id)
+    assert record["worker"] != stopped, record
     assert stack.client.delete(f"/v1/jobs/{job_id}").status_code == 202
     assert wait_finished(stack, job_id)["status"] == "cancelled"
     docker("start", container)

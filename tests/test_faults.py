@@ -16,22 +16,13 @@ from pathlib import Path
 
 import h5py
 import pytest
-from conftest import CHATTERS, merge, report
+from conftest import CHATTERS, LONG_WORK, SECONDS_OF_WORK, merge, report, running_again
 
+from percussim.client import FINISHED
 from percussim.solver.presets import preset_json
 from percussim.testing.live_stack import RedisServer, Stack, children, command_line, wait_for
 
 pytestmark = pytest.mark.slow  # a live stack, a browser or the solver's full reports
-
-FINISHED = ("succeeded", "failed", "cancelled")
-# About 3 s of work: long enough to be killed or cut off in the middle.
-SECONDS_OF_WORK = merge(
-    preset_json("fig3"),
-    {
-        "numerics": {"duration": 0.5, "cells": 600, "time_step": 8.3e-7},
-        "outputs": {"history_stride": 100, "probes": []},
-    },
-)
 
 
 @pytest.fixture
@@ -163,10 +154,6 @@ def test_a_stop_signalled_to_every_process_of_the_service_lets_the_running_job_f
         s.stop()
 
 
-# About 13 s of work: far longer than the 1-s grace the stop tests give.
-LONG_WORK = merge(SECONDS_OF_WORK, {"numerics": {"duration": 5.0}})
-
-
 def a_long_job_running(stack: Stack) -> dict:
     """A job of `LONG_WORK` submitted and running, some progress made: its record as submitted."""
     job = stack.client.post("/v1/jobs", json=LONG_WORK).json()
@@ -198,13 +185,7 @@ def test_a_job_outlasting_the_stops_grace_is_cut_by_its_worker_and_runs_again_at
         assert f"the running job {job['id']} outlasted PERCUSSIM_STOP_GRACE (1 s)" in log, log[-3000:]
         assert "Cold shutdown" in log, log[-3000:]
         s.restart()
-        record = wait_for(
-            lambda: (
-                (r := s.client.get(f"/v1/jobs/{job['id']}").json())["attempts"] == 2 and r["status"] == "running" and r
-            ),
-            60,
-            "the job running again",
-        )
+        record = running_again(s.client, job["id"])
         report(record_property, f"\na job cut at a stop after the grace: running again, attempt {record['attempts']}")
         assert s.client.delete(f"/v1/jobs/{job['id']}").status_code == 202
     finally:
@@ -232,16 +213,8 @@ def test_a_worker_stopped_in_a_job_longer_than_its_grace_hands_the_job_to_anothe
         assert f"the running job {job['id']} outlasted PERCUSSIM_STOP_GRACE (1 s)" in log, s.logs()
         assert "Cold shutdown" in log, s.logs()
         s.add_worker("w1")
-        record = wait_for(
-            lambda: (
-                (r := s.client.get(f"/v1/jobs/{job['id']}").json())["attempts"] == 2
-                and r["status"] == "running"
-                and r["worker"] == "w1@percussim"
-                and r
-            ),
-            60,
-            "the job running again on the next worker",
-        )
+        record = running_again(s.client, job["id"])
+        assert record["worker"] == "w1@percussim", record
         report(
             record_property,
             f"\na worker stopped in a job after a 1-s grace: exited in {stopped:.1f} s; the job running "
