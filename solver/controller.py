@@ -279,15 +279,19 @@ def shaft_on(case: Case, grid: Grid, tau: float) -> K.Shaft:
     )
 
 
-def shaft_shares(case: Case, grid: Grid) -> tuple[np.ndarray, np.ndarray]:
-    """Node i's share of segment k's force (segments × nodes), and each node's length of shaft
-    (m), which turns its force into the resistance per metre (N/m)."""
-    segments = case.shaft or []
-    each = np.array([shaft_nodes([segment], grid)[0] for segment in segments]).reshape(len(segments), grid.cells + 1)
+def shaft_shares(case: Case, grid: Grid) -> np.ndarray:
+    """Node i's share of segment k's force (segments × nodes)."""
+    if not case.shaft:
+        return np.zeros((0, grid.cells + 1))
+    each = np.array([shaft_nodes([segment], grid)[0] for segment in case.shaft])
     total = each.sum(axis=0)
-    share = np.divide(each, total, out=np.zeros_like(each), where=total > 0)
+    return np.divide(each, total, out=np.zeros_like(each), where=total > 0)
+
+
+def shaft_length(grid: Grid) -> np.ndarray:
+    """Each node's length of shaft (m), which turns its force into the resistance per metre (N/m)."""
     left, right = shaft_spans(grid)
-    return share, right - left
+    return right - left
 
 
 def tool_on(grid: Grid, gravity: K.Gravity | None = None) -> K.Tool:
@@ -436,13 +440,14 @@ def simulate_rod(
             recorder.create(f"fields/{prefix}displacement", (total_frames, len(x)))
             recorder.create(f"fields/{prefix}stress", (total_frames, len(x)))
     # the shaft's force on each segment, and its resistance along the tool
-    shaft_share, shaft_length = shaft_shares(case, grid)
+    shaft_share = shaft_shares(case, grid)
     segment_paths = [f"shaft/segment_{k}/force" for k in range(len(shaft_share))]
     for path in segment_paths:
         recorder.create(path, (total_rows,))
     shaft_field = bool(case.shaft) and out.fields
     if shaft_field:
         recorder.create("fields/shaft_resistance", (total_frames, n + 1))
+        lengths = shaft_length(grid)
     # Gathered during the run, so that the summary never needs the whole history (given only
     # these rows, it keeps them all).
     summary_rows = force_history_rows(total_rows)
@@ -524,9 +529,9 @@ def simulate_rod(
             if shaft_field:
                 resistance = np.divide(
                     recorders.shaft_field[:n_field],
-                    shaft_length,
+                    lengths,
                     out=np.zeros((n_field, n + 1)),
-                    where=shaft_length > 0,
+                    where=lengths > 0,
                 )
                 recorder.append("fields/shaft_resistance", resistance)
         first = last + 1

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 from typing import Annotated, Literal
 
 import numpy as np
@@ -24,7 +25,41 @@ def tool_area(tool: Tool, x: np.ndarray) -> np.ndarray:
     """Cross-section `S(x)` (m²) at stations `x`."""
     if tool.profile is None:
         return np.full_like(np.asarray(x, dtype=float), tool.area)
-    return np.interp(x, tool.profile.x, tool.profile.area)
+    stations = profile_stations(tool.profile)
+    return np.interp(x, stations.x, stations.area)
+
+
+@dataclass(frozen=True)
+class Stations:
+    """A profile's stations as arrays: `x`, `area`, `∫_0^x S dx` at each (`integral`) and the slope
+    of S on each segment after it; `inner` the stations between the ends, which split x into
+    segments."""
+
+    x: np.ndarray
+    area: np.ndarray
+    integral: np.ndarray
+    slope: np.ndarray
+    inner: np.ndarray
+
+
+def profile_stations(profile: Profile) -> Stations:
+    """The profile's `Stations`, made once for each profile (every grid of a ladder reads them)."""
+    return _stations(tuple(profile.x), tuple(profile.area))
+
+
+@lru_cache(maxsize=256)
+def _stations(x: tuple[float, ...], area: tuple[float, ...]) -> Stations:
+    px, pa = np.asarray(x), np.asarray(area)
+    stations = Stations(
+        x=px,
+        area=pa,
+        integral=np.concatenate(([0.0], np.cumsum(np.diff(px) * 0.5 * (pa[1:] + pa[:-1])))),
+        slope=np.diff(pa) / np.diff(px),
+        inner=px[1:-1],
+    )
+    for array in (stations.x, stations.area, stations.integral, stations.slope):
+        array.setflags(write=False)  # shared by every caller
+    return stations
 
 
 def tool_mass(tool: Tool) -> float:
@@ -355,19 +390,17 @@ class Grid:
 
     @property
     def uniform(self) -> bool:
-        return bool(np.all(self.area == self.area[0]))
+        return bool((self.area == self.area[0]).all())
 
 
 def area_integral(tool: Tool, x: np.ndarray) -> np.ndarray:
     """`∫_0^x S dx`, exact for the piecewise-linear profile."""
     if tool.profile is None:
         return tool.area * x
-    px, pa = np.asarray(tool.profile.x), np.asarray(tool.profile.area)
-    at_stations = np.concatenate(([0.0], np.cumsum(np.diff(px) * 0.5 * (pa[1:] + pa[:-1]))))
-    k = np.clip(np.searchsorted(px, x, side="right") - 1, 0, len(px) - 2)
-    slope = (pa[k + 1] - pa[k]) / (px[k + 1] - px[k])
-    d = x - px[k]
-    return at_stations[k] + pa[k] * d + 0.5 * slope * d * d
+    stations = profile_stations(tool.profile)
+    k = np.searchsorted(stations.inner, x, side="right")  # the segment each x lies on
+    d = x - stations.x[k]
+    return stations.integral[k] + stations.area[k] * d + 0.5 * stations.slope[k] * d * d
 
 
 def node_areas(area_mid: np.ndarray) -> np.ndarray:
@@ -376,22 +409,24 @@ def node_areas(area_mid: np.ndarray) -> np.ndarray:
 
 
 def make_grid(tool: Tool, cells: int, end_masses: bool) -> Grid:
-    x = np.linspace(0.0, tool.length, cells + 1)
     h = tool.length / cells
+    x = np.arange(cells + 1) * h  # as `np.linspace` makes it, without its cost on a coarse grid
+    x[-1] = tool.length
+    area = tool_area(tool, x)
     area_mid = np.diff(area_integral(tool, x)) / h
     # The end cells take the ends' own areas: an end answers a sudden force through the impedance
     # just inside it, and a cell mean h/2 away would put it O(h) off on a taper (the cells' mass
     # changes by O(h²)).
-    area_mid[[0, -1]] = tool_area(tool, x[[0, -1]])
+    area_mid[0], area_mid[-1] = area[0], area[-1]
     node_area = node_areas(area_mid)
     lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
     lower[1:-1] = area_mid[:-1] / node_area[1:-1]
     upper[1:-1] = area_mid[1:] / node_area[1:-1]
     if not end_masses:
-        node_area[[0, -1]] = 0.0
+        node_area[0] = node_area[-1] = 0.0
     return Grid(
         x=x,
-        area=tool_area(tool, x),
+        area=area,
         area_mid=area_mid,
         lower=lower,
         upper=upper,

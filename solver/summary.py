@@ -241,7 +241,7 @@ def build_summary(
     follow (`add_accuracy`).
     """
     count = int(extremes[L.X_CONTACTS])
-    intervals = [{"start": float(s), "end": float(e)} for s, e in contacts[: min(count, len(contacts))]]
+    intervals = [{"start": s, "end": e} for s, e in contacts[: min(count, len(contacts))].tolist()]
     if open_contact is not None:
         intervals.append({"start": float(open_contact), "end": None})
 
