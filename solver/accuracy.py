@@ -168,17 +168,25 @@ def quantity_error(h: list[float], values: list[float | None], formal_order: flo
         )
         return QuantityError(SAFETY_FACTOR * rough / scale, order, False)
     used, confirmed, finest = min(order, formal_order), True, abs(d2)
+    off_trend = 0.0
     if len(values) >= 4 and values[-4] is not None:
         # Three coarse grids can show order 2 by chance; the three before must confirm it.
         before = observed_order(tuple(h[-4:-1]), tuple(values[-4:-1]))
         confirmed = before is not None and before >= LOWEST_ORDER
         used = min(used, before if confirmed else UNCONFIRMED_ORDER)
         if confirmed and order > formal_order:
-            # faster than the scheme converges: an oscillating error passing near zero on the
-            # finest grid (it swings back on the next); the difference before, carried at the
-            # order the grids confirm, bounds it
+            # Faster than the scheme converges: the finest grid is off the trend of the grids
+            # before it, and its own three cannot say how far. An oscillating error passes near
+            # zero on it (it swings back on the next): the difference before, carried at the order
+            # the grids confirm, bounds it.
             finest = max(finest, abs(d1) / (h3[0] / h3[1]) ** used)
-    bare = finest / ((h3[1] / h3[2]) ** used - 1.0)
+            refinement = h3[1] / h3[2]
+            if abs(refinement - round(refinement)) > 1e-9 * refinement:
+                # A grid not nested in the one before samples a feature apart (a peak near a kink
+                # of the profile) and may lag the trend instead: the limit the three before
+                # extrapolate to shows how far.
+                off_trend = abs(q3[2] - (q3[1] + d1 / ((h3[0] / h3[1]) ** used - 1.0)))
+    bare = max(finest / ((h3[1] / h3[2]) ** used - 1.0), off_trend)
     return QuantityError(SAFETY_FACTOR * bare / scale, order, confirmed)
 
 
