@@ -27,6 +27,12 @@ _WITH = {
     L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
     L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME),
 }
+# The peaks a summary reports with their time, by name, with their slots (value, time)
+_PEAKS = {
+    "peak_contact_force": (L.X_PEAK_FORCE, L.X_PEAK_FORCE_TIME),
+    "max_compressive_stress": (L.X_MAX_COMPRESSION, L.X_MAX_COMPRESSION_TIME),
+    "max_tensile_stress": (L.X_MAX_TENSION, L.X_MAX_TENSION_TIME),
+}
 
 
 class BlowLog:
@@ -93,6 +99,24 @@ class BlowLog:
         first = self.blows[0]["extremes"]
         run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
         return run
+
+    def still_rising(self, blow_span: float, time_step: float) -> list[str]:
+        """Warnings for the run's peaks reached in the last step of their blow (each blow lasts
+        `blow_span`, s): still rising when it ended, each is the value at its end, not a peak. Its
+        last layer may lie up to a step beyond `numerics.duration`, so such a value is not even
+        that at the duration."""
+        run, found = self.extremes(), []
+        for name, (slot, time_slot) in _PEAKS.items():
+            if not run[slot] > 0.0:
+                continue
+            k, blow = next((k, b["extremes"]) for k, b in enumerate(self.blows) if b["extremes"][slot] == run[slot])
+            if blow[time_slot] > (k + 1) * blow_span - time_step:
+                which = f"blow {k + 1}'s" if len(self.blows) > 1 else "the run's"
+                found.append(
+                    f"{name} is reached in {which} last step (t = {blow[time_slot]:.4g} s): still rising when "
+                    "the run ends, it is the value there, not a peak; lengthen numerics.duration to see its peak"
+                )
+        return found
 
     def contacts(self) -> np.ndarray:
         return np.concatenate([blow["contacts"] for blow in self.blows]).reshape(-1, 2)

@@ -575,6 +575,7 @@ def simulate_rod(
         permanent_penetration=ends[K.S_MEDIUM_SET],
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
+        extra_warnings=log.still_rising(blow_steps * tau, tau),
     )
     if hammer is not None:
         summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)
