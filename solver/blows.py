@@ -27,11 +27,11 @@ _WITH = {
     L.X_MAX_COMPRESSION: (L.X_MAX_COMPRESSION_X, L.X_MAX_COMPRESSION_TIME),
     L.X_MAX_TENSION: (L.X_MAX_TENSION_X, L.X_MAX_TENSION_TIME),
 }
-# The peaks a summary reports with their time, by name, with their slots (value, time)
+# The peaks a summary reports with their time (the last of their `_WITH` slots), by name
 _PEAKS = {
-    "peak_contact_force": (L.X_PEAK_FORCE, L.X_PEAK_FORCE_TIME),
-    "max_compressive_stress": (L.X_MAX_COMPRESSION, L.X_MAX_COMPRESSION_TIME),
-    "max_tensile_stress": (L.X_MAX_TENSION, L.X_MAX_TENSION_TIME),
+    "peak_contact_force": L.X_PEAK_FORCE,
+    "max_compressive_stress": L.X_MAX_COMPRESSION,
+    "max_tensile_stress": L.X_MAX_TENSION,
 }
 
 
@@ -100,15 +100,16 @@ class BlowLog:
         run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
         return run
 
-    def still_rising(self, blow_span: float, time_step: float) -> list[str]:
-        """Warnings for the run's peaks reached in the last step of their blow (each blow lasts
-        `blow_span`, s): still rising when it ended, each is the value at its end, not a peak. Its
-        last layer may lie up to a step beyond `numerics.duration`, so such a value is not even
-        that at the duration."""
-        run, found = self.extremes(), []
-        for name, (slot, time_slot) in _PEAKS.items():
+    def still_rising(self, run: np.ndarray, blow_span: float, time_step: float) -> list[str]:
+        """Warnings for the run's peaks (`run`, its `extremes`) reached in the last step of their
+        blow (each blow lasts `blow_span`, s): still rising when it ended, each is the value at its
+        end, not a peak. Its last layer may lie up to a step beyond `numerics.duration`, so such a
+        value is not even that at the duration."""
+        found = []
+        for name, slot in _PEAKS.items():
             if not run[slot] > 0.0:
                 continue
+            time_slot = _WITH[slot][-1]
             k, blow = next((k, b["extremes"]) for k, b in enumerate(self.blows) if b["extremes"][slot] == run[slot])
             if blow[time_slot] > (k + 1) * blow_span - time_step:
                 which = f"blow {k + 1}'s" if len(self.blows) > 1 else "the run's"

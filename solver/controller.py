@@ -564,10 +564,11 @@ def simulate_rod(
         state.energy, last_layer, tau, blows * case.numerics.duration, weights.impedance_ends, striker.elastic
     )
     log.finish(energy, observed, ends[K.S_MEDIUM_SET])
+    extremes = log.extremes()
     summary = build_summary(
         case=case,
         numerics=num,
-        extremes=log.extremes(),
+        extremes=extremes,
         contacts=log.contacts(),
         open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
         energy=energy,
@@ -575,7 +576,7 @@ def simulate_rod(
         permanent_penetration=ends[K.S_MEDIUM_SET],
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
-        extra_warnings=log.still_rising(blow_steps * tau, tau),
+        extra_warnings=log.still_rising(extremes, blow_steps * tau, tau),
     )
     if hammer is not None:
         summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)

@@ -57,7 +57,7 @@ def _stations(x: tuple[float, ...], area: tuple[float, ...]) -> Stations:
         slope=np.diff(pa) / np.diff(px),
         inner=px[1:-1],
     )
-    for array in (stations.x, stations.area, stations.integral, stations.slope):
+    for array in (stations.x, stations.area, stations.integral, stations.slope, stations.inner):
         array.setflags(write=False)  # shared by every caller
     return stations
 
