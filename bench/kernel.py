@@ -152,7 +152,7 @@ def explicit_courant_one(case: Case, cells: int) -> dict:
 
 def reported(state: K.State, observed: K.Observed) -> dict[str, float]:
     """What the summary reports, from the kernel's slots."""
-    extremes, contacts = observed
+    extremes, contacts = observed.extremes, observed.contacts
     count = int(extremes[K.X_CONTACTS])
     found = {
         "co-impact time": extremes[K.X_CO_IMPACT],
@@ -382,7 +382,7 @@ def banded_run(s: Setup) -> dict[str, float]:
     z = solve_banded((1, 1), ab, unit)  # the tool's response to a unit contact force
 
     state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
-    (extremes, contacts), u, y, ends = observed, state.u, state.y, state.ends
+    extremes, contacts, u, y, ends = observed.extremes, observed.contacts, state.u, state.y, state.ends
     energy = state.energy[0]  # the kernel's latest layer; this solve needs no other
     y[2] = -w1 * tau
     ends[K.S_IN_CONTACT] = 1.0

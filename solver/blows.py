@@ -100,22 +100,21 @@ class BlowLog:
         run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
         return run
 
-    def still_rising(self, run: np.ndarray, blow_span: float, time_step: float) -> list[str]:
-        """Warnings for the run's peaks (`run`, its `extremes`) reached in the last step of their
-        blow (each blow lasts `blow_span`, s): still rising when it ended, each is the value at its
-        end, not a peak. Its last layer may lie up to a step beyond `numerics.duration`, so such a
-        value is not even that at the duration."""
+    def still_rising(self, run: np.ndarray, blow_ends: np.ndarray) -> list[str]:
+        """Warnings for the run's peaks (`run`, its `extremes`) reached where their blow's duration
+        ends (blow k's at `blow_ends[k]`, s, the kernel's time): still rising then, each is the
+        value there, not a peak."""
         found = []
         for name, slot in _PEAKS.items():
             if not run[slot] > 0.0:
                 continue
             time_slot = _WITH[slot][-1]
             k, blow = next((k, b["extremes"]) for k, b in enumerate(self.blows) if b["extremes"][slot] == run[slot])
-            if blow[time_slot] > (k + 1) * blow_span - time_step:
+            if blow[time_slot] >= blow_ends[k]:
                 which = f"blow {k + 1}'s" if len(self.blows) > 1 else "the run's"
                 found.append(
-                    f"{name} is reached in {which} last step (t = {blow[time_slot]:.4g} s): still rising when "
-                    "the run ends, it is the value there, not a peak; lengthen numerics.duration to see its peak"
+                    f"{name} is reached at the end of {which} duration (t = {blow[time_slot]:.4g} s): still "
+                    "rising then, it is the value there, not a peak; lengthen numerics.duration to see its peak"
                 )
         return found
 

@@ -405,9 +405,11 @@ def simulate_rod(
     if case.gravity is not None:
         K.start_at_rest(state, at_rest(case, grid))
     set_at_rest = float(state.ends[K.S_MEDIUM_SET])
-    observed = K.new_observed(MAX_CONTACTS)
     blows = case.blows_run
     blow, blow_steps = 0, num.steps // blows
+    # blow k's extremes are those of its duration, which its last layer may pass by up to a step
+    blow_ends = np.arange(blows) * (blow_steps * tau) + case.numerics.duration
+    observed = K.new_observed(MAX_CONTACTS, until=blow_ends[0])
     hammer = HammerAtWork(case, blow_steps * tau) if case.cycles is not None else None
     log = BlowLog(launch_energy=launch_energy(case), set_at_rest=set_at_rest)
     log.start(state.energy[0])
@@ -550,9 +552,9 @@ def simulate_rod(
                 velocity = flight.impact_velocity
             K.start_blow(last, state, observed, contact, striker, anvil, medium, tau, velocity)
             log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
-            observed = K.new_observed(MAX_CONTACTS)
-            log.start(state.energy[0])
             blow += 1
+            observed = K.new_observed(MAX_CONTACTS, until=blow_ends[blow])
+            log.start(state.energy[0])
         if progress is not None:
             progress(min(1.0, first / (last_layer + 1)))
         if cancelled is not None and first <= last_layer and cancelled():
@@ -576,7 +578,7 @@ def simulate_rod(
         permanent_penetration=ends[K.S_MEDIUM_SET],
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
-        extra_warnings=log.still_rising(extremes, blow_steps * tau, tau),
+        extra_warnings=log.still_rising(extremes, blow_ends),
     )
     if hammer is not None:
         summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)

@@ -150,9 +150,10 @@ State = namedtuple("State", "u y ends energy striker shaft_sets")
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
 the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`) and the shaft's
 sets along the tool (N+1: each node's permanent displacement against its soil)."""
-Observed = namedtuple("Observed", "extremes contacts")
-"""What a run reports beyond its recordings: the extremes (`X_…`) and the finished contact
-intervals (start, end; one row each, those beyond its rows counted only)."""
+Observed = namedtuple("Observed", "extremes contacts until")
+"""What a blow reports beyond its recordings: the extremes (`X_…`) over its duration, up to the
+time `until`, and the finished contact intervals (start, end; one row each, those beyond its rows
+counted only)."""
 Recorders = namedtuple(
     "Recorders",
     "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress "
@@ -205,9 +206,10 @@ def new_state(cells: int, striker_cells: int = 0) -> State:
     )
 
 
-def new_observed(max_contacts: int) -> Observed:
-    """Nothing observed yet, with room for `max_contacts` contact intervals."""
-    return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)))
+def new_observed(max_contacts: int, until: float = np.inf) -> Observed:
+    """Nothing observed yet, with room for `max_contacts` contact intervals, over a blow whose
+    duration ends at `until` (s, the kernel's time)."""
+    return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)), until=float(until))
 
 
 @compiled()

@@ -79,6 +79,7 @@ from .bundles import (
     S_TRANSFER_DISP,
     S_TRANSFER_FORCE,
     S_TRANSFERRED,
+    Recorded,
 )
 from .contact import crossing, external_force
 
@@ -98,7 +99,7 @@ def node_stress(u, recorded, i, step):
 def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
     """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
     contact); the first one to close sets the co-impact time and the rebound velocity."""
-    extremes, contacts = observed
+    extremes, contacts = observed.extremes, observed.contacts
     in_contact = ends[S_IN_CONTACT] != 0.0
     if in_contact and not into_contact:
         k = int(extremes[X_CONTACTS])
@@ -143,33 +144,41 @@ def vertex(earliest, before_that, before, now):
 
 
 @compiled(inline="always")
-def track_end_extreme(extremes, peak, value, x, t):
-    """A new record of the `peak`'s (`COMPRESSION` or `TENSION`) value, with where and when."""
+def track_end_extreme(extremes, peak, value, x, t, until):
+    """A new record of the `peak`'s (`COMPRESSION` or `TENSION`) value, with where and when, if it
+    lies within the blow's duration (`t` ≤ `until`)."""
     value_slot, place_slot, time_slot = peak
-    if value > extremes[value_slot]:
+    if value > extremes[value_slot] and t <= until:
         extremes[value_slot] = value
         extremes[place_slot] = x
         extremes[time_slot] = t
 
 
 @compiled(inline="always")
-def track_ends_between_layers(extremes, contact_range, end_range, working_range, t, tool, rod, step):
+def track_peak_force(extremes, force, t, until):
+    """A new record of the contact force, if `t` lies within the blow's duration."""
+    if force > extremes[X_PEAK_FORCE] and t <= until:
+        extremes[X_PEAK_FORCE] = force
+        extremes[X_PEAK_FORCE_TIME] = t
+
+
+@compiled(inline="always")
+def track_ends_between_layers(observed, contact_range, end_range, working_range, t, tool, rod, step):
     """The end forces' extremes within the step, as the ends' substeps saw them: `contact_range`
     (largest contact force, its time), `end_range` (the force on the tool's struck end: largest,
     its time, least, its time) and `working_range` (the medium force's, with their offsets from
-    the step's start)."""
+    the step's start); those beyond the blow's duration are not seen."""
+    extremes, until = observed.extremes, observed.until
     f_max, t_max = contact_range
     e_max, te_max, e_min, te_min = end_range
     g_max, tg_max, g_min, tg_min = working_range
     n, h, tau = step.n, rod.cell_length, rod.time_step
     end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
-    if f_max > extremes[X_PEAK_FORCE]:
-        extremes[X_PEAK_FORCE] = f_max
-        extremes[X_PEAK_FORCE_TIME] = t_max
-    track_end_extreme(extremes, COMPRESSION, e_max / end_area_0, 0.0, te_max)
-    track_end_extreme(extremes, TENSION, -e_min / end_area_0, 0.0, te_min)
-    track_end_extreme(extremes, COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max)
-    track_end_extreme(extremes, TENSION, -g_min / end_area_n, n * h, t - tau + tg_min)
+    track_peak_force(extremes, f_max, t_max, until)
+    track_end_extreme(extremes, COMPRESSION, e_max / end_area_0, 0.0, te_max, until)
+    track_end_extreme(extremes, TENSION, -e_min / end_area_0, 0.0, te_min, until)
+    track_end_extreme(extremes, COMPRESSION, g_max / end_area_n, n * h, t - tau + tg_max, until)
+    track_end_extreme(extremes, TENSION, -g_min / end_area_n, n * h, t - tau + tg_min, until)
 
 
 @compiled(inline="always")
@@ -202,17 +211,58 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
 
 
 @compiled(inline="always")
-def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_vertex):
+def between(before, now, weight):
+    """The value `weight` of the way from `before` to `now` (`now` itself at weight 1)."""
+    return now if weight >= 1.0 else before + weight * (now - before)
+
+
+@compiled(inline="always")
+def layer_at_end(recorded, ends, weight, until, tool):
+    """The layer at `until`, where the blow's duration ends, `weight` of the step from the layer
+    before the recorded one to it: its end forces and stresses linear between the two (those of
+    the layer before as `ends` carries them, until `track_end_forces` and `track_transferred`
+    move on), as the energy at the duration is (`controller.energy_at`)."""
+    struck_before = -ends[S_TRANSFER_FORCE] / tool.struck_end_area
+    medium_force = between(ends[S_MEDIUM_FORCE], recorded.medium_force, weight)
+    return Recorded(
+        row=recorded.row,
+        time=until,
+        velocity=recorded.velocity,
+        contact_force=between(ends[S_FORCE_BEFORE], recorded.contact_force, weight),
+        medium_force=medium_force,
+        struck_end_stress=between(struck_before, recorded.struck_end_stress, weight),
+        working_end_stress=-medium_force / tool.working_end_area,
+    )
+
+
+@compiled(inline="always")
+def track_stresses_at_end(extremes, u, seen, weight, rod, step):
+    """The extreme stresses along the tool at the duration's end (`seen`, `layer_at_end`): each
+    interior node's linear between the layer before (the row before `seen.row`) and the recorded
+    one, as its end stresses are. Once a blow, so node by node."""
+    row, before = seen.row, (seen.row + 2) % 3
+    for i in range(step.n + 1):
+        if i == 0:
+            s = seen.struck_end_stress
+        elif i == step.n:
+            s = seen.working_end_stress
+        else:
+            s = step.half_e_over_h * between(u[before, i + 1] - u[before, i - 1], u[row, i + 1] - u[row, i - 1], weight)
+        track_end_extreme(extremes, COMPRESSION, -s, i * rod.cell_length, seen.time, seen.time)
+        track_end_extreme(extremes, TENSION, s, i * rod.cell_length, seen.time, seen.time)
+
+
+@compiled(inline="always")
+def track_end_forces(extremes, ends, recorded, seen, until, m_rec, tool, rod, step, struck_vertex):
     """The peak contact force and the end stresses' extremes between layers, from the recorded
     layer's end forces and those of the three layers before it (carried in `ends`); at the struck
     end only when the contact force is the force on it (`struck_vertex`: not with an anvil,
-    whose substeps' extremes are all there is)."""
+    whose substeps' extremes are all there is). `seen`: the layer the extremes see, the recorded
+    one or, past the blow's duration (`until`), the one at its end (`layer_at_end`)."""
     contact_force, medium_force = recorded.contact_force, recorded.medium_force
     t_rec, n, h, tau = recorded.time, step.n, rod.cell_length, rod.time_step
     end_area_0, end_area_n = tool.struck_end_area, tool.working_end_area
-    if contact_force > extremes[X_PEAK_FORCE]:
-        extremes[X_PEAK_FORCE] = contact_force
-        extremes[X_PEAK_FORCE_TIME] = t_rec
+    track_peak_force(extremes, seen.contact_force, seen.time, until)
     # Extremes of the end forces between layers: the vertex of the parabola through the last
     # three, so that their error is the scheme's, not the sampling's.
     f1, f2, f3 = ends[S_FORCE_BEFORE], ends[S_FORCE_BEFORE_THAT], ends[S_FORCE_EARLIER]
@@ -220,17 +270,15 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
     if m_rec >= 3 and struck_vertex:
         top, offset = vertex(f3, f2, f1, contact_force)
         when = t_rec - tau + offset * tau
-        if top > extremes[X_PEAK_FORCE]:
-            extremes[X_PEAK_FORCE] = top
-            extremes[X_PEAK_FORCE_TIME] = when
-        track_end_extreme(extremes, COMPRESSION, top / end_area_0, 0.0, when)
+        track_peak_force(extremes, top, when, until)
+        track_end_extreme(extremes, COMPRESSION, top / end_area_0, 0.0, when, until)
         top, offset = vertex(-f3, -f2, -f1, -contact_force)
-        track_end_extreme(extremes, TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, TENSION, top / end_area_0, 0.0, t_rec - tau + offset * tau, until)
     if m_rec >= 3:
         top, offset = vertex(g3, g2, g1, medium_force)
-        track_end_extreme(extremes, COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, COMPRESSION, top / end_area_n, n * h, t_rec - tau + offset * tau, until)
         top, offset = vertex(-g3, -g2, -g1, -medium_force)
-        track_end_extreme(extremes, TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau)
+        track_end_extreme(extremes, TENSION, top / end_area_n, n * h, t_rec - tau + offset * tau, until)
     ends[S_FORCE_EARLIER] = f2
     ends[S_FORCE_BEFORE_THAT] = f1
     ends[S_FORCE_BEFORE] = contact_force
@@ -240,15 +288,21 @@ def track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, struck_ve
 
 
 @compiled(inline="always")
-def track_transferred(extremes, ends, recorded, u, m_rec, tool):
+def track_transferred(extremes, ends, recorded, u, m_rec, tool, weight):
     """The work done on the tool through its struck end, ∫F·u_0' dt over this blow (trapezoidal
     over the recorded layers, F the force on the end, compression +), and its largest value so
-    far: a pile driving analyser's EMX."""
+    far: a pile driving analyser's EMX, to the blow's duration's end `weight` of the step to the
+    recorded layer (F and u_0 linear over the step)."""
     force = -recorded.struck_end_stress * tool.struck_end_area
     at = u[recorded.row, 0]
     if m_rec > 0:
+        before = ends[S_TRANSFERRED]
         ends[S_TRANSFERRED] += 0.5 * (force + ends[S_TRANSFER_FORCE]) * (at - ends[S_TRANSFER_DISP])
-        extremes[X_MAX_TRANSFERRED] = max(extremes[X_MAX_TRANSFERRED], ends[S_TRANSFERRED])
+        seen = ends[S_TRANSFERRED]
+        if weight < 1.0:
+            force_seen = between(ends[S_TRANSFER_FORCE], force, weight)
+            seen = before + 0.5 * (force_seen + ends[S_TRANSFER_FORCE]) * weight * (at - ends[S_TRANSFER_DISP])
+        extremes[X_MAX_TRANSFERRED] = max(extremes[X_MAX_TRANSFERRED], seen)
     ends[S_TRANSFER_FORCE] = force
     ends[S_TRANSFER_DISP] = at
 

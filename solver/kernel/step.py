@@ -94,6 +94,8 @@ from .contact import contact_law, external_force, launched_at, pressed_to
 from .driven_end import driven_end_step, driven_force, piece
 from .gravity import gravity_work
 from .recording import (
+    between,
+    layer_at_end,
     record_fields,
     record_history,
     record_probes,
@@ -102,6 +104,7 @@ from .recording import (
     track_ends_between_layers,
     track_overlap,
     track_stress_extremes,
+    track_stresses_at_end,
     track_transferred,
 )
 from .rows import back_substitute, explicit_interior, right_hand_sides, segment_layout, sweep
@@ -429,7 +432,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
     for k in range(MEDIUM_STATE):
         far_state[WORK_MEDIUM[k]] = ends[MEDIUM_SLOTS[k]]
     dissipated_far, working_range = working_end_step(tau, far_state, v_far, far_slope, medium)
-    track_ends_between_layers(observed.extremes, contact_range, end_range, working_range, t, tool, rod, step)
+    track_ends_between_layers(observed, contact_range, end_range, working_range, t, tool, rod, step)
     # the weights' work on the lumped striker and the anvil, as they moved under it
     lifted = striker.weight * end_state[END_STRIKER_DISP] + anvil.weight * end_state[END_ANVIL_DISP] - lifted_from
     flows = (work, dissipated, dissipated_far, lifted)
@@ -557,12 +560,24 @@ def record_layer(
     step,
 ):
     """The recorded layer's extremes, and its history, probes and fields when their strides take
-    it: returns the rows of history and of fields written so far."""
-    u, ends, extremes = state.u, state.ends, observed.extremes
-    track_stress_extremes(extremes, u, recorded, interior, rod, step)
-    extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
-    track_end_forces(extremes, ends, recorded, m_rec, tool, rod, step, not anvil.present)
-    track_transferred(extremes, ends, recorded, u, m_rec, tool)
+    it: returns the rows of history and of fields written so far.
+
+    A blow's extremes are those of its duration (`observed.until`): its last layer can lie up to a
+    step beyond, where a quantity still rising would be read too high, and on every grid of a
+    doubling ladder at the same instant. Past it, they see the layer at the duration's end."""
+    u, ends, extremes, until = state.u, state.ends, observed.extremes, observed.until
+    seen, weight = recorded, 1.0
+    if recorded.time <= until:
+        track_stress_extremes(extremes, u, recorded, interior, rod, step)
+        extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
+    else:
+        weight = 1.0 - (recorded.time - until) / rod.time_step
+        seen = layer_at_end(recorded, ends, weight, until, tool)
+        track_stresses_at_end(extremes, u, seen, weight, rod, step)
+        reached = between(u[(recorded.row + 2) % 3, step.n], u[recorded.row, step.n], weight)
+        extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], reached)
+    track_end_forces(extremes, ends, recorded, seen, until, m_rec, tool, rod, step, not anvil.present)
+    track_transferred(extremes, ends, recorded, u, m_rec, tool, weight)
     column = frame = -1
     if recorders.history_stride > 0 and m_rec % recorders.history_stride == 0:
         record_history(recorders, n_hist, state, recorded, m_rec, force, anvil, step)
