@@ -253,7 +253,10 @@ def test_a_worker_container_stopped_mid_job_hands_the_job_back_and_exits_by_itse
     logs = subprocess.run(["docker", "logs", container], capture_output=True, text=True).stderr
     assert state["State"]["ExitCode"] == 0, (state["State"], logs[-3000:])
     assert f"the running job {job_id} outlasted PERCUSSIM_STOP_GRACE (1 s)" in logs, logs[-3000:]
-    record = running_again(stack.client, job_id)
+    try:
+        record = running_again(stack.client, job_id)
+    except TimeoutError as error:  # what the broker and the containers saw, for the next one to read
+        raise AssertionError(f"{error}; {stack.broker_state()}\n{stack.logs()}") from error
     assert record["worker"] != stopped, record
     assert stack.client.delete(f"/v1/jobs/{job_id}").status_code == 202
     assert wait_finished(stack, job_id)["status"] == "cancelled"

@@ -156,6 +156,18 @@ class ComposeStack:
             "networks": docker("network", "ls", "-q", "--filter", label).split(),
         }
 
+    def broker_state(self) -> str:
+        """The queue's length, the messages delivered and not acknowledged, and the time left on
+        the lock a worker holds while it puts overdue ones back: where a lost job may be."""
+        script = (
+            "return {redis.call('llen','celery'), redis.call('hlen','unacked'), redis.call('pttl','unacked_mutex')}"
+        )
+        try:
+            found = docker("exec", self.container("redis"), "redis-cli", "eval", script, "0", timeout=30).split()
+        except (RuntimeError, subprocess.SubprocessError, ValueError) as error:
+            return f"the broker's state unread: {error}"
+        return "queued {}, unacknowledged {}, restore lock's ms left {}".format(*found)
+
     def logs(self) -> str:
         try:
             return self.compose("logs", "--no-color", "--tail", "60", timeout=60)
