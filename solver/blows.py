@@ -52,10 +52,11 @@ class BlowLog:
             self._launched = energy[L.E_LAUNCHED] - self._start[L.E_LAUNCHED]
         self._start = energy.copy()
 
-    def finish(self, energy: np.ndarray, observed, permanent_penetration: float) -> None:
-        """The blow ends with `energy`, having observed `observed` (its extremes and contacts),
-        the medium's permanent penetration then `permanent_penetration`."""
+    def finish(self, energy: np.ndarray, observed) -> None:
+        """The blow ends with `energy`, having observed `observed` (its extremes and contacts,
+        and the medium's permanent penetration where its duration ends)."""
         x = observed.extremes
+        permanent_penetration = float(x[L.X_SET])
         medium = to_medium(energy) - to_medium(self._start)
         supplied = self._launched + energy[L.E_EXTERNAL_WORK] - self._start[L.E_EXTERNAL_WORK]
         count = int(x[L.X_CONTACTS])
@@ -66,7 +67,7 @@ class BlowLog:
                     "max_compressive_stress": float(x[L.X_MAX_COMPRESSION]),
                     "to_medium": medium,
                     "transfer_efficiency": float(medium / supplied) if supplied > 0 else 0.0,
-                    "permanent_penetration": float(permanent_penetration),
+                    "permanent_penetration": permanent_penetration,
                     "set": self.set_of(permanent_penetration),
                     "transferred": float(x[L.X_MAX_TRANSFERRED]),
                 },

@@ -551,7 +551,7 @@ def simulate_rod(
                 elapsed += flight.duration
                 velocity = flight.impact_velocity
             K.start_blow(last, state, observed, contact, striker, anvil, medium, tau, velocity)
-            log.finish(ended, observed, state.ends[K.S_MEDIUM_SET])
+            log.finish(ended, observed)
             blow += 1
             observed = K.new_observed(MAX_CONTACTS, until=blow_ends[blow])
             log.start(state.energy[0])
@@ -565,7 +565,7 @@ def simulate_rod(
     energy = energy_at(
         state.energy, last_layer, tau, blows * case.numerics.duration, weights.impedance_ends, striker.elastic
     )
-    log.finish(energy, observed, ends[K.S_MEDIUM_SET])
+    log.finish(energy, observed)
     extremes = log.extremes()
     summary = build_summary(
         case=case,
@@ -575,7 +575,7 @@ def simulate_rod(
         open_contact=ends[K.S_CONTACT_START] if ends[K.S_IN_CONTACT] else None,
         energy=energy,
         history=dict(zip(FORCE_HISTORY.values(), table)),
-        permanent_penetration=ends[K.S_MEDIUM_SET],
+        permanent_penetration=log.table()[-1]["permanent_penetration"],
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
         extra_warnings=log.still_rising(extremes, blow_ends),

@@ -33,7 +33,8 @@ X_FAILED_TIME = 12
 X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resolved by
 X_MAX_PENETRATION = 14  # the working end's deepest penetration into the medium
 X_MAX_TRANSFERRED = 15  # the most work done on the tool through its struck end (EMX)
-EXTREME_SLOTS = 16
+X_SET = 16  # the medium's permanent penetration where the blow's duration ends
+EXTREME_SLOTS = 17
 
 # Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
 # and dissipation, and the stored terms

@@ -13,6 +13,8 @@ from conftest import merge
 from percussim.solver.accuracy import ESTIMATED, SAFETY_FACTOR, estimated_values, observed_order, quantity_error
 from percussim.solver.adaptive import unsettled
 from percussim.solver.case import CaseError, parse_case
+from percussim.solver.controller import simulate_rod
+from percussim.solver.grid import explicit_numerics
 from percussim.solver.limits import Limits
 from percussim.solver.matrix import converged_reference
 from percussim.solver.presets import preset_json
@@ -140,6 +142,24 @@ def test_a_peak_still_rising_when_the_run_ends_is_its_value_at_the_duration_and_
     whole = simulate(parse_case(at_default_accuracy("fig3"))).summary
     assert whole["peak_contact_force"]["time"] == pytest.approx(1.41e-4, rel=0.01)
     assert not any("still rising" in w for w in whole["warnings"])
+
+
+def test_a_set_still_growing_when_the_run_ends_is_the_set_at_the_duration():
+    """The rock drill's rock yields from 0.70 to 0.82 ms: cut at 0.76 ms, on 25 to 200 cells (a
+    doubling ladder), the last layer falls at 0.7618 ms on every grid, where the set is 2.4% past
+    the set at the duration; read there, the grids would agree on the wrong value. The set at the
+    duration agrees with a grid of 2560 cells to its first-order error."""
+    case = preset_json("rock_drill")
+    case["numerics"] = {"duration": 7.6e-4}
+    rock_drill = parse_case(case)
+    finest = simulate_rod(rock_drill, numerics=explicit_numerics(rock_drill, 2560)).summary["set"]
+    for cells in (25, 50, 100, 200):
+        run = simulate_rod(rock_drill, numerics=explicit_numerics(rock_drill, cells))
+        permanent = run.history["medium/permanent_penetration"]
+        assert run.history["time"][-1] > 7.61e-4
+        assert abs(permanent[-1] - permanent[0] - finest) > 0.02 * finest  # the last layer's
+        assert run.summary["set"] == pytest.approx(finest, rel=4e-3 * 25 / cells)
+    assert simulate(parse_case(case)).summary["set"] == pytest.approx(finest, rel=0.01)
 
 
 @pytest.mark.parametrize("name", ["fig3", "fig9"])

@@ -28,6 +28,7 @@ from ..layout import (
     ENERGY_SLOTS,
     X_FAILED_TIME,
     X_MAX_PENETRATION,
+    X_SET,
 )
 from .audit import audit_impedance_energy, audit_scheme_energy, tool_energy_and_stresses, track_energy_excess
 from .bundles import (
@@ -570,12 +571,14 @@ def record_layer(
     if recorded.time <= until:
         track_stress_extremes(extremes, u, recorded, interior, rod, step)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
+        extremes[X_SET] = ends[S_MEDIUM_SET]
     else:
         weight = 1.0 - (recorded.time - until) / rod.time_step
         seen = layer_at_end(recorded, ends, weight, until, tool)
         track_stresses_at_end(extremes, u, seen, weight, rod, step)
         reached = between(u[(recorded.row + 2) % 3, step.n], u[recorded.row, step.n], weight)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], reached)
+        extremes[X_SET] = between(extremes[X_SET], ends[S_MEDIUM_SET], weight)  # the layer before's, then
     track_end_forces(extremes, ends, recorded, seen, until, m_rec, tool, rod, step, not anvil.present)
     track_transferred(extremes, ends, recorded, u, m_rec, tool, weight)
     column = frame = -1
