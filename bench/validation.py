@@ -703,17 +703,17 @@ def rock_report(figures: dict[str, Figure]) -> list[str]:
 
 
 def last_instant(x: float) -> list[str]:
-    """Why the media's ladders may not converge the largest compression: it is reached at the
-    run's last instant, and a grid's last layer can lie up to a step past the duration."""
+    """The largest compression near the run's last instant, where a grid's last layer can lie up
+    to a step past the duration: read over the duration exactly, it does not depend on that step."""
     meeting = (2.0 * CF.TOOL + CF.PISTON) / CF.SPEED
     case = parse_case({**CF.rock_case(x, {}), "outputs": {}})
     lines = [
-        "A ladder of these media that does not meet its tolerance is held back by the largest "
-        f"compression. The duration, {CF.MEDIUM_DURATION * 1e6:.3f} µs, is the instant 2L/a + L_s/a = "
-        f"{meeting * 1e6:.3f} µs at which the wave that the free struck end reflects meets, at x = L_s, "
-        "the peak of the medium's reflection: their sum is reached at the run's last instant only, "
-        "and a grid reports it where its last layer, up to a step past the duration, catches it. "
-        f"On fixed grids, x = {x:g}:",
+        f"The duration of these media, {CF.MEDIUM_DURATION * 1e6:.3f} µs, ends before the instant "
+        f"2L/a + L_s/a = {meeting * 1e6:.3f} µs at which the wave that the free struck end reflects "
+        "meets, at x = L_s, the peak of the medium's reflection. A grid's last layer can lie up to a "
+        "step past the duration, nearer that meeting; a run's extremes are read over the duration "
+        "exactly (its last step where the duration ends), so grids whose last layers differ report "
+        f"the same largest compression. On fixed grids, x = {x:g}:",
         "",
         "| cells | last layer (µs) | largest compression (MPa) | at x (m) | at t (µs) |",
         "|---:|---:|---:|---:|---:|",
