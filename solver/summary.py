@@ -30,7 +30,7 @@ class _Part(BaseModel):
 
 class Contact(_Part):
     start: float = Field(description="s")
-    end: float | None = Field(description="s; null while the contact lasts at the end of the run")
+    end: float | None = Field(description="s; null while the contact lasts where the run's duration ends")
 
 
 class PeakForce(_Part):

@@ -162,6 +162,24 @@ def test_a_set_still_growing_when_the_run_ends_is_the_set_at_the_duration():
     assert simulate(parse_case(case)).summary["set"] == pytest.approx(finest, rel=0.01)
 
 
+def test_a_contact_that_ends_past_the_duration_is_open_at_its_end():
+    """Fig. 3's contact ends at 334.3 µs on 40 cells; a run whose duration ends halfway from the
+    layer before that to it takes its last step past the crossing, and reports the contact open
+    where its duration ends: no co-impact time, no end."""
+    whole = parse_case(preset_json("fig3"))
+    numerics = explicit_numerics(whole, 40)
+    ended = simulate_rod(whole, numerics=numerics).summary["co_impact_time"]
+    layer_before = math.floor(ended / numerics.time_step) * numerics.time_step
+    case = preset_json("fig3")
+    case["numerics"]["duration"] = 0.5 * (layer_before + ended)
+    cut = parse_case(case)
+    cut_numerics = explicit_numerics(cut, 40)
+    assert cut_numerics.steps * cut_numerics.time_step > ended  # the crossing lies in the last step
+    summary = simulate_rod(cut, numerics=cut_numerics).summary
+    assert summary["co_impact_time"] is None
+    assert summary["contacts"] == [{"start": 0.0, "end": None}]
+
+
 @pytest.mark.parametrize("name", ["fig3", "fig9"])
 def test_a_case_that_gives_only_a_duration_is_within_one_percent_and_says_so(name):
     """The paper's scheme on its default grid was off by up to 23% here without a word."""

@@ -98,7 +98,11 @@ def node_stress(u, recorded, i, step):
 @compiled(inline="always")
 def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
     """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
-    contact); the first one to close sets the co-impact time and the rebound velocity."""
+    contact); the first one to close sets the co-impact time and the rebound velocity. Past the
+    blow's duration (`observed.until`, within its last step) nothing changes: the contact is as
+    it stood where the duration ends."""
+    if t_cross > observed.until:
+        return
     extremes, contacts = observed.extremes, observed.contacts
     in_contact = ends[S_IN_CONTACT] != 0.0
     if in_contact and not into_contact:

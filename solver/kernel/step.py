@@ -291,11 +291,11 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau, velocit
     energy[0, E_WITHDRAWN] += (
         energy[0, E_STRIKER_KINETIC] + energy[0, E_STRIKER_STRAIN] + potential + energy[0, E_ANVIL_KINETIC]
     )
-    if ends[S_IN_CONTACT] != 0.0:
+    if ends[S_IN_CONTACT] != 0.0:  # open where the blow's duration ended: closed there
         track_contact(
             ends,
             observed,
-            t,
+            min(t, observed.until),
             mean_velocity(ends[S_IMPULSE], launched_at(contact, ends[S_LAUNCH_VELOCITY]), striker)
             if striker.elastic
             else ends[S_STRIKER_VELOCITY],
