@@ -101,17 +101,18 @@ class BlowLog:
         run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
         return run
 
-    def still_rising(self, run: np.ndarray, blow_ends: np.ndarray) -> list[str]:
+    def still_rising(self, run: np.ndarray, blow_ends: np.ndarray, time_step: float) -> list[str]:
         """Warnings for the run's peaks (`run`, its `extremes`) reached where their blow's duration
         ends (blow k's at `blow_ends[k]`, s, the kernel's time): still rising then, each is the
-        value there, not a peak."""
+        value there, not a peak. A last layer can fall a rounding short of the duration's end
+        (a duration of whole steps), so the end is taken to a millionth of a `time_step`."""
         found = []
         for name, slot in _PEAKS.items():
             if not run[slot] > 0.0:
                 continue
             time_slot = _WITH[slot][-1]
             k, blow = next((k, b["extremes"]) for k, b in enumerate(self.blows) if b["extremes"][slot] == run[slot])
-            if blow[time_slot] >= blow_ends[k]:
+            if blow[time_slot] >= blow_ends[k] - 1e-6 * time_step:
                 which = f"blow {k + 1}'s" if len(self.blows) > 1 else "the run's"
                 found.append(
                     f"{name} is reached at the end of {which} duration (t = {blow[time_slot]:.4g} s): still "

@@ -578,7 +578,7 @@ def simulate_rod(
         permanent_penetration=log.table()[-1]["permanent_penetration"],
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
-        extra_warnings=log.still_rising(extremes, blow_ends),
+        extra_warnings=log.still_rising(extremes, blow_ends, tau),
     )
     if hammer is not None:
         summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)

@@ -144,6 +144,18 @@ def test_a_peak_still_rising_when_the_run_ends_is_its_value_at_the_duration_and_
     assert not any("still rising" in w for w in whole["warnings"])
 
 
+def test_a_peak_at_a_last_layer_a_rounding_short_of_the_duration_is_named_still_rising():
+    """Fig. 3's numerics with 152 steps of 1.2e-4/152 s: the last layer, 152·τ, falls 1e-20 s short
+    of the duration in floating point, and the rising force and compression reached there are
+    still the values at the run's end."""
+    case = preset_json("fig3")
+    case["numerics"] = {**case["numerics"], "duration": 1.2e-4, "time_step": 1.2e-4 / 152}
+    assert 152 * (1.2e-4 / 152) < 1.2e-4
+    summary = simulate(parse_case(case)).summary
+    rising = [w.split()[0] for w in summary["warnings"] if "still rising then" in w]
+    assert rising == ["peak_contact_force", "max_compressive_stress"]
+
+
 def test_a_set_still_growing_when_the_run_ends_is_the_set_at_the_duration():
     """The rock drill's rock yields from 0.70 to 0.82 ms: cut at 0.76 ms, on 25 to 200 cells (a
     doubling ladder), the last layer falls at 0.7618 ms on every grid, where the set is 2.4% past
