@@ -562,9 +562,7 @@ def simulate_rod(
 
     table = np.concatenate(summary_table, axis=1)
     ends = state.ends
-    energy = energy_at(
-        state.energy, last_layer, tau, blows * case.numerics.duration, weights.impedance_ends, striker.elastic
-    )
+    energy = energy_at(state.energy, last_layer, tau, blow_ends[-1], weights.impedance_ends, striker.elastic)
     log.finish(energy, observed)
     extremes = log.extremes()
     summary = build_summary(
