@@ -239,11 +239,13 @@ def layer_at_end(recorded, ends, weight, until, tool):
     )
 
 
-@compiled(inline="always")
+@compiled(fastmath={"contract"})
 def track_stresses_at_end(extremes, u, seen, weight, rod, step):
     """The extreme stresses along the tool at the duration's end (`seen`, `layer_at_end`): each
     interior node's linear between the layer before (the row before `seen.row`) and the recorded
-    one, as its end stresses are. Once a blow, so node by node."""
+    one, as its end stresses are. Once a blow, so node by node, and called, not inlined: a loop run
+    once a blow is kept out of `advance`'s body (inlined there, the anvil's steps on 2000 cells
+    measured 1.15 ns a node, against 1.02–1.15 without it)."""
     row, before = seen.row, (seen.row + 2) % 3
     for i in range(step.n + 1):
         if i == 0:
