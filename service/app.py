@@ -12,9 +12,9 @@ from fastapi.responses import JSONResponse
 
 from percussim.common.settings import Settings
 from percussim.common.settings import settings as env_settings
-from percussim.common.store import WorkerRegistry
+from percussim.common.store import ALIVE_WITHIN, WorkerRegistry
 
-from . import errors, page, presets, retention
+from . import background, errors, page, presets
 from .auth import authenticate
 from .cases import cases_router
 from .jobs import jobs_router
@@ -23,8 +23,6 @@ from .metrics import metrics_router
 from .queue import JobQueue
 from .studies import KINDS, studies_router
 from .sweeps import sweeps_router
-
-READY_WITHIN = 15.0  # seconds: three missed worker heartbeats (every 5 s) and a worker is gone
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -38,7 +36,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         "summary and its HDF5 result. The presets are the paper's cases, a rock drill and a pile. "
         "In a browser, [the job page](/) does all of this.",
         version="1",
-        lifespan=retention.lifespan(settings),
+        lifespan=background.lifespan(settings),
     )
     errors.install(app)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
@@ -68,10 +66,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @app.get("/readyz", tags=["health"], responses={503: {"description": "not ready, with the reason"}})
     def readyz():
         """Readiness: the broker is reachable and a worker has reported recently."""
-        workers = WorkerRegistry(settings.results_dir).alive(within=READY_WITHIN)
+        workers = WorkerRegistry(settings.results_dir).alive(within=ALIVE_WITHIN)
         reason = queue.problem()
         if reason is None and not workers:
-            reason = f"no worker has reported in the last {READY_WITHIN:g} s (start one with `percussim worker`)"
+            reason = f"no worker has reported in the last {ALIVE_WITHIN:g} s (start one with `percussim worker`)"
         if reason:
             return JSONResponse(
                 status_code=503,

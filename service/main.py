@@ -20,13 +20,13 @@ import time
 import uvicorn
 
 from percussim.common.settings import Settings, settings
-from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
+from percussim.common.store import QUEUED, RUNNING, JobStore
 
 from .queue import JobQueue
+from .recovery import requeue_or_fail
 
 COLD_STOP_SECONDS = 5.0  # after the grace (`stop_grace`), how long a worker may take to stop its job
 WATCH_SECONDS = 1.0  # how often the service looks for a worker that died
-MAX_ATTEMPTS = 3  # runs of a job whose worker died under it, before the job is failed
 
 
 def _stop_requested(signum: int, frame) -> None:
@@ -41,24 +41,8 @@ def _start_worker(name: str) -> subprocess.Popen:
 
 def _back_to_queue(jobs: JobStore, worker: str, death: str) -> list[str]:
     """Record as queued again the jobs the dead `worker` was running (`death` says how it died), or
-    as failed those it died under MAX_ATTEMPTS times: a case that kills its worker must not kill
-    every worker in turn. Returns the ids queued again."""
-    again = []
-    for job_id in jobs.ids(RUNNING, worker=worker):
-        attempts = jobs.get(job_id)["attempts"]
-        if attempts >= MAX_ATTEMPTS:
-            jobs.finish(
-                job_id,
-                FAILED,
-                error=(
-                    f"its worker died {attempts} times while running it (the last time: {death}): "
-                    "a case that needs more memory than the machine has, or a crash; try a coarser grid "
-                    "or fewer outputs"
-                ),
-            )
-        elif jobs.requeue(job_id, worker):
-            again.append(job_id)
-    return again
+    as failed those it died under too often (`requeue_or_fail`). Returns the ids queued again."""
+    return [job_id for job_id in jobs.ids(RUNNING, worker=worker) if requeue_or_fail(jobs, job_id, worker, death)]
 
 
 def _say_queued_again(again: list[str], worker: str, death: str) -> None:

@@ -16,6 +16,7 @@ from pathlib import Path
 
 import h5py
 import pytest
+import redis as redis_client
 from conftest import CHATTERS, LONG_WORK, SECONDS_OF_WORK, merge, report, running_again
 
 from percussim.client import FINISHED
@@ -74,6 +75,41 @@ def test_a_worker_killed_mid_job_gets_it_delivered_again_and_it_succeeds_once(re
         assert sorted(p.name for p in folder.iterdir()) == ["case.json", "result.h5", "summary.json"]
         with h5py.File(folder / "result.h5") as f:
             assert f.attrs["format"] == "percussim-result" and len(f["contact/force"]) > 0
+    finally:
+        s.stop()
+
+
+def test_a_job_whose_message_redis_lost_with_its_worker_runs_again_from_its_record(redis, tmp_path, record_property):
+    """A worker killed mid-job and the job's message gone from Redis with it (what a worker cut while
+    it hands its messages back can leave, Celery's issue #4354): no redelivery will come. Once the
+    job's beat has been silent for the redelivery time and a margin, the API queues it again from
+    its record, and the other worker runs it, once."""
+    s = Stack(
+        tmp_path, redis.url, workers=2, env={"PERCUSSIM_JOB_TIME_LIMIT": "10", "PERCUSSIM_REDELIVERY_SECONDS": "12"}
+    )
+    try:
+        job = s.client.post("/v1/jobs", json=SECONDS_OF_WORK).json()
+        running = s.wait_status(job["id"], ("running",), timeout=30)
+        wait_for(lambda: s.client.get(f"/v1/jobs/{job['id']}").json()["progress"] > 0.1, 30, "some progress")
+        victim = running["worker"]
+        s.workers[victim].stop(signal.SIGKILL)
+        broker = redis_client.Redis.from_url(redis.url)
+        assert broker.hlen("unacked") == 1 and broker.llen("celery") == 0  # the job's message, not yet back
+        broker.delete("unacked", "unacked_index")  # lost
+        killed = time.monotonic()
+        record = running_again(s.client, job["id"], timeout=90)
+        taken = time.monotonic() - killed
+        assert record["worker"] != victim, record
+        record = s.wait_status(job["id"], FINISHED, timeout=60)
+        assert record["status"] == "succeeded" and record["attempts"] == 2, (record, s.logs())
+        log = (tmp_path / "api.log").read_text()
+        assert f"job {job['id']} was running on {victim}, no sign of life for more than 27 s: queued again" in log, log
+        report(
+            record_property,
+            f"\na worker killed mid-job and its message deleted from Redis: the job queued again from its "
+            f"record and running on {record['worker']} {taken:.1f} s after the kill (redelivery 12 s + 15 s), "
+            f"then {record['status']} after {record['attempts']} attempts",
+        )
     finally:
         s.stop()
 
@@ -236,7 +272,7 @@ def gone(pid: int) -> bool:
 def test_a_worker_past_its_grace_with_no_job_running_blames_none_and_stops_cold(caplog):
     """A worker still there when its grace ends, its jobs done (slow to exit for another reason),
     says so rather than name a job it would cut, and asks itself for the cold shutdown."""
-    from percussim.worker.app import _cut_after_the_grace
+    from percussim.worker.app import _cut_after_the_grace, handing_back
 
     quits = []
     before = signal.signal(signal.SIGQUIT, lambda *_: quits.append(True))
@@ -245,6 +281,7 @@ def test_a_worker_past_its_grace_with_no_job_running_blames_none_and_stops_cold(
             _cut_after_the_grace(0.5)
     finally:
         signal.signal(signal.SIGQUIT, before)
+        handing_back.clear()
     assert quits == [True]
     assert "no job running, yet not stopped after PERCUSSIM_STOP_GRACE (0.5 s): stopping now" in caplog.text
     assert "outlasted" not in caplog.text

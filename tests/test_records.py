@@ -41,7 +41,9 @@ def test_a_job_goes_queued_running_finished_and_then_never_changes(records):
     assert jobs.start(job_id, "w1@x") and jobs.set_progress(job_id, 0.5)
     record = jobs.get(job_id)
     assert record["status"] == RUNNING and record["attempts"] == 1 and record["progress"] == 0.5
-    assert jobs.start(job_id, "w2@x"), "delivered again after its worker died"
+    assert not jobs.start(job_id, "w2@x"), "delivered again while its worker runs it"
+    jobs.release([job_id], "w1@x")  # its worker stopped it and handed it back (or died, and its beat lapsed)
+    assert jobs.start(job_id, "w2@x"), "delivered again after its worker stopped"
     assert jobs.get(job_id)["attempts"] == 2 and jobs.get(job_id)["worker"] == "w2@x"
     assert jobs.finish(job_id, SUCCEEDED, progress=1.0, result_bytes=123)
     done = jobs.get(job_id)
@@ -52,6 +54,8 @@ def test_a_job_goes_queued_running_finished_and_then_never_changes(records):
         lambda: jobs.finish(job_id, FAILED, error="late"),
         lambda: jobs.requeue(job_id, "w2@x"),
         lambda: jobs.request_cancel(job_id),
+        lambda: jobs.renew([job_id], "w2@x"),
+        lambda: jobs.release([job_id], "w2@x"),
     ):
         assert not change()
     assert jobs.get(job_id) == done, "a finished job's record never changes"
@@ -370,3 +374,42 @@ def test_a_store_that_kept_its_records_in_folders_is_imported_once(tmp_path):
     # Opened again (another process), the store imports nothing a second time.
     _open.cache_clear()
     assert JobStore(settings).list()[0] == 4
+
+
+def test_a_job_running_across_the_upgrade_that_adds_its_beat_has_one_from_its_start(records):
+    """Records from before a running job had a beat: each running one gets the time of its start
+    (or of its creation, if it has none), so that it is taken again, or queued again, once that
+    lapses; the others none."""
+    from alembic import command
+    from alembic.config import Config
+    from sqlalchemy import create_engine
+
+    url = records.database_url or f"sqlite:///{records.results_dir / 'percussim.db'}"
+    records.results_dir.mkdir(parents=True)
+    config = Config()
+    config.set_main_option("script_location", "percussim.common:migrations")
+    started = datetime(2026, 1, 2, 3, 4, 5, tzinfo=UTC)
+    with create_engine(url).connect() as connection:
+        config.attributes |= {"connection": connection, "results_dir": records.results_dir}
+        command.upgrade(config, "0002")
+        for job_id, status, start in (
+            ("R" * 22, RUNNING, started),
+            ("N" * 22, RUNNING, None),
+            ("Q" * 22, QUEUED, None),
+        ):
+            connection.execute(
+                text(
+                    "INSERT INTO jobs (id, kind, status, progress, created, started, attempts, worker, cancel_requested)"
+                    " VALUES (:id, 'run', :status, 0, :created, :started, 1, 'w1@x', false)"
+                ),
+                {"id": job_id, "status": status, "created": started - timedelta(minutes=1), "started": start},
+            )
+        connection.commit()
+    jobs = JobStore(records)  # opened: migrated to the head
+    with database(records).connect() as connection:
+        beats = dict(connection.execute(text("SELECT id, beat FROM jobs")).all())
+    as_time = lambda value: datetime.fromisoformat(str(value)).replace(tzinfo=UTC)  # noqa: E731
+    assert as_time(beats["R" * 22]) == started and as_time(beats["N" * 22]) == started - timedelta(minutes=1)
+    assert beats["Q" * 22] is None
+    assert jobs.start("R" * 22, "w2@x")["attempts"] == 2  # long lapsed
+    assert [job_id for job_id, _ in jobs.lapsed(datetime.now(UTC) - timedelta(minutes=1))] == ["N" * 22]

@@ -17,8 +17,9 @@ from percussim.common.broker import queue_folder
 from percussim.common.settings import Settings
 from percussim.common.store import FAILED, SUCCEEDED, JobStore, WorkerRegistry
 from percussim.service.app import create_app
-from percussim.service.main import MAX_ATTEMPTS, queue_again, restore_queue
+from percussim.service.main import queue_again, restore_queue
 from percussim.service.queue import JobQueue
+from percussim.service.recovery import MAX_ATTEMPTS
 from percussim.solver.presets import PRESETS_ENV, preset_json, preset_names
 from percussim.solver.simulate import simulate
 
@@ -420,7 +421,8 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
 
     def running(worker: str, attempts: int) -> str:
         job_id = jobs.create(BASE_CASE)["id"]
-        for _ in range(attempts):  # started again after each death
+        for _ in range(attempts):  # started again after each death, its beat lapsed
+            jobs.release([job_id], worker)
             assert jobs.start(job_id, worker)
         jobs.set_progress(job_id, 0.4)
         return job_id

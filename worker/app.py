@@ -3,8 +3,8 @@
 Jobs are acknowledged late and rejected when their worker is lost, so a job whose worker dies is
 delivered again; each worker process takes one job at a time. A worker told to stop lets its
 running job finish for `PERCUSSIM_STOP_GRACE` s, then stops it and puts it back on the queue
-(`_stopping`). A pool's child stops on its own worker's SIGTERM alone
-(`_stop_on_the_workers_signal_alone`).
+(`_stopping`), its beat lapsed (`JobStore.release`) for the next worker to take it at once. A
+pool's child stops on its own worker's SIGTERM alone (`_stop_on_the_workers_signal_alone`).
 """
 
 from __future__ import annotations
@@ -19,11 +19,10 @@ from celery.signals import worker_init, worker_process_init, worker_ready, worke
 from celery.utils.log import get_logger
 from celery.worker.state import active_requests
 
-from percussim.common.broker import broker_config, queue_folder
+from percussim.common.broker import RUN_JOB, broker_config, queue_folder
 from percussim.common.settings import Settings, settings
-from percussim.common.store import WorkerRegistry
+from percussim.common.store import HEARTBEAT_SECONDS, JobStore, StoreFull, StoreUnavailable, WorkerRegistry
 
-HEARTBEAT_SECONDS = 5.0
 logger = get_logger(__name__)
 
 
@@ -51,6 +50,8 @@ app = make_app(settings())
 _stop = threading.Event()
 # Set by the worker once it is stopping, seen by its pool's children (who inherit it at the fork).
 _worker_stopping = get_context("fork").Event()
+# Set once the worker hands its running jobs back: their processes stop renewing their beat.
+handing_back = get_context("fork").Event()
 FOREIGN_SIGTERM_WAIT = 1.0  # seconds a child, sent SIGTERM by another process, waits to see its worker stop too
 
 
@@ -114,8 +115,10 @@ def _stopping(how: str, **_):
 
 def _cut_after_the_grace(grace: float):
     """The grace is over and the worker still runs: say why, by the jobs it still runs (a study's
-    part is its study's), then shut down cold."""
-    running = sorted({str(request.args[0]) for request in list(active_requests) if request.args})
+    part is its study's), hand its jobs back (their beat lapsed, for the next worker delivered one
+    to take it at once: `JobStore.release`), then shut down cold."""
+    requests = list(active_requests)
+    running = sorted({str(request.args[0]) for request in requests if request.args})
     for job_id in running:
         logger.warning(
             "the running job %s outlasted PERCUSSIM_STOP_GRACE (%g s): stopping it; it goes back on the queue",
@@ -124,6 +127,13 @@ def _cut_after_the_grace(grace: float):
         )
     if not running:
         logger.warning("no job running, yet not stopped after PERCUSSIM_STOP_GRACE (%g s): stopping now", grace)
+    handing_back.set()
+    jobs = [request for request in requests if request.name == RUN_JOB and request.args]
+    try:
+        for request in jobs:
+            JobStore(settings()).release([str(request.args[0])], request.hostname)
+    except (StoreUnavailable, StoreFull) as error:
+        logger.warning("the jobs handed back are taken again once their beat lapses: %s", error)
     os.kill(os.getpid(), signal.SIGQUIT)
 
 

@@ -10,8 +10,10 @@ from __future__ import annotations
 
 import os
 import socket
+import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from typing import TypeVar
 
 from celery.exceptions import Reject
@@ -20,17 +22,20 @@ from percussim.common.broker import EVALUATE_PART, RUN_JOB
 from percussim.common.metrics import job_observations
 from percussim.common.settings import settings
 from percussim.common.store import (
+    ALIVE_WITHIN,
     BEARING_GRAPH,
     CALIBRATION,
     CANCELLED,
     DRIVABILITY,
     FAILED,
+    HEARTBEAT_SECONDS,
     OPTIMIZATION,
     RUN,
     SIGNAL_MATCH,
     STUDY_PLOT,
     SUCCEEDED,
     JobStore,
+    StoreFull,
     StoreUnavailable,
     UnknownJob,
     WorkerRegistry,
@@ -45,7 +50,7 @@ from percussim.solver.signal_match import signal_match
 from percussim.solver.simulate import simulate
 from percussim.solver.study_plots import render_study
 
-from .app import app
+from .app import app, handing_back
 from .fanout import QueueEvaluator, take_part
 
 T = TypeVar("T")
@@ -53,7 +58,6 @@ T = TypeVar("T")
 PROGRESS_SECONDS = 0.25  # how often a running job's progress is written
 CANCEL_POLL_SECONDS = 0.1  # how often a running job asks whether it was cancelled
 STORE_RETRY_SECONDS = 60.0  # how long a job's end waits for a database that went away
-ALIVE_WITHIN = 15.0  # s: workers whose heartbeat is this recent may take a study's parts
 STUDIES = {
     CALIBRATION: calibrate,
     OPTIMIZATION: optimize,
@@ -88,10 +92,12 @@ def run_job(job_id: str) -> str:
     s = settings()
     store = JobStore(s)
     worker = run_job.request.hostname or socket.gethostname()
-    record = _stored(lambda: store.start(job_id, worker))
+    record = _take(store, job_id, worker)
     if record is None:
-        # Finished already (or removed), or a cancel was asked while it ran on a worker that died.
-        _stored(lambda: store.finish(job_id, CANCELLED))
+        # Finished already (or removed), running on a live worker, or a cancel was asked while it
+        # ran on a worker that died.
+        if _stored(lambda: store.cancel_requested(job_id)):
+            _stored(lambda: store.finish(job_id, CANCELLED))
         return "not started"
     start = last_write = last_poll = time.monotonic()  # a job shorter than PROGRESS_SECONDS writes none
 
@@ -118,7 +124,8 @@ def run_job(job_id: str) -> str:
 
     work = _run if record["kind"] == RUN else _study
     try:
-        solver_seconds, node_steps = work(store, job_id, progress, cancelled)
+        with _beating(store, job_id, worker):
+            solver_seconds, node_steps = work(store, job_id, progress, cancelled)
     except Cancelled:
         return _end(store, job_id, CANCELLED)
     except TimeLimitExceeded:
@@ -147,6 +154,41 @@ def run_job(job_id: str) -> str:
         result_bytes=store.size(job_id),
         then=job_observations(time.monotonic() - start, solver_seconds, node_steps),
     )
+
+
+def _take(store: JobStore, job_id: str, worker: str) -> dict | None:
+    """The job started on `worker` (`JobStore.start`), or None. A message delivered while the job's
+    beat is still fresh (its worker died within the last ALIVE_WITHIN s, or the job was queued
+    again from its record while its own message waited) waits for the beat to lapse: a dead
+    worker's job then runs here, a live worker's is not run twice."""
+    deadline = time.monotonic() + ALIVE_WITHIN + HEARTBEAT_SECONDS
+    while (record := _stored(lambda: store.start(job_id, worker))) is None:
+        if time.monotonic() > deadline or not _stored(lambda: store.held(job_id)):
+            return None
+        time.sleep(HEARTBEAT_SECONDS / 5)
+    return record
+
+
+@contextmanager
+def _beating(store: JobStore, job_id: str, worker: str) -> Iterator[None]:
+    """The job's beat renewed every HEARTBEAT_SECONDS while the block runs it here, until the worker
+    hands it back (`app.handing_back`). A thread: the kernel returns to Python every few ms."""
+    stop = threading.Event()
+
+    def renew():
+        while not stop.wait(HEARTBEAT_SECONDS) and not handing_back.is_set():
+            try:
+                store.renew([job_id], worker)
+            except (StoreUnavailable, StoreFull):
+                pass  # a beat missed; recovery waits far longer than a few missed beats
+
+    thread = threading.Thread(target=renew, name="percussim-beat", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
 
 
 def _reason(error: OSError) -> str:

@@ -33,7 +33,7 @@ import shutil
 import tempfile
 from collections.abc import Callable, Iterable, Iterator
 from contextlib import contextmanager
-from datetime import UTC, datetime
+from datetime import UTC, datetime, timedelta
 from pathlib import Path
 
 from sqlalchemy import and_, delete, func, insert, or_, select, tuple_, update
@@ -60,6 +60,10 @@ STUDY_PLOT = {
     DRIVABILITY: "drivability",
     SIGNAL_MATCH: "signal_match",
 }
+# A worker says it is alive every HEARTBEAT_SECONDS, and renews then the beat of each job it runs;
+# three missed, and the worker (or the job's run) is taken for gone.
+HEARTBEAT_SECONDS = 5.0
+ALIVE_WITHIN = 3 * HEARTBEAT_SECONDS
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
 _PLOT_NAME = re.compile(r"[a-z_]+")
 
@@ -173,6 +177,7 @@ class JobStore:
             "sweep": sweep,
             "cancel_requested": False,
             "result_bytes": None,
+            "beat": None,
         }
 
     def _create(
@@ -222,16 +227,62 @@ class JobStore:
             return done
 
     def start(self, job_id: str, worker: str) -> dict | None:
-        """Queued (or running on a worker that died) → running on `worker`, unless cancelled:
-        the record then, or None if it was not started."""
+        """Queued, or running with its beat lapsed (its worker died, or handed it back) → running on
+        `worker`, unless cancelled: the record then, or None if it was not started."""
+        taken = or_(JOBS.c.status == QUEUED, and_(JOBS.c.status == RUNNING, JOBS.c.beat < _lapsed_before()))
         with self._connection(write=True) as connection:
             row = connection.execute(
                 update(JOBS)
-                .where(JOBS.c.id == job_id, JOBS.c.status.in_((QUEUED, RUNNING)), ~JOBS.c.cancel_requested)
-                .values(status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker, progress=0.0)
+                .where(JOBS.c.id == job_id, taken, ~JOBS.c.cancel_requested)
+                .values(
+                    status=RUNNING, started=now(), attempts=JOBS.c.attempts + 1, worker=worker, progress=0.0, beat=now()
+                )
                 .returning(*JOBS.c)
             ).first()
         return None if row is None else _record(row._mapping)
+
+    def held(self, job_id: str) -> bool:
+        """The job runs on a worker that keeps its beat: another must not run it too."""
+        with self._connection() as connection:
+            return (
+                connection.scalar(
+                    select(func.count())
+                    .select_from(JOBS)
+                    .where(JOBS.c.id == job_id, JOBS.c.status == RUNNING, JOBS.c.beat >= _lapsed_before())
+                )
+                == 1
+            )
+
+    def renew(self, job_ids: Iterable[str], worker: str) -> None:
+        """The jobs `worker` runs still run: their beat, now."""
+        self._beat(job_ids, worker, now())
+
+    def release(self, job_ids: Iterable[str], worker: str) -> None:
+        """`worker` hands these jobs back (their message goes back on the queue): their beat lapsed
+        now, so that the next worker delivered one takes it at once."""
+        self._beat(job_ids, worker, _lapsed_before())
+
+    def _beat(self, job_ids: Iterable[str], worker: str, when: datetime) -> None:
+        job_ids = list(job_ids)
+        if job_ids:
+            with self._connection(write=True) as connection:
+                connection.execute(
+                    update(JOBS)
+                    .where(JOBS.c.id.in_(job_ids), JOBS.c.status == RUNNING, JOBS.c.worker == worker)
+                    .values(beat=when)
+                )
+
+    def lapsed(self, before: datetime) -> list[tuple[str, str]]:
+        """(id, worker) of the running jobs whose last beat was before then, oldest first."""
+        with self._connection() as connection:
+            return [
+                tuple(row)
+                for row in connection.execute(
+                    select(JOBS.c.id, JOBS.c.worker)
+                    .where(JOBS.c.status == RUNNING, JOBS.c.beat < before)
+                    .order_by(JOBS.c.created, JOBS.c.id)
+                )
+            ]
 
     def set_progress(self, job_id: str, fraction: float) -> bool:
         return self._change(job_id, JOBS.c.status == RUNNING, progress=fraction)
@@ -273,11 +324,12 @@ class JobStore:
             return CANCELLED
         return record["status"]
 
-    def requeue(self, job_id: str, worker: str) -> bool:
-        """Running on `worker`, which died → queued again."""
-        return self._change(
-            job_id, and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker), status=QUEUED, progress=0.0
-        )
+    def requeue(self, job_id: str, worker: str, lapsed_before: datetime | None = None) -> bool:
+        """Running on `worker`, which died (with no beat since `lapsed_before`, if given) → queued again."""
+        condition = and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker)
+        if lapsed_before is not None:
+            condition = and_(condition, JOBS.c.beat < lapsed_before)
+        return self._change(job_id, condition, status=QUEUED, progress=0.0)
 
     def request_cancel(self, job_id: str) -> dict | None:
         """Cancel the job if it has not finished: a queued one at once, a running one by its
@@ -418,6 +470,11 @@ class JobStore:
     def result_bytes(self) -> int:
         with self._connection() as connection:
             return int(connection.scalar(select(func.coalesce(func.sum(JOBS.c.result_bytes), 0))))
+
+
+def _lapsed_before() -> datetime:
+    """A beat before this has lapsed."""
+    return now() - timedelta(seconds=ALIVE_WITHIN)
 
 
 def _utc(value: datetime | None) -> str | None:

@@ -1,0 +1,132 @@
+"""A running job's beat, and the jobs run again from their records: a job runs on one worker at a
+time while its worker renews its beat; once the beat lapses another worker may take it; once it
+has lapsed for longer than the broker's redelivery, the job is queued again from its record
+(`service.recovery`), its message lost or not. The live version, a message lost for real in
+Redis, is `tests/test_faults.py`."""
+
+from __future__ import annotations
+
+import threading
+import time
+
+import pytest
+from conftest import BASE_CASE
+
+from percussim.common import store
+from percussim.common.broker import queue_folder
+from percussim.common.settings import Settings
+from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
+from percussim.service import recovery
+from percussim.worker import tasks
+
+LAPSE = 0.3  # s: ALIVE_WITHIN for these tests, so that a beat lapses within the test
+
+
+@pytest.fixture
+def quick(monkeypatch):
+    """Beats that lapse after LAPSE s, renewed every LAPSE/3 s, and recovery with no margin."""
+    monkeypatch.setattr(store, "ALIVE_WITHIN", LAPSE)
+    monkeypatch.setattr(tasks, "ALIVE_WITHIN", LAPSE)
+    monkeypatch.setattr(tasks, "HEARTBEAT_SECONDS", LAPSE / 3)
+    monkeypatch.setattr(recovery, "RESTORE_MARGIN", 0.0)
+
+
+def test_a_job_runs_on_one_worker_while_its_beat_is_fresh(tmp_path, quick):
+    jobs = JobStore(Settings(results_dir=tmp_path))
+    job_id = jobs.create(BASE_CASE)["id"]
+    first = jobs.start(job_id, "w1@x")
+    assert first["attempts"] == 1 and first["worker"] == "w1@x"
+    assert jobs.start(job_id, "w2@x") is None and jobs.held(job_id)  # a second delivery, refused
+    jobs.release([job_id], "w2@x")  # not w2's to hand back
+    assert jobs.held(job_id)
+    time.sleep(LAPSE / 2)
+    jobs.renew([job_id], "w1@x")
+    time.sleep(LAPSE / 2 + 0.05)  # past the first beat's lapse, not the renewed one's
+    assert jobs.held(job_id) and jobs.start(job_id, "w2@x") is None
+    time.sleep(LAPSE)  # w1 died: its beat lapses
+    assert not jobs.held(job_id)
+    second = jobs.start(job_id, "w2@x")
+    assert second["attempts"] == 2 and second["worker"] == "w2@x"
+    jobs.renew([job_id], "w1@x")  # the dead worker's beat no longer counts
+    jobs.release([job_id], "w2@x")  # handed back at a stop: the next worker takes it at once
+    third = jobs.start(job_id, "w3@x")
+    assert third["attempts"] == 3 and third["worker"] == "w3@x"
+
+
+def test_a_delivery_waits_for_a_dead_workers_beat_to_lapse_and_leaves_a_live_workers_job(tmp_path, quick):
+    jobs = JobStore(Settings(results_dir=tmp_path))
+    dead, alive = jobs.create(BASE_CASE)["id"], jobs.create(BASE_CASE)["id"]
+    jobs.start(dead, "w1@x")
+    jobs.start(alive, "w1@x")
+    stop = threading.Event()
+
+    def heartbeat():  # w1 keeps running `alive` (and has died under `dead`)
+        while not stop.wait(LAPSE / 3):
+            jobs.renew([alive], "w1@x")
+
+    beating = threading.Thread(target=heartbeat)
+    beating.start()
+    try:
+        start = time.monotonic()
+        taken = tasks._take(jobs, dead, "w2@x")
+        waited = time.monotonic() - start
+        assert taken["worker"] == "w2@x" and taken["attempts"] == 2
+        assert 0.5 * LAPSE < waited < 3 * LAPSE, waited
+        start = time.monotonic()
+        assert tasks._take(jobs, alive, "w2@x") is None
+        assert time.monotonic() - start >= LAPSE  # it waited to be sure
+        assert jobs.get(alive)["worker"] == "w1@x" and jobs.get(alive)["attempts"] == 1
+    finally:
+        stop.set()
+        beating.join()
+    finished = jobs.create(BASE_CASE)["id"]
+    jobs.start(finished, "w1@x")
+    jobs.finish(finished, FAILED, error="x")
+    start = time.monotonic()
+    assert tasks._take(jobs, finished, "w2@x") is None and time.monotonic() - start < LAPSE  # no wait
+
+
+def test_a_job_silent_past_the_redelivery_is_queued_again_from_its_record(tmp_path, quick):
+    settings = Settings(results_dir=tmp_path, job_time_limit=0.2, redelivery_seconds=0.5)
+    jobs = JobStore(settings)
+
+    def running(worker: str, attempts: int) -> str:
+        job_id = jobs.create(BASE_CASE)["id"]
+        for _ in range(attempts):
+            jobs.release([job_id], worker)
+            assert jobs.start(job_id, worker)
+        return job_id
+
+    lost, doomed, alive = running("w1@x", 1), running("w1@x", recovery.MAX_ATTEMPTS), running("w2@x", 1)
+    assert recovery.recover_lapsed(settings) == []  # every beat fresh
+    deadline = time.monotonic() + 0.5 + 0.3  # the redelivery, then a lapse more than the margin (none)
+    while time.monotonic() < deadline:
+        jobs.renew([alive], "w2@x")
+        time.sleep(0.05)
+    assert recovery.recover_lapsed(settings) == [lost]
+    assert jobs.get(lost)["status"] == QUEUED and jobs.get(lost)["attempts"] == 1
+    failed = jobs.get(doomed)
+    assert failed["status"] == FAILED and f"died {recovery.MAX_ATTEMPTS} times" in failed["error"]
+    assert "w1@x: no sign of life for more than 0.5 s" in failed["error"], failed["error"]
+    assert jobs.get(alive)["status"] == RUNNING
+    assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
+    assert recovery.recover_lapsed(settings) == []  # queued once
+
+
+def test_recovery_runs_beside_the_api(tmp_path, quick, monkeypatch):
+    """The API's lifespan runs the recovery's passes: a job left running by a dead worker is queued
+    again while the API serves, with no request made."""
+    from fastapi.testclient import TestClient
+
+    from percussim.service.app import create_app
+
+    settings = Settings(results_dir=tmp_path, job_time_limit=0.2, redelivery_seconds=0.3)
+    monkeypatch.setattr(recovery, "interval", lambda s: 0.1)
+    jobs = JobStore(settings)
+    job_id = jobs.create(BASE_CASE)["id"]
+    jobs.start(job_id, "w1@x")
+    with TestClient(create_app(settings)):
+        deadline = time.monotonic() + 5
+        while jobs.get(job_id)["status"] == RUNNING and time.monotonic() < deadline:
+            time.sleep(0.05)
+    assert jobs.get(job_id)["status"] == QUEUED
