@@ -19,8 +19,8 @@ log = logging.getLogger("percussim.background")
 
 @contextmanager
 def periodically(name: str, seconds: float, work: Callable[[], object]) -> Iterator[None]:
-    """`work()` every `seconds` in a thread while the block runs; a pass the records cannot serve
-    is tried again at the next."""
+    """`work()` every `seconds` in a thread while the block runs; a pass that fails (the records
+    unavailable, anything else) is logged, and the next one runs as planned."""
     stop = threading.Event()
 
     def loop():
@@ -29,6 +29,8 @@ def periodically(name: str, seconds: float, work: Callable[[], object]) -> Itera
                 work()
             except (StoreUnavailable, StoreFull) as error:
                 log.warning("%s: %s; trying again later", name, error)
+            except Exception:  # a pass that fails must not end the passes to come
+                log.exception("%s: the pass failed; trying again later", name)
 
     thread = threading.Thread(target=loop, name=f"percussim-{name}", daemon=True)
     thread.start()

@@ -130,3 +130,24 @@ def test_recovery_runs_beside_the_api(tmp_path, quick, monkeypatch):
         while jobs.get(job_id)["status"] == RUNNING and time.monotonic() < deadline:
             time.sleep(0.05)
     assert jobs.get(job_id)["status"] == QUEUED
+
+
+def test_a_pass_beside_the_api_that_fails_is_logged_and_the_next_runs(caplog):
+    from percussim.service.background import periodically
+
+    passes = []
+
+    def work():
+        passes.append(time.monotonic())
+        if len(passes) == 1:
+            raise RuntimeError("a broker in a state no one foresaw")
+        if len(passes) == 2:
+            raise store.StoreUnavailable("the database is unavailable: down")
+
+    with periodically("recovery", 0.05, work):
+        deadline = time.monotonic() + 5
+        while len(passes) < 3 and time.monotonic() < deadline:
+            time.sleep(0.02)
+    assert len(passes) >= 3
+    assert "recovery: the pass failed; trying again later" in caplog.text and "a broker in a state" in caplog.text
+    assert "recovery: the database is unavailable: down; trying again later" in caplog.text

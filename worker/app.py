@@ -128,10 +128,11 @@ def _cut_after_the_grace(grace: float):
     if not running:
         logger.warning("no job running, yet not stopped after PERCUSSIM_STOP_GRACE (%g s): stopping now", grace)
     handing_back.set()
-    jobs = [request for request in requests if request.name == RUN_JOB and request.args]
     try:
-        for request in jobs:
-            JobStore(settings()).release([str(request.args[0])], request.hostname)
+        jobs = JobStore(settings())
+        for request in requests:
+            if request.name == RUN_JOB and request.args:
+                jobs.release([str(request.args[0])], request.hostname)
     except (StoreUnavailable, StoreFull) as error:
         logger.warning("the jobs handed back are taken again once their beat lapses: %s", error)
     os.kill(os.getpid(), signal.SIGQUIT)
