@@ -6,8 +6,9 @@ still be lost (Redis and a worker cut while it hands its messages back, Celery's
 job recorded running whose beat has lapsed for longer than the redelivery time and
 `RESTORE_MARGIN` (by then Celery would have delivered it again) is queued again from its record by
 a thread beside the API (`background`); one whose worker died under it `MAX_ATTEMPTS` times fails,
-saying so: a case that kills its worker must not kill every worker in turn. A message the broker
-did keep as well is harmless: a worker delivered a job that another runs, with a fresh beat, does
+saying so: a case that kills its worker must not kill every worker in turn. A job queued that long
+while the broker holds no message at all is published again too. A message the broker did keep as
+well is harmless: a worker delivered a job that another runs, with a fresh beat, does
 not run it (`worker.tasks._take`). Every change is conditional, so API replicas doing the same
 queue each job once.
 """
@@ -54,8 +55,9 @@ def silence(settings: Settings) -> float:
 
 
 def recover_lapsed(settings: Settings) -> list[str]:
-    """One pass: queue again the running jobs silent for longer than `silence`; returns their ids
-    (none if the broker could not take them: they are then failed, saying why)."""
+    """One pass: queue again the running jobs silent for longer than `silence`, then the queued
+    jobs whose message is lost (`_unpublished`); returns their ids (none if the broker could not
+    take them: they are then failed, saying why)."""
     jobs = JobStore(settings)
     before = now() - timedelta(seconds=silence(settings))
     death = f"no sign of life for more than {silence(settings):g} s"
@@ -64,9 +66,23 @@ def recover_lapsed(settings: Settings) -> list[str]:
         if requeue_or_fail(jobs, job_id, worker, f"{worker}: {death}", lapsed_before=before):
             again.append(job_id)
             log.warning("job %s was running on %s, %s: queued again", job_id, worker, death)
-    failure = "its worker died and it could not be queued again"
-    if again and JobQueue(settings).enqueue_or_fail(jobs, again, failure) is not None:
+    queue = JobQueue(settings)
+    again += _unpublished(jobs, queue, before)  # those just queued again are not among them
+    failure = "its worker died or its message was lost, and it could not be queued again"
+    if again and queue.enqueue_or_fail(jobs, again, failure) is not None:
         return []
+    return again
+
+
+def _unpublished(jobs: JobStore, queue: JobQueue, before: datetime) -> list[str]:
+    """The jobs queued since before then while the broker holds no message at all: theirs were lost
+    (a broker that lost its last writes), for a worker takes one message at a time and starts its
+    job at once. Each is marked queued again now, by one caller of several."""
+    if queue.depth() > 0:
+        return []  # messages still wait: none of theirs can be told lost
+    again = [job_id for job_id in jobs.unpublished(before) if jobs.queued_again(job_id, before)]
+    for job_id in again:
+        log.warning("job %s waited queued with no message in the broker: queued again", job_id)
     return again
 
 

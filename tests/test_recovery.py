@@ -19,7 +19,7 @@ from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
 from percussim.service import recovery
 from percussim.worker import tasks
 
-LAPSE = 0.3  # s: ALIVE_WITHIN for these tests, so that a beat lapses within the test
+LAPSE = 1.0  # s: ALIVE_WITHIN for these tests, so that a beat lapses within the test (renewed every third of it)
 
 
 @pytest.fixture
@@ -151,3 +151,36 @@ def test_a_pass_beside_the_api_that_fails_is_logged_and_the_next_runs(caplog):
     assert len(passes) >= 3
     assert "recovery: the pass failed; trying again later" in caplog.text and "a broker in a state" in caplog.text
     assert "recovery: the database is unavailable: down; trying again later" in caplog.text
+
+
+def test_a_queued_job_whose_message_is_lost_is_published_again_once_the_broker_holds_none(tmp_path, quick):
+    """A broker that lost its last writes: a job recorded queued with no message. While messages
+    wait, none can be told lost; once none does, a job queued for longer than the silence is
+    published again, once."""
+    from percussim.service.queue import JobQueue
+
+    settings = Settings(results_dir=tmp_path, job_time_limit=0.2, redelivery_seconds=0.5)
+    jobs, queue = JobStore(settings), JobQueue(settings)
+    lost = jobs.create(BASE_CASE)["id"]  # recorded; its message never reached the broker
+    waiting = jobs.create(BASE_CASE)["id"]
+    queue.enqueue(waiting)
+    assert recovery.recover_lapsed(settings) == []  # too recent
+    time.sleep(0.6)
+    assert recovery.recover_lapsed(settings) == []  # a message waits: the broker is not empty
+
+    def delivered() -> list[str]:
+        with queue.app.connection_for_read() as connection:
+            messages = connection.SimpleQueue("celery", no_ack=True)
+            found = []
+            while True:
+                try:
+                    found.append(messages.get(timeout=0.2).payload[0][0])
+                except messages.Empty:
+                    return found
+
+    assert delivered() == [waiting]
+    jobs.start(waiting, "w1@x")  # a worker took it
+    assert recovery.recover_lapsed(settings) == [lost]
+    assert queue.depth() == 1 and jobs.get(lost)["status"] == QUEUED
+    assert delivered() == [lost]
+    assert recovery.recover_lapsed(settings) == []  # queued again just now: not lost yet

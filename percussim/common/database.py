@@ -61,7 +61,8 @@ jobs = Table(
     Column("sweep", String(32)),  # the sweep it is a variant of
     Column("cancel_requested", Boolean, nullable=False),
     Column("result_bytes", BigInteger),  # its files' size once finished
-    Column("beat", DateTime(timezone=True)),  # a running job's last sign of life from its worker
+    # A running job's last sign of life from its worker; a queued one's last queueing again.
+    Column("beat", DateTime(timezone=True)),
     Index("ix_jobs_created", "created", "id"),
     Index("ix_jobs_owner_created", "owner", "created", "id"),
     Index("ix_jobs_status_created", "status", "created", "id"),

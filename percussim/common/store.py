@@ -329,7 +329,19 @@ class JobStore:
         condition = and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker)
         if lapsed_before is not None:
             condition = and_(condition, JOBS.c.beat < lapsed_before)
-        return self._change(job_id, condition, status=QUEUED, progress=0.0)
+        return self._change(job_id, condition, status=QUEUED, progress=0.0, beat=now())
+
+    def unpublished(self, before: datetime) -> list[str]:
+        """The queued jobs last queued (created, or queued again) before then, oldest first."""
+        with self._connection() as connection:
+            return list(
+                connection.scalars(select(JOBS.c.id).where(_queued_before(before)).order_by(JOBS.c.created, JOBS.c.id))
+            )
+
+    def queued_again(self, job_id: str, before: datetime) -> bool:
+        """A queued job last queued before then is queued again now (its message lost): True if
+        this call did (so that of several callers one publishes it)."""
+        return self._change(job_id, _queued_before(before), beat=now())
 
     def request_cancel(self, job_id: str) -> dict | None:
         """Cancel the job if it has not finished: a queued one at once, a running one by its
@@ -470,6 +482,14 @@ class JobStore:
     def result_bytes(self) -> int:
         with self._connection() as connection:
             return int(connection.scalar(select(func.coalesce(func.sum(JOBS.c.result_bytes), 0))))
+
+
+def _queued_before(before: datetime):
+    """Queued, and last queued (its beat: when it was queued again, else its creation) before then."""
+    return and_(
+        JOBS.c.status == QUEUED,
+        or_(JOBS.c.beat < before, and_(JOBS.c.beat.is_(None), JOBS.c.created < before)),
+    )
 
 
 def _lapsed_before() -> datetime:
