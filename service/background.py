@@ -51,7 +51,7 @@ def lifespan(settings: Settings):
                     periodically("retention", retention.interval(settings), lambda: retention.delete_expired(settings))
                 )
             threads.enter_context(
-                periodically("recovery", recovery.interval(settings), lambda: recovery.recover_lapsed(settings))
+                periodically("recovery", recovery.interval(settings), lambda: recovery.recover(settings))
             )
             yield
 

@@ -54,7 +54,7 @@ def silence(settings: Settings) -> float:
     return settings.redelivery + RESTORE_MARGIN
 
 
-def recover_lapsed(settings: Settings) -> list[str]:
+def recover(settings: Settings) -> list[str]:
     """One pass: queue again the running jobs silent for longer than `silence`, then the queued
     jobs whose message is lost (`_unpublished`); returns their ids (none if the broker could not
     take them: they are then failed, saying why)."""

@@ -42,7 +42,7 @@ def test_a_job_goes_queued_running_finished_and_then_never_changes(records):
     record = jobs.get(job_id)
     assert record["status"] == RUNNING and record["attempts"] == 1 and record["progress"] == 0.5
     assert not jobs.start(job_id, "w2@x"), "delivered again while its worker runs it"
-    jobs.release([job_id], "w1@x")  # its worker stopped it and handed it back (or died, and its beat lapsed)
+    jobs.release(job_id, "w1@x")  # its worker stopped it and handed it back (or died, and its beat lapsed)
     assert jobs.start(job_id, "w2@x"), "delivered again after its worker stopped"
     assert jobs.get(job_id)["attempts"] == 2 and jobs.get(job_id)["worker"] == "w2@x"
     assert jobs.finish(job_id, SUCCEEDED, progress=1.0, result_bytes=123)
@@ -54,8 +54,8 @@ def test_a_job_goes_queued_running_finished_and_then_never_changes(records):
         lambda: jobs.finish(job_id, FAILED, error="late"),
         lambda: jobs.requeue(job_id, "w2@x"),
         lambda: jobs.request_cancel(job_id),
-        lambda: jobs.renew([job_id], "w2@x"),
-        lambda: jobs.release([job_id], "w2@x"),
+        lambda: jobs.renew(job_id, "w2@x"),
+        lambda: jobs.release(job_id, "w2@x"),
     ):
         assert not change()
     assert jobs.get(job_id) == done, "a finished job's record never changes"

@@ -37,18 +37,18 @@ def test_a_job_runs_on_one_worker_while_its_beat_is_fresh(tmp_path, quick):
     first = jobs.start(job_id, "w1@x")
     assert first["attempts"] == 1 and first["worker"] == "w1@x"
     assert jobs.start(job_id, "w2@x") is None and jobs.held(job_id)  # a second delivery, refused
-    jobs.release([job_id], "w2@x")  # not w2's to hand back
+    jobs.release(job_id, "w2@x")  # not w2's to hand back
     assert jobs.held(job_id)
     time.sleep(LAPSE / 2)
-    jobs.renew([job_id], "w1@x")
+    jobs.renew(job_id, "w1@x")
     time.sleep(LAPSE / 2 + 0.05)  # past the first beat's lapse, not the renewed one's
     assert jobs.held(job_id) and jobs.start(job_id, "w2@x") is None
     time.sleep(LAPSE)  # w1 died: its beat lapses
     assert not jobs.held(job_id)
     second = jobs.start(job_id, "w2@x")
     assert second["attempts"] == 2 and second["worker"] == "w2@x"
-    jobs.renew([job_id], "w1@x")  # the dead worker's beat no longer counts
-    jobs.release([job_id], "w2@x")  # handed back at a stop: the next worker takes it at once
+    jobs.renew(job_id, "w1@x")  # the dead worker's beat no longer counts
+    jobs.release(job_id, "w2@x")  # handed back at a stop: the next worker takes it at once
     third = jobs.start(job_id, "w3@x")
     assert third["attempts"] == 3 and third["worker"] == "w3@x"
 
@@ -62,7 +62,7 @@ def test_a_delivery_waits_for_a_dead_workers_beat_to_lapse_and_leaves_a_live_wor
 
     def heartbeat():  # w1 keeps running `alive` (and has died under `dead`)
         while not stop.wait(LAPSE / 3):
-            jobs.renew([alive], "w1@x")
+            jobs.renew(alive, "w1@x")
 
     beating = threading.Thread(target=heartbeat)
     beating.start()
@@ -93,24 +93,24 @@ def test_a_job_silent_past_the_redelivery_is_queued_again_from_its_record(tmp_pa
     def running(worker: str, attempts: int) -> str:
         job_id = jobs.create(BASE_CASE)["id"]
         for _ in range(attempts):
-            jobs.release([job_id], worker)
+            jobs.release(job_id, worker)
             assert jobs.start(job_id, worker)
         return job_id
 
     lost, doomed, alive = running("w1@x", 1), running("w1@x", recovery.MAX_ATTEMPTS), running("w2@x", 1)
-    assert recovery.recover_lapsed(settings) == []  # every beat fresh
+    assert recovery.recover(settings) == []  # every beat fresh
     deadline = time.monotonic() + 0.5 + 0.3  # the redelivery, then a lapse more than the margin (none)
     while time.monotonic() < deadline:
-        jobs.renew([alive], "w2@x")
+        jobs.renew(alive, "w2@x")
         time.sleep(0.05)
-    assert recovery.recover_lapsed(settings) == [lost]
+    assert recovery.recover(settings) == [lost]
     assert jobs.get(lost)["status"] == QUEUED and jobs.get(lost)["attempts"] == 1
     failed = jobs.get(doomed)
     assert failed["status"] == FAILED and f"died {recovery.MAX_ATTEMPTS} times" in failed["error"]
     assert "w1@x: no sign of life for more than 0.5 s" in failed["error"], failed["error"]
     assert jobs.get(alive)["status"] == RUNNING
     assert len(list(queue_folder(settings).iterdir())) == 1  # one message, for the lost job
-    assert recovery.recover_lapsed(settings) == []  # queued once
+    assert recovery.recover(settings) == []  # queued once
 
 
 def test_recovery_runs_beside_the_api(tmp_path, quick, monkeypatch):
@@ -164,9 +164,9 @@ def test_a_queued_job_whose_message_is_lost_is_published_again_once_the_broker_h
     lost = jobs.create(BASE_CASE)["id"]  # recorded; its message never reached the broker
     waiting = jobs.create(BASE_CASE)["id"]
     queue.enqueue(waiting)
-    assert recovery.recover_lapsed(settings) == []  # too recent
+    assert recovery.recover(settings) == []  # too recent
     time.sleep(0.6)
-    assert recovery.recover_lapsed(settings) == []  # a message waits: the broker is not empty
+    assert recovery.recover(settings) == []  # a message waits: the broker is not empty
 
     def delivered() -> list[str]:
         with queue.app.connection_for_read() as connection:
@@ -180,7 +180,7 @@ def test_a_queued_job_whose_message_is_lost_is_published_again_once_the_broker_h
 
     assert delivered() == [waiting]
     jobs.start(waiting, "w1@x")  # a worker took it
-    assert recovery.recover_lapsed(settings) == [lost]
+    assert recovery.recover(settings) == [lost]
     assert queue.depth() == 1 and jobs.get(lost)["status"] == QUEUED
     assert delivered() == [lost]
-    assert recovery.recover_lapsed(settings) == []  # queued again just now: not lost yet
+    assert recovery.recover(settings) == []  # queued again just now: not lost yet

@@ -422,7 +422,7 @@ def test_a_dead_workers_jobs_are_queued_again_until_it_has_died_under_one_too_of
     def running(worker: str, attempts: int) -> str:
         job_id = jobs.create(BASE_CASE)["id"]
         for _ in range(attempts):  # started again after each death, its beat lapsed
-            jobs.release([job_id], worker)
+            jobs.release(job_id, worker)
             assert jobs.start(job_id, worker)
         jobs.set_progress(job_id, 0.4)
         return job_id

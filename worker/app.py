@@ -132,7 +132,7 @@ def _cut_after_the_grace(grace: float):
         jobs = JobStore(settings())
         for request in requests:
             if request.name == RUN_JOB and request.args:
-                jobs.release([str(request.args[0])], request.hostname)
+                jobs.release(str(request.args[0]), request.hostname)
     except (StoreUnavailable, StoreFull) as error:
         logger.warning("the jobs handed back are taken again once their beat lapses: %s", error)
     os.kill(os.getpid(), signal.SIGQUIT)

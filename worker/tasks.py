@@ -178,7 +178,7 @@ def _beating(store: JobStore, job_id: str, worker: str) -> Iterator[None]:
     def renew():
         while not stop.wait(HEARTBEAT_SECONDS) and not handing_back.is_set():
             try:
-                store.renew([job_id], worker)
+                store.renew(job_id, worker)
             except (StoreUnavailable, StoreFull):
                 pass  # a beat missed; recovery waits far longer than a few missed beats
 

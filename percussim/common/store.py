@@ -60,8 +60,8 @@ STUDY_PLOT = {
     DRIVABILITY: "drivability",
     SIGNAL_MATCH: "signal_match",
 }
-# A worker says it is alive every HEARTBEAT_SECONDS, and renews then the beat of each job it runs;
-# three missed, and the worker (or the job's run) is taken for gone.
+# A worker says it is alive every HEARTBEAT_SECONDS, and so does the process running a job, in the
+# job's beat; three missed, and the worker (or the job's run) is taken for gone.
 HEARTBEAT_SECONDS = 5.0
 ALIVE_WITHIN = 3 * HEARTBEAT_SECONDS
 _ID = re.compile(r"[A-Za-z0-9_-]{22}")
@@ -253,24 +253,14 @@ class JobStore:
                 == 1
             )
 
-    def renew(self, job_ids: Iterable[str], worker: str) -> None:
-        """The jobs `worker` runs still run: their beat, now."""
-        self._beat(job_ids, worker, now())
+    def renew(self, job_id: str, worker: str) -> bool:
+        """The job `worker` runs still runs: its beat, now. True if it was `worker`'s to renew."""
+        return self._change(job_id, _running_on(worker), beat=now())
 
-    def release(self, job_ids: Iterable[str], worker: str) -> None:
-        """`worker` hands these jobs back (their message goes back on the queue): their beat lapsed
-        now, so that the next worker delivered one takes it at once."""
-        self._beat(job_ids, worker, _lapsed_before())
-
-    def _beat(self, job_ids: Iterable[str], worker: str, when: datetime) -> None:
-        job_ids = list(job_ids)
-        if job_ids:
-            with self._connection(write=True) as connection:
-                connection.execute(
-                    update(JOBS)
-                    .where(JOBS.c.id.in_(job_ids), JOBS.c.status == RUNNING, JOBS.c.worker == worker)
-                    .values(beat=when)
-                )
+    def release(self, job_id: str, worker: str) -> bool:
+        """`worker` hands the job back (its message goes back on the queue): its beat lapsed now, so
+        that the next worker delivered it takes it at once. True if it was `worker`'s to hand back."""
+        return self._change(job_id, _running_on(worker), beat=_lapsed_before())
 
     def lapsed(self, before: datetime) -> list[tuple[str, str]]:
         """(id, worker) of the running jobs whose last beat was before then, oldest first."""
@@ -325,8 +315,9 @@ class JobStore:
         return record["status"]
 
     def requeue(self, job_id: str, worker: str, lapsed_before: datetime | None = None) -> bool:
-        """Running on `worker`, which died (with no beat since `lapsed_before`, if given) → queued again."""
-        condition = and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker)
+        """Running on `worker`, which died (with no beat since `lapsed_before`, if given) → queued again,
+        its beat now: when it was queued again."""
+        condition = _running_on(worker)
         if lapsed_before is not None:
             condition = and_(condition, JOBS.c.beat < lapsed_before)
         return self._change(job_id, condition, status=QUEUED, progress=0.0, beat=now())
@@ -482,6 +473,10 @@ class JobStore:
     def result_bytes(self) -> int:
         with self._connection() as connection:
             return int(connection.scalar(select(func.coalesce(func.sum(JOBS.c.result_bytes), 0))))
+
+
+def _running_on(worker: str):
+    return and_(JOBS.c.status == RUNNING, JOBS.c.worker == worker)
 
 
 def _queued_before(before: datetime):
