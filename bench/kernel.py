@@ -199,6 +199,7 @@ def numba_run(s: Setup) -> dict[str, float]:
         striker_u=no_fields,
         striker_stress=no_fields,
         shaft_share=np.empty((0, s.n + 1)),
+        shaft_span=np.empty((0, 2), np.int64),
         shaft_history=np.empty((0, 0)),
         shaft_field=no_fields,
     )

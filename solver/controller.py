@@ -288,6 +288,17 @@ def shaft_shares(case: Case, grid: Grid) -> np.ndarray:
     return np.divide(each, total, out=np.zeros_like(each), where=total > 0)
 
 
+def share_spans(shares: np.ndarray) -> np.ndarray:
+    """Each segment's first and last node with a share of it (segments × 2; (1, 0), none, for a
+    segment with no share)."""
+    spans = np.tile(np.array([1, 0], np.int64), (len(shares), 1))
+    for k, row in enumerate(shares):
+        nodes = np.flatnonzero(row)
+        if nodes.size:
+            spans[k] = nodes[0], nodes[-1]
+    return spans
+
+
 def shaft_length(grid: Grid) -> np.ndarray:
     """Each node's length of shaft (m), which turns its force into the resistance per metre (N/m)."""
     left, right = shaft_spans(grid)
@@ -443,6 +454,7 @@ def simulate_rod(
             recorder.create(f"fields/{prefix}stress", (total_frames, len(x)))
     # the shaft's force on each segment, and its resistance along the tool
     shaft_share = shaft_shares(case, grid)
+    shaft_span = share_spans(shaft_share)
     segment_paths = [f"shaft/segment_{k}/force" for k in range(len(shaft_share))]
     for path in segment_paths:
         recorder.create(path, (total_rows,))
@@ -478,6 +490,7 @@ def simulate_rod(
             striker_u=np.empty((frames, striker_nodes)),
             striker_stress=np.empty((frames, striker_nodes)),
             shaft_share=shaft_share,
+            shaft_span=shaft_span,
             shaft_history=np.empty((len(shaft_share), kept_rows)),
             shaft_field=np.zeros((frames if shaft_field else 0, n + 1)),
         )

@@ -157,14 +157,15 @@ counted only)."""
 Recorders = namedtuple(
     "Recorders",
     "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress "
-    "shaft_share shaft_history shaft_field",
+    "shaft_share shaft_span shaft_history shaft_field",
 )
 """Where a call records its layers: every `history_stride`-th to `history` (a column each) and
 `probes` (a row each: the stress at each probe, linear between the node `probe_node` and the next
 with its weight `probe_weight`), every `field_stride`-th to `field_u`/`field_stress` (a row each)
 and an elastic striker's to `striker_u`/`striker_stress`; strides ≤ 0 keep nothing. The shaft's
 force on each of its segments goes to `shaft_history` (a row a segment), node i's share of
-segment k being `shaft_share[k, i]`, and its force on each node to `shaft_field`."""
+segment k being `shaft_share[k, i]`, nonzero only from node `shaft_span[k, 0]` to
+`shaft_span[k, 1]`, and its force on each node to `shaft_field`."""
 
 # Within a step
 Layers = namedtuple("Layers", "new cur old ref")

@@ -80,20 +80,22 @@ def shaft_force_at(u, row, before, i, shaft, sets, tau):
     return static + shaft.damping_factor[i] * abs(static) * (u[row, i] - u[before, i]) / tau
 
 
-@compiled(inline="always")
+# Its own function, so that each segment's sum is free to be reordered (`reassoc`, a change of
+# the recorded force's rounding only): summed node by node in order, a pile's step on 512 cells
+# spent 1 µs on it.
+@compiled(fastmath={"contract", "reassoc"})
 def record_shaft(recorders, column, frame, state, row, shaft, tau):
     """The soil's force on each segment into `column` of `shaft_history` (when ≥ 0) and on each
     node into row `frame` of `shaft_field` (when ≥ 0), of the layer in `row`."""
     u, sets = state.u, state.shaft_sets
     before = (row + 2) % 3
-    share = recorders.shaft_share
     if column >= 0:
+        share, span = recorders.shaft_share, recorders.shaft_span
         for k in range(share.shape[0]):
-            recorders.shaft_history[k, column] = 0.0
-    for i in range(shaft.first, shaft.last + 1):
-        force = shaft_force_at(u, row, before, i, shaft, sets, tau)
-        if column >= 0:
-            for k in range(share.shape[0]):
-                recorders.shaft_history[k, column] += share[k, i] * force
-        if frame >= 0:
-            recorders.shaft_field[frame, i] = force
+            total = 0.0
+            for i in range(np.uint64(span[k, 0]), np.uint64(span[k, 1] + 1)):
+                total += share[k, i] * shaft_force_at(u, row, before, i, shaft, sets, tau)
+            recorders.shaft_history[k, column] = total
+    if frame >= 0:
+        for i in range(shaft.first, shaft.last + 1):
+            recorders.shaft_field[frame, i] = shaft_force_at(u, row, before, i, shaft, sets, tau)
