@@ -82,20 +82,21 @@ def shaft_force_at(u, row, before, i, shaft, sets, tau):
 
 # Its own function, so that each segment's sum is free to be reordered (`reassoc`, a change of
 # the recorded force's rounding only): summed node by node in order, a pile's step on 512 cells
-# spent 1 µs on it.
+# spent 1 µs on it. It takes the arrays it writes, not the `Recorders`: a call is passed its
+# arguments' every field, and the whole bundle cost each recorded layer 70 ns.
 @compiled(fastmath={"contract", "reassoc"})
-def record_shaft(recorders, column, frame, state, row, shaft, tau):
-    """The soil's force on each segment into `column` of `shaft_history` (when ≥ 0) and on each
-    node into row `frame` of `shaft_field` (when ≥ 0), of the layer in `row`."""
+def record_shaft(shares, spans, history, field, column, frame, state, row, shaft, tau):
+    """The soil's force on each segment into `column` of `history` (when ≥ 0; node i's share of
+    segment k `shares[k, i]`, nonzero from node `spans[k, 0]` to `spans[k, 1]`) and on each node
+    into row `frame` of `field` (when ≥ 0), of the layer in `row`."""
     u, sets = state.u, state.shaft_sets
     before = (row + 2) % 3
     if column >= 0:
-        share, span = recorders.shaft_share, recorders.shaft_span
-        for k in range(share.shape[0]):
+        for k in range(shares.shape[0]):
             total = 0.0
-            for i in range(np.uint64(span[k, 0]), np.uint64(span[k, 1] + 1)):
-                total += share[k, i] * shaft_force_at(u, row, before, i, shaft, sets, tau)
-            recorders.shaft_history[k, column] = total
+            for i in range(np.uint64(spans[k, 0]), np.uint64(spans[k, 1] + 1)):
+                total += shares[k, i] * shaft_force_at(u, row, before, i, shaft, sets, tau)
+            history[k, column] = total
     if frame >= 0:
         for i in range(shaft.first, shaft.last + 1):
-            recorders.shaft_field[frame, i] = shaft_force_at(u, row, before, i, shaft, sets, tau)
+            field[frame, i] = shaft_force_at(u, row, before, i, shaft, sets, tau)

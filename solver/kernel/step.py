@@ -589,8 +589,19 @@ def record_layer(
     if recorders.field_stride > 0 and m_rec % recorders.field_stride == 0:
         record_fields(recorders, n_field, state, recorded, striker, step)
         frame, n_field = n_field, n_field + 1
-    if column >= 0 or frame >= 0:
-        record_shaft(recorders, column, frame, state, recorded.row, shaft, rod.time_step)
+    if (column >= 0 or frame >= 0) and shaft.last >= shaft.first:
+        record_shaft(
+            recorders.shaft_share,
+            recorders.shaft_span,
+            recorders.shaft_history,
+            recorders.shaft_field,
+            column,
+            frame,
+            state,
+            recorded.row,
+            shaft,
+            rod.time_step,
+        )
     return n_hist, n_field
 
 
