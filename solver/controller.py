@@ -291,7 +291,8 @@ def shaft_shares(case: Case, grid: Grid) -> np.ndarray:
 def share_spans(shares: np.ndarray) -> np.ndarray:
     """Each segment's first and last node with a share of it (segments × 2; (1, 0), none, for a
     segment with no share)."""
-    spans = np.tile(np.array([1, 0], np.int64), (len(shares), 1))
+    spans = np.zeros((len(shares), 2), np.int64)
+    spans[:, 0] = 1
     for k, row in enumerate(shares):
         nodes = np.flatnonzero(row)
         if nodes.size:
