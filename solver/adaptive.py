@@ -37,6 +37,7 @@ from .grid import (
     ResolvedNumerics,
     explicit_numerics,
     first_cells,
+    ladder_unit,
     resolve_numerics,
     rigidity,
     tolerance_of,
@@ -121,6 +122,7 @@ def solve_to_tolerance(
     order = 2.0
     runs: list[tuple[ResolvedNumerics, dict]] = []
     cells = first_cells(case, tol)
+    unit = ladder_unit(case, cells)  # an elastic striker kept a whole number of cells
     result = None
     found: Estimate | None = None
     worst: list[float] = []  # each estimate's, from the `MIN_RUNS`-th grid on
@@ -171,7 +173,7 @@ def solve_to_tolerance(
                 "change, and finer grids do not settle it"
             )
             break
-        cells = math.ceil(cells * (next_refinement(found, tol) if closed else CLIMB))
+        cells = math.ceil(cells * (next_refinement(found, tol) if closed else CLIMB) / unit) * unit
     else:
         stopped = f"{MAX_RUNS} grids did not reach it"
     why = (

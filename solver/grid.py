@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from fractions import Fraction
 from functools import lru_cache
 from typing import Annotated, Literal
 
@@ -107,6 +108,42 @@ def fewest_cells(case: Case) -> int:
     while striker_cells(case.striker, tool_transit / cells) < MIN_STRIKER_CELLS:  # rounding's last step
         cells += 1
     return cells
+
+
+# An elastic striker whose wave transit is p/q of the tool's (q at most this) is a whole number of
+# cells on every multiple of q cells; its rest beyond the last node otherwise makes an error of
+# first order, which grids each twice as fine as the last do not see (`whole_striker`)
+WHOLE_STRIKER_DENOMINATOR = 1000
+WHOLE_STRIKER_COARSEST = 2.0  # a ladder's grid is rounded up to one at most this many times finer
+
+
+def whole_striker_unit(case: Case) -> int:
+    """The fewest tool cells on which an elastic striker spans a whole number of cells (its wave
+    transit over the tool's a ratio p/q, q ≤ `WHOLE_STRIKER_DENOMINATOR`, within the rounding
+    `striker_cells` allows): q; 1 for a lumped striker or an incommensurate one."""
+    if not case.elastic_striker:
+        return 1
+    ratio = striker_transit(case.striker) / (case.tool.length / wave_speed(case.tool))
+    near = Fraction(ratio).limit_denominator(WHOLE_STRIKER_DENOMINATOR)
+    return near.denominator if abs(float(near) - ratio) <= 1e-13 * ratio else 1
+
+
+def whole_striker(case: Case, cells: int) -> int:
+    """`cells` rounded up to a grid on which an elastic striker is a whole number of cells
+    (`whole_striker_unit`), when that is at most `WHOLE_STRIKER_COARSEST` times finer; else `cells`.
+    Its back end then lies on a node: the rock drill's energy to the rock converges to 90.81 J on
+    such grids, where grids doubled from 49 cells agree with each other 0.40% under it."""
+    unit = whole_striker_unit(case)
+    whole = math.ceil(cells / unit) * unit
+    return whole if whole <= WHOLE_STRIKER_COARSEST * cells else cells
+
+
+def ladder_unit(case: Case, first: int) -> int:
+    """What every grid of a ladder that starts on `first` cells is a multiple of: the elastic
+    striker's `whole_striker_unit` when `first` is one (`first_cells` made it so), else 1. A ladder
+    that started on other grids keeps to them: switched midway, its grids stop being nested."""
+    unit = whole_striker_unit(case)
+    return unit if first % unit == 0 else 1
 
 
 def striker_grid(striker: Striker, tau: float) -> tuple[Grid, float]:
@@ -540,8 +577,9 @@ def profile_cells(case: Case) -> int:
 
 def first_cells(case: Case, tol: float) -> int:
     """The coarsest grid of a ladder: `FIRST_POINTS` steps over the contact's time scale, the
-    tool's profile resolved (`profile_cells`), and no fewer cells than the case's ends take
-    (`fewest_cells`)."""
+    tool's profile resolved (`profile_cells`), no fewer cells than the case's ends take
+    (`fewest_cells`), and an elastic striker a whole number of cells where its length allows
+    (`whole_striker`)."""
     points = FIRST_POINTS * math.sqrt(1e-2 / tol)
     tau = time_scale(case) / points
     if not tau > 0.0:  # a striker of a few yoctograms: its contact time underflows
@@ -554,7 +592,8 @@ def first_cells(case: Case, tol: float) -> int:
                 )
             ]
         )
-    return max(fewest_cells(case), profile_cells(case), math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
+    cells = max(fewest_cells(case), profile_cells(case), math.ceil(case.tool.length / (wave_speed(case.tool) * tau)))
+    return whole_striker(case, cells)
 
 
 def explicit_numerics(case: Case, cells: int) -> ResolvedNumerics:
