@@ -277,11 +277,14 @@ def test_a_tolerance_the_limits_stop_short_of_returns_the_finest_grid_and_says_s
 
 
 def test_repeated_impacts_that_settle_on_no_grid_stop_the_ladder_and_say_why():
-    # Fig. 6's forced rattle: 17, 21, 19, ... contacts on successive grids, and peak forces that
-    # jump by tens of percent; refining to the limits (12 grids, 10240 cells) gains nothing
+    # Fig. 6's forced rattle: 19, 22, 19, 18, 18, 17, 19, 21 contacts on 5 to 640 cells, and
+    # peak forces that jump by tens of percent; refining to the limits (12 grids, 10240 cells)
+    # gains nothing. Where the rule stops it turns on the rattle's sequence, which a step's
+    # rounding moves: on 160 cells (6 grids) before the substeps of a gap the step cannot close
+    # changed, on 640 (8 grids) since
     summary = simulate(parse_case(at_default_accuracy("fig6"))).summary
     counts = [r["cells"] for r in summary["runs"]]
-    assert len(counts) < 8
+    assert len(counts) <= 8
     [warning] = [w for w in summary["warnings"] if "not met" in w]
     assert "number of contacts keeps changing" in warning and "finer grids do not settle it" in warning
 

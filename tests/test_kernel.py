@@ -113,3 +113,35 @@ def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     assert (low, high) == (stress.min(), stress.max())
     for value, block, first in ((low, low_block, np.argmin(stress)), (high, high_block, np.argmax(stress))):
         assert K.first_node(u, stressed, half_e_over_h, block, value) == first + 1
+
+
+def test_a_gap_the_step_cannot_close_takes_one_substep_and_an_overlap_its_stiffness_asks():
+    """The struck end's substeps keep a stiff contact's relaxation monotone: they follow the
+    stiffness at the largest overlap the stretch may reach. Faces apart by more than the stretch
+    can close never reach the law's compression: one substep, where they had taken as many as the
+    same overlap pressed (Fig. 9's contact on 128 cells, half its rigid-wall depth: 3); a gap the
+    stretch can close, the substeps of the overlap it may reach."""
+    from percussim.solver import controller as C
+    from percussim.solver.case import parse_case
+    from percussim.solver.grid import explicit_numerics, rigid_wall_depth
+    from percussim.solver.kernel import bundles as B
+    from percussim.solver.kernel.struck_end import struck_substeps
+    from percussim.testing import at_default_accuracy
+
+    case = parse_case(at_default_accuracy("fig9"))
+    numerics = explicit_numerics(case, 128)
+    grid = make_grid(case.tool, numerics.cells, end_masses=False)
+    contact, _ = C.end_conditions(case, grid)
+    anvil = C.anvil_on(case, grid, contact)
+    striker = B.StrikerEnd(elastic=False, impedance=1.0, mass=case.striker.mass, weight=0.0)
+    tau, speed = numerics.time_step, case.impact_velocity
+    overlap = 0.5 * rigid_wall_depth(case)  # 23 steps' closing at the impact speed
+
+    def count(gap, closing):
+        return struck_substeps((gap, closing, 0.0, 0.0, 0.0), 0.0, tau, 0.0, contact, striker, anvil, tau)
+
+    pressed = count(overlap, 0.0)
+    assert pressed >= 3
+    assert count(-overlap, speed) == count(-overlap, -speed) == 1  # closing by a step's worth, and opening
+    # a gap of half a step's closing, closing fast enough to reach the same overlap within the step
+    assert count(-0.5 * speed * tau, (overlap + 0.5 * speed * tau) / tau) == pressed
