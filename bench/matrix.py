@@ -253,6 +253,7 @@ def presets() -> list[dict]:
                 "worst": max(errors.values()),
                 "estimated": summary["error_estimate"]["worst"],
                 "cells": [r["cells"] for r in summary["runs"]],
+                "not_met": any("not met" in w for w in summary["warnings"]),
             }
         )
     return rows
@@ -314,7 +315,7 @@ def overview(stats: dict, preset_rows: list[dict], count: int, seed: int) -> str
     for p in preset_rows:
         lines.append(
             f"| {p['name']} | {p['ms']:.2f} ms | {p['worst']:.1e} | {p['estimated']:.1e} | "
-            f"{', '.join(map(str, p['cells']))} |"
+            f"{', '.join(map(str, p['cells']))}{', says not met' if p.get('not_met') else ''} |"
         )
     return "\n".join(lines)
 
