@@ -1,7 +1,7 @@
 """Sweeps of the Fig. 5 preset: variants per second on one core, on every core, and through the
 service (Redis and 2 workers), side by side.
 
-    .venv/bin/python bench/sweep.py [--variants 400]
+    .venv/bin/python bench/sweep.py [--variants 400] [--spread]
 
 The sweep is striker velocity × contact stiffness over the Fig. 5 preset (20 ms of repeated
 impacts), run twice: with the preset's own numerics (the paper's 5 cells and τ = 2e-5 s: about
@@ -10,6 +10,10 @@ impacts), run twice: with the preset's own numerics (the paper's 5 cells and τ 
 clock from the call to the last row; the service's from the POST to the GET that shows the sweep
 finished (polled every 20 ms), with every variant a job that writes its HDF5 result. Last, the
 ratio of the two sweeps' times, each way of running them, from this run.
+
+`--spread` instead solves each variant of the tolerance's sweep alone, in this process, and prints
+how its time is spread over the variants: the median and the 90th percentile, the share of the
+costliest twentieth, and the costliest variants with their grids and what their estimate says.
 """
 
 from __future__ import annotations
@@ -20,10 +24,11 @@ import tempfile
 import time
 from pathlib import Path
 
+from percussim.solver.adaptive import solve
 from percussim.solver.controller import warm_up
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import run_sweep
-from percussim.solver.sweep import Sweep
+from percussim.solver.sweep import Sweep, variants
 from percussim.testing import merge
 from percussim.testing.live_stack import Stack, redis_server, wait_for
 
@@ -52,12 +57,40 @@ def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], f
     return sweep["rows"], time.perf_counter() - start
 
 
+def spread(grid: dict[str, list[float]]) -> None:
+    """Each variant of the tolerance's sweep alone: how the sweep's time is spread over them."""
+    sweep = Sweep(case=CASES["tolerance 1e-2"], parameters=grid)
+    runs = []
+    for values, case in variants(sweep.model_copy(update={"case": sweep.case.summary_only()})):
+        start = time.perf_counter()
+        _, accuracy = solve(case)
+        runs.append((time.perf_counter() - start, values, accuracy))
+    runs.sort(key=lambda run: run[0])
+    seconds = [run[0] for run in runs]
+    total, count = sum(seconds), len(seconds)
+    costly = max(1, count // 20)
+    print(f"\nFig. 5 at tolerance 1e-2, {count} variants each alone, {total:.1f} s in all:")
+    print(f"  median {1e3 * seconds[count // 2]:.1f} ms, 90th percentile {1e3 * seconds[int(0.9 * count)]:.1f} ms")
+    print(
+        f"  the costliest {costly} ({100 * costly / count:.0f}%) take {100 * sum(seconds[-costly:]) / total:.0f}% of it:"
+    )
+    for took, values, accuracy in reversed(runs[-5:]):
+        met = "not met" if any("not met" in w for w in accuracy.warnings) else "met"
+        worst = accuracy.estimate.worst if accuracy.estimate else float("nan")
+        grids = ", ".join(str(n.cells) for n in accuracy.runs)
+        print(f"    {took:6.2f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--variants", type=int, default=400, help="about this many (a square grid)")
+    parser.add_argument("--spread", action="store_true", help="each variant alone: how the time is spread")
     args = parser.parse_args()
     warm_up()
     grid = parameters(args.variants)
+    if args.spread:
+        spread(grid)
+        return
     with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
         stack = Stack(Path(tmp), url, workers=2)
         try:
