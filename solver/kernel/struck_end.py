@@ -354,7 +354,7 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     """Substeps over a stretch of `span` for the struck end's links: each contact relaxing against
     what gives way to it, at its stiffness at the largest overlap the stretch may reach (its faces
     closing at their present speed: a gap they cannot close within it takes the law's tension
-    line, where it had been counted as deep an overlap as it is wide), and an anvil's
+    line, one substep), and an anvil's
     oscillation between its two contacts (capped at `ANVIL_SUBSTEPS`: an anvil too light to
     follow is relaxed to its quasi-static state, as a stiff link is)."""
     y, w, y_a, w_a, u0 = x
