@@ -350,11 +350,18 @@ def limited_slope(before, now, after, tau):
 
 
 @compiled(inline="always")
+def reached_stiffness(overlap, closing, span, contact):
+    """A contact's stiffness at the largest overlap a stretch of `span` may reach, its faces
+    closing at `closing` (either way): a gap they cannot close within it takes the law's tension
+    line."""
+    return max(contact_spring(overlap + span * abs(closing), contact)[1], contact.tension_stiffness)
+
+
+@compiled(inline="always")
 def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     """Substeps over a stretch of `span` for the struck end's links: each contact relaxing against
-    what gives way to it, at its stiffness at the largest overlap the stretch may reach (its faces
-    closing at their present speed: a gap they cannot close within it takes the law's tension
-    line, one substep), and an anvil's
+    what gives way to it, at its stiffness at the largest overlap the stretch may reach
+    (`reached_stiffness`: a gap that stays open takes one substep), and an anvil's
     oscillation between its two contacts (capped at `ANVIL_SUBSTEPS`: an anvil too light to
     follow is relaxed to its quasi-static state, as a stiff link is)."""
     y, w, y_a, w_a, u0 = x
@@ -363,15 +370,14 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     z = end.impedance
     end_rate = end_force / z + 2.0 * v_in
     if not anvil.present:
-        reach = y - u0 + span * abs(w - end_rate)
-        stiffness = max(contact_spring(reach, contact)[1], contact.tension_stiffness)
+        stiffness = reached_stiffness(y - u0, w - end_rate, span, contact)
         if striker.elastic:
             z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
             return substeps(stiffness / (z_both + b1), span, SDIRK_MONOTONE)
         limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / contact.striker_mass * tau)
         return substeps(stiffness / (z + b1), span, limit)
-    k1 = max(contact_spring(y - y_a + span * abs(w - w_a), contact)[1], contact.tension_stiffness)
-    k2 = max(contact_spring(y_a - u0 + span * abs(w_a - end_rate), end)[1], end.tension_stiffness)
+    k1 = reached_stiffness(y - y_a, w - w_a, span, contact)
+    k2 = reached_stiffness(y_a - u0, w_a - end_rate, span, end)
     b2 = end.damping
     count = substeps(k2 / (z + b2), span, min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b2) / anvil.mass * tau))
     omega2 = (k1 + k2) / anvil.mass
