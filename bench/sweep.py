@@ -13,7 +13,8 @@ ratio of the two sweeps' times, each way of running them, from this run.
 
 `--spread` instead solves each variant of the tolerance's sweep alone, in this process, and prints
 how its time is spread over the variants: the median and the 90th percentile, the share of the
-costliest twentieth, and the costliest variants with their grids and what their estimate says.
+costliest twentieth, the share of the work on each variant's final grid (what no start from a
+neighbour can save), and the costliest variants with their grids and what their estimate says.
 """
 
 from __future__ import annotations
@@ -73,6 +74,16 @@ def spread(grid: dict[str, list[float]]) -> None:
     print(f"  median {1e3 * seconds[count // 2]:.1f} ms, 90th percentile {1e3 * seconds[int(0.9 * count)]:.1f} ms")
     print(
         f"  the costliest {costly} ({100 * costly / count:.0f}%) take {100 * sum(seconds[-costly:]) / total:.0f}% of it:"
+    )
+    # What any start could save: each variant must still run its final grid, for its own answer,
+    # and at least one coarser grid, for its own estimate.
+    work = [[(n.cells + 1) * (n.steps + 1) for n in accuracy.runs] for _, _, accuracy in runs]
+    ladders, finals = sum(map(sum, work)), sum(w[-1] for w in work)
+    halves = sum(w[-1] + w[-1] / 4 for w in work)  # the final grid and one half as fine
+    print(
+        f"  node-steps: {ladders:.3g} on the variants' ladders; {100 * finals / ladders:.0f}% of them on their final "
+        f"grids, {100 * halves / ladders:.0f}% with one grid half as fine: a start from a neighbour that went "
+        f"straight to each variant's final grid would leave at least that much of the work"
     )
     for took, values, accuracy in reversed(runs[-5:]):
         met = "not met" if any("not met" in w for w in accuracy.warnings) else "met"

@@ -72,6 +72,7 @@ class BlowLog:
                     "transferred": float(x[L.X_MAX_TRANSFERRED]),
                 },
                 "extremes": x.copy(),
+                "envelope": observed.envelope.copy(),
                 "contacts": observed.contacts[: min(count, len(observed.contacts))].copy(),
             }
         )
@@ -100,6 +101,10 @@ class BlowLog:
         first = self.blows[0]["extremes"]
         run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
         return run
+
+    def envelope(self) -> np.ndarray:
+        """The whole run's stress envelope (`kernel.Observed`): each stretch's greatest of the blows'."""
+        return np.max([blow["envelope"] for blow in self.blows], axis=0)
 
     def still_rising(self, run: np.ndarray, blow_ends: np.ndarray, time_step: float) -> list[str]:
         """Warnings for the run's peaks (`run`, its `extremes`) reached where their blow's duration

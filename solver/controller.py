@@ -206,7 +206,7 @@ def striker_on(case: Case, num: ResolvedNumerics, tool: K.Tool, rod: K.Rod) -> K
     impedance = grid.density * wave_speed(striker.rod())
     return K.Striker(
         elastic=True,
-        tool=tool_on(grid, gravity_on(grid, num.time_step, g)),
+        tool=tool_on(grid, gravity_on(grid, num.time_step, g), stretches=1),  # the tool's envelope only
         rod=rod_on(grid, num.time_step, 1.0),
         impedance=impedance * grid.end_area[0],
         back_impedance=impedance * grid.end_area[1],
@@ -306,9 +306,9 @@ def shaft_length(grid: Grid) -> np.ndarray:
     return right - left
 
 
-def tool_on(grid: Grid, gravity: K.Gravity | None = None) -> K.Tool:
+def tool_on(grid: Grid, gravity: K.Gravity | None = None, stretches: int = L.ENVELOPE_BINS) -> K.Tool:
     """The tool on its grid, with its nodes' weight (`gravity_on`; none by default), as the kernel
-    takes it."""
+    takes it, its stress envelope kept over `stretches` stretches."""
     return K.Tool(
         gravity=gravity or K.no_gravity(),
         lower=grid.lower,
@@ -318,6 +318,7 @@ def tool_on(grid: Grid, gravity: K.Gravity | None = None) -> K.Tool:
         uniform=grid.uniform,
         struck_end_area=float(grid.area[0]),
         working_end_area=float(grid.area[-1]),
+        stress_chunks=K.stress_chunks(grid.cells, stretches),
     )
 
 
@@ -591,6 +592,7 @@ def simulate_rod(
         set_at_rest=set_at_rest,
         blows=log.table() if case.blows or hammer else None,
         extra_warnings=log.still_rising(extremes, blow_ends, tau),
+        envelope=log.envelope(),
     )
     if hammer is not None:
         summary["cycle"] = hammer.summary(log.table(), tolerance_of(case.numerics) or DEFAULT_TOLERANCE)

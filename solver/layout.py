@@ -54,6 +54,11 @@ E_BETWEEN_BLOWS = 17  # a hammer at work: what the tool's leftover waves held wh
 ENERGY_SLOTS = 18
 
 
+# The tool's stretches of equal length over which its greatest stresses are kept apart (the stress
+# envelope): node i of N lies in stretch ⌊i·ENVELOPE_BINS/N⌋, the working end in the last.
+ENVELOPE_BINS = 8
+
+
 def new_extremes() -> np.ndarray:
     """The extremes before a run: none yet (NaN where nothing may happen)."""
     x = np.zeros(EXTREME_SLOTS)

@@ -455,6 +455,19 @@ def _blows(fig: Figure, src: Source, times) -> None:
         ax.xaxis.set_major_locator(MaxNLocator(integer=True))
 
 
+def _envelope(fig: Figure, src: Source, times) -> None:
+    """The summary's stress envelope: each stretch of the tool's greatest compression and tension,
+    as steps along it."""
+    envelope = src.summary["stress_envelope"]
+    ax = fig.subplots()
+    x = np.repeat(envelope["x"], 2)[1:-1]  # each stretch's two ends
+    for key, label, color in (("compression", "greatest compression", "C0"), ("tension", "greatest tension", "C3")):
+        values = np.repeat([np.nan if v is None else v / 1e6 for v in envelope[key]], 2)
+        ax.plot(x, values, color=color, lw=1.6, label=label)
+    decorate(ax, "x from the struck end (m)", "stress (MPa)")
+    ax.legend(fontsize=8)
+
+
 def _cycle(fig: Figure, src: Source, times) -> None:
     """A hammer at work: the striker's position and velocity over the cycles, the drive's
     pressures, and each blow's impact energy and stroke."""
@@ -499,6 +512,7 @@ _TABLE = {
     "spacetime": _Plot("Stress in the tool over x and t", ("fields",), _spacetime),
     "energy": _Plot("Energy budget", (), _energy),
     "force_penetration": _Plot("Medium force against penetration", ("medium",), _force_penetration),
+    "envelope": _Plot("Greatest stresses along the tool", ("envelope",), _envelope),
     "blows": _Plot("Blow by blow", ("blows",), _blows),
     "cycle": _Plot("A hammer at work", ("cycles",), _cycle),
 }
@@ -540,6 +554,15 @@ def _no_medium(h5: h5py.File, case: dict) -> str | None:
     )
 
 
+def _no_envelope(h5: h5py.File, case: dict) -> str | None:
+    if h5.attrs.get("numerics.model") != "lumped":
+        return None
+    return (
+        "this result is of the lumped model, which has no stress along the tool: "
+        'run the case with numerics.model = "rod"'
+    )
+
+
 def _no_blows(h5: h5py.File, case: dict) -> str | None:
     if case.get("blows") or case.get("cycles"):
         return None
@@ -557,6 +580,7 @@ _NEEDS: dict[str, Callable[[h5py.File, dict], str | None]] = {
     "fields": _no_fields,
     "probes": _no_probes,
     "medium": _no_medium,
+    "envelope": _no_envelope,
     "blows": _no_blows,
     "cycles": _no_cycles,
 }

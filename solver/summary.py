@@ -44,6 +44,20 @@ class PeakStress(_Part):
     time: float = Field(description="s")
 
 
+class StressEnvelope(_Part):
+    """The greatest stresses in each stretch of the tool: where along it the loads are, and what
+    the error estimate of the largest stresses reads stretch by stretch."""
+
+    x: list[float] = Field(description="the stretches' bounds, m from the struck end (equal stretches)")
+    compression: list[float | None] = Field(
+        description="each stretch's greatest compression, Pa, as a magnitude (negative: no compression there); "
+        "null where the grid has no node"
+    )
+    tension: list[float | None] = Field(
+        description="each stretch's greatest tension, Pa (negative: no tension there); null where the grid has no node"
+    )
+
+
 class Energy(_Part):
     initial: float = Field(description="the striker's (and an anvil's) kinetic energy at impact (every blow's), J")
     external_work: float = Field(description="work of the external force, J")
@@ -146,6 +160,7 @@ class Summary(_Part):
     striker_rebound_velocity: float | None = Field(
         description="the striker's velocity when the first contact ends, m/s (negative: away from the tool)"
     )
+    stress_envelope: StressEnvelope | None = Field(description="null for the lumped model, which has no stress")
     medium_penetration: Penetration | None = Field(description="null without a medium")
     set: float | None = Field(
         description="the working end's permanent penetration in the last blow, m; null for a medium that does not yield"
@@ -218,6 +233,22 @@ def refusal(last_set: float | None) -> list[str]:
     ]
 
 
+def stress_envelope(case: Case, envelope: np.ndarray) -> dict:
+    """The greatest compression and tension (Pa, each positive where it is of its kind) in each of
+    the tool's `ENVELOPE_BINS` stretches of equal length, from the struck end: `x`, the stretches'
+    bounds (m); null for a stretch the grid has no node in."""
+    bins = envelope.shape[1]
+
+    def values(row: np.ndarray) -> list[float | None]:
+        return [float(v) if np.isfinite(v) else None for v in row]
+
+    return {
+        "x": [case.tool.length * k / bins for k in range(bins + 1)],
+        "compression": values(envelope[0]),
+        "tension": values(envelope[1]),
+    }
+
+
 def build_summary(
     case: Case,
     numerics: ResolvedNumerics,
@@ -230,12 +261,14 @@ def build_summary(
     permanent_penetration: float = 0.0,
     blows: list[dict] | None = None,
     set_at_rest: float = 0.0,
+    envelope: np.ndarray | None = None,
 ) -> dict:
     """Assemble the summary; `extremes`, `contacts` and `energy` use the kernel's slot layout,
     `open_contact` is the start of a contact still open at the end (None if there is none),
     `history` needs the paths of FORCE_HISTORY only, `permanent_penetration` is the medium's
     at the end (`set_at_rest` before the first blow, under gravity) and `blows` each blow's row of
-    the `blows` table (None: the case has no `blows`).
+    the `blows` table (None: the case has no `blows`); `envelope` the kernel's stress envelope
+    (`kernel.Observed`; None: the model keeps none).
 
     `extra_warnings` are the caller's own (e.g. outputs a model cannot provide); the estimate's
     follow (`add_accuracy`).
@@ -303,6 +336,7 @@ def build_summary(
             "time": float(extremes[L.X_MAX_TENSION_TIME]),
         },
         "striker_rebound_velocity": _number(extremes[L.X_REBOUND_VELOCITY]),
+        "stress_envelope": None if envelope is None else stress_envelope(case, envelope),
         "medium_penetration": None
         if case.medium is None
         else {"max": float(extremes[L.X_MAX_PENETRATION]), "permanent": float(permanent_penetration)},

@@ -13,6 +13,7 @@ from scipy.linalg import solve_banded
 from percussim.solver import kernel as K
 from percussim.solver.controller import tool_on
 from percussim.solver.grid import make_grid
+from percussim.solver.layout import ENVELOPE_BINS
 from percussim.solver.presets import load_preset
 
 RNG = np.random.default_rng(7)
@@ -97,8 +98,9 @@ def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     grid = make_grid(load_preset("fig9").tool, cells, end_masses=True)  # conical: areas vary
     u = RNG.normal(size=(3, cells + 1))
     new, cur, stressed, half_e_over_h = 2, 0, 1, 3.5  # the stresses of a third layer
-    kinetic, strain, low, low_block, high, high_block = K.tool_energy_and_stresses(
-        u, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h
+    chunks, envelope = K.stress_chunks(cells), np.full((2, ENVELOPE_BINS), -np.inf)
+    kinetic, strain, low, low_chunk, high, high_chunk = K.tool_energy_and_stresses(
+        u, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h, chunks, envelope, True
     )
 
     ea, eb = np.diff(u[new]), np.diff(u[cur])
@@ -109,10 +111,17 @@ def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     stress = half_e_over_h * (u[stressed, 2:] - u[stressed, :-2])  # interior nodes 1 … n − 1
     if cells < 2:
         assert (low, high) == (np.inf, -np.inf)
+        assert (envelope == -np.inf).all()
         return
     assert (low, high) == (stress.min(), stress.max())
-    for value, block, first in ((low, low_block, np.argmin(stress)), (high, high_block, np.argmax(stress))):
-        assert K.first_node(u, stressed, half_e_over_h, block, value) == first + 1
+    for value, chunk, first in ((low, low_chunk, np.argmin(stress)), (high, high_chunk, np.argmax(stress))):
+        assert K.first_node(u, stressed, half_e_over_h, chunks, chunk, value) == first + 1
+    # each stretch of the envelope: its interior nodes' greatest compression and tension
+    stretch = np.arange(1, cells) * ENVELOPE_BINS // cells
+    for b in range(ENVELOPE_BINS):
+        inside = stress[stretch == b]
+        expected = (-inside.min(), inside.max()) if inside.size else (-np.inf, -np.inf)
+        assert (envelope[0, b], envelope[1, b]) == expected
 
 
 def test_a_gap_the_step_cannot_close_takes_one_substep_and_an_overlap_its_stiffness_asks():

@@ -117,6 +117,21 @@ def test_the_force_plot_is_the_contact_medium_and_external_force_in_kN(results):
     assert ax.get_xlabel() == "time t (ms)" and "kN" in ax.get_ylabel()
 
 
+def test_the_envelope_is_each_stretchs_greatest_stresses_along_the_tool_in_mpa(results):
+    ax = figure(results["full"], "envelope").axes[0]
+    with h5py.File(results["full"]) as f:
+        summary = json.loads(f["summary"][()])
+    envelope = summary["stress_envelope"]
+    for label, key in (("greatest compression", "compression"), ("greatest tension", "tension")):
+        line = _line(ax, label)
+        assert list(line.get_xdata()) == [x for k in range(len(envelope[key])) for x in envelope["x"][k : k + 2]]
+        assert list(line.get_ydata()[::2]) == [v / 1e6 for v in envelope[key]]
+    # the largest of the stretches' is the summary's largest (Fig. 9 on the paper's scheme: its
+    # extremes are its layers', as the envelope's are)
+    assert max(envelope["tension"]) == summary["max_tensile_stress"]["value"]
+    assert max(envelope["compression"]) == summary["max_compressive_stress"]["value"]
+
+
 def test_the_displacements_are_the_striker_and_both_tool_ends_in_mm(results):
     ax = figure(results["full"], "displacements").axes[0]
     with h5py.File(results["full"]) as f:
@@ -324,11 +339,18 @@ def test_a_result_without_fields_or_probes_says_what_to_change(results, tmp_path
         assert problem(f, "force") is None and problem(f, "energy") is None
     with h5py.File(results["lumped"]) as f:
         assert 'numerics.model = "rod"' in problem(f, "spacetime")
+        assert 'numerics.model = "rod"' in problem(f, "envelope")
     with pytest.raises(NotAvailable, match="outputs.fields = true"):
         figure(results["bare"], "spacetime")
     written, skipped = write_plots(results["bare"], tmp_path, formats=["png"])
     assert sorted(skipped) == ["blows", "cycle", "probes", "spacetime", "stress_along"]
-    assert sorted(p.name for p in written) == ["displacements.png", "energy.png", "force.png", "force_penetration.png"]
+    assert sorted(p.name for p in written) == [
+        "displacements.png",
+        "energy.png",
+        "envelope.png",
+        "force.png",
+        "force_penetration.png",
+    ]
 
 
 def test_a_plot_that_does_not_apply_says_why(results):
@@ -361,7 +383,11 @@ def test_cli_writes_the_plots_next_to_the_result_and_says_what_it_skipped(result
     assert main(["plot", str(bare)]) == 0
     out, err = capsys.readouterr()
     folder = tmp_path / "run-plots"
-    names = {f"{n}.{fmt}" for n in ("force", "displacements", "energy", "force_penetration") for fmt in ("png", "svg")}
+    names = {
+        f"{n}.{fmt}"
+        for n in ("force", "displacements", "energy", "force_penetration", "envelope")
+        for fmt in ("png", "svg")
+    }
     assert {p.name for p in folder.iterdir()} == names
     assert set(out.split()) == {str(folder / n) for n in names}
     assert ("skipped spacetime: this result has no stress fields: run the case with outputs.fields = true") in err
@@ -470,7 +496,7 @@ def test_http_answers_404_for_an_unknown_plot_and_for_one_this_result_cannot_mak
     assert unknown.status_code == 404
     assert unknown.json()["detail"] == (
         "no plot named 'forces'; the plots are: force, displacements, "
-        "probes, stress_along, spacetime, energy, force_penetration, blows, cycle"
+        "probes, stress_along, spacetime, energy, force_penetration, envelope, blows, cycle"
     )
     missing = client.get(f"/v1/jobs/{job_id}/plots/probes.svg")
     assert missing.status_code == 404

@@ -452,6 +452,32 @@ function buildBars(rows, columns) {
 
 const buildBlows = (blows) => buildBars(blows, BLOW_BARS);
 
+// The summary's stress envelope: each stretch of the tool's greatest compression and tension, as
+// steps along it (a stretch the grid has no node in is left blank).
+function buildEnvelope(envelope) {
+  const length = shownUnit("length");
+  const x = scaled(envelope.x.slice(1).flatMap((end, k) => [envelope.x[k], end]), length);
+  const traces = [["compression", "greatest compression"], ["tension", "greatest tension"]].map(([key, label], k) => ({
+    type: "scatter", mode: "lines", name: label, x,
+    y: scaled(envelope[key].flatMap((v) => [v, v]), STRESS),
+    line: { color: PALETTE[k], width: 1.8 },
+    hovertemplate: `${label} %{y:.4g} ${STRESS} at x = %{x:.4g} ${length}<extra></extra>`,
+  }));
+  return {
+    traces,
+    layout: {
+      xaxis: { title: { text: `x from the struck end (${length})` } },
+      yaxis: { title: { text: `stress (${STRESS})` }, rangemode: "tozero" },
+    },
+  };
+}
+
+function envelopeCsv(envelope, stem) {
+  const text = csvText(["from (m)", "to (m)", "greatest compression (Pa)", "greatest tension (Pa)"],
+    envelope.compression.map((c, k) => [envelope.x[k], envelope.x[k + 1], c, envelope.tension[k]]));
+  return { blob: new Blob([text], { type: "text/csv" }), name: `${stem}.csv` };
+}
+
 // A hammer at work's blows (`summary.cycle`): the impact velocity, energy and stroke of each.
 const CYCLE_BARS = [
   ["impact_velocity", "impact velocity", "speed"],
@@ -514,6 +540,7 @@ export async function showCharts(view, summary) {
   const blows = summary.blows && summary.blows.length ? summary.blows : null;
   if (blows) figures.blows = chartFigure("blows", "Blow by blow", { size: "short", wide: true });
   if (summary.cycle) figures.cycles = chartFigure("cycles", "Cycle by cycle", { size: "short", wide: true });
+  if (summary.stress_envelope) figures.envelope = chartFigure("envelope", "Greatest stresses along the tool");
   box.replaceChildren(card("Plots", h("div", { class: "chart-grid" }, Object.values(figures))));
 
   const jobs = [];
@@ -535,6 +562,12 @@ export async function showCharts(view, summary) {
   if (blows) {
     const stem = fileStem(summary.name, view.id, "blows");
     jobs.push(drawChart(figures.blows, { data: blows, build: buildBlows, file: stem, csv: async () => blowsCsv(blows, stem) }));
+  }
+  if (summary.stress_envelope) {
+    const envelope = summary.stress_envelope;
+    const stem = fileStem(summary.name, view.id, "envelope");
+    jobs.push(drawChart(figures.envelope, { data: envelope, build: buildEnvelope, file: stem,
+                                            csv: async () => envelopeCsv(envelope, stem) }));
   }
   if (summary.cycle) {
     const rows = cycleRows(summary);

@@ -88,7 +88,7 @@ from ..layout import (
     X_PEAK_FORCE_TIME,
     X_REBOUND_VELOCITY,
 )
-from .audit import first_node, tool_energy_and_stresses
+from .audit import first_node, stress_chunks, tool_energy_and_stresses
 from .bundles import (
     DRIVEN_BY_FORCE,
     DRIVEN_BY_VELOCITY,
@@ -191,6 +191,7 @@ __all__ = [
     "boundary_weights",
     "factor_tool_rows",
     "first_node",
+    "stress_chunks",
     "new_observed",
     "new_state",
     "no_gravity",

@@ -29,6 +29,7 @@ from ..layout import (
     E_TOOL_KINETIC,
     E_TOOL_STRAIN,
     E_WITHDRAWN,
+    ENVELOPE_BINS,
     X_ENERGY_EXCESS,
 )
 from .bundles import (
@@ -63,8 +64,27 @@ def _llvm_binary(name):
 fmin = _llvm_binary("llvm.minnum.f64")
 fmax = _llvm_binary("llvm.maxnum.f64")
 
-# Nodes a block: enough for a block's vector reduction to pay, few for searching one to be cheap
+# Nodes a chunk at most: enough for a chunk's vector reduction to pay, few for searching one to be
+# cheap
 STRESS_BLOCK = 64
+
+
+def stress_chunks(cells: int, bins: int = ENVELOPE_BINS) -> np.ndarray:
+    """The interior nodes 1 … N−1 (N = `cells`) in chunks of at most `STRESS_BLOCK` nodes, none
+    across two of the `bins` stretches: row 0 each chunk's first node, then N; row 1 its stretch."""
+    starts, stretches = [], []
+    for b in range(bins):
+        first, end = max(1, -(-b * cells // bins)), min(cells, -(-(b + 1) * cells // bins))
+        for start in range(first, end, STRESS_BLOCK):
+            starts.append(start)
+            stretches.append(b)
+    return np.array([starts + [cells], stretches + [bins]], dtype=np.int64)
+
+
+@compiled(inline="always")
+def stretch_of(node, n, bins):
+    """The stretch of the tool node `node` of `n` lies in (`stress_chunks`)."""
+    return min(node * bins // n, bins - 1)
 
 
 # One pass for the energy and the stresses, in one vectorised loop; its fast-math flags:
@@ -74,16 +94,19 @@ STRESS_BLOCK = 64
 #   kinetic energy non-finite, which `advance` checks before it uses the stresses, and a stress of
 #   −0 or +0 is the same record.
 @compiled(fastmath={"contract", "reassoc", "nnan", "nsz"})
-def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_sigma, half_e_over_h):
+def tool_energy_and_stresses(
+    u, new, cur, stressed, node_area, area_mid, strain_sigma, half_e_over_h, chunks, envelope, enveloped
+):
     """The tool's energy terms between the layers in rows `new`, `cur` of `u` and the interior
     stress extremes of the layer in row `stressed`: `(Σ S_i·(u_i − uc_i)², Σ S_{i+½}·[σ(e_a² +
-    e_b²) + (1 − 2σ)·e_a·e_b], least stress, its block, greatest stress, its block)`.
+    e_b²) + (1 − 2σ)·e_a·e_b], least stress, its chunk, greatest stress, its chunk)`.
 
     The sums are twice the kinetic energy times τ²/(ρh) and twice the strain energy times h/E, e
     the cell strains. The stresses are `½·E/h·(u_{i+1} − u_{i−1})` at the interior nodes of that
-    layer (±inf when it has none), each with the first node of the first block of `STRESS_BLOCK`
-    nodes that holds it: a loop that carries an extreme's index does not vectorise, so
-    `first_node` finds the node in the block, when it is wanted.
+    layer (±inf when it has none), each with the first chunk (`stress_chunks`) that holds it: a
+    loop that carries an extreme's index does not vectorise, so `first_node` finds the node in the
+    chunk, when it is wanted. When `enveloped`, each chunk's greatest compression and tension
+    raise its stretch's in `envelope` (rows 0 and 1).
     """
     n = u.shape[1] - 1
     one = np.uint64(1)
@@ -92,10 +115,10 @@ def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_
     kinetic = node_area[0] * du * du
     strain = 0.0
     low, high = np.inf, -np.inf
-    low_start = high_start = 0
-    for start in range(1, n, STRESS_BLOCK):
-        lo, hi = low, high
-        for i in range(np.uint64(start), np.uint64(min(start + STRESS_BLOCK, n))):
+    low_chunk = high_chunk = 0
+    for k in range(chunks.shape[1] - 1):
+        lo, hi = np.inf, -np.inf
+        for i in range(np.uint64(chunks[0, k]), np.uint64(chunks[0, k + 1])):
             du = u[new, i] - u[cur, i]
             kinetic += node_area[i] * du * du
             ea = u[new, i] - u[new, i - one]
@@ -105,22 +128,27 @@ def tool_energy_and_stresses(u, new, cur, stressed, node_area, area_mid, strain_
             lo = fmin(lo, s)
             hi = fmax(hi, s)
         if lo < low:
-            low, low_start = lo, start
+            low, low_chunk = lo, k
         if hi > high:
-            high, high_start = hi, start
+            high, high_chunk = hi, k
+        if enveloped:
+            b = chunks[1, k]
+            envelope[0, b] = max(envelope[0, b], -lo)
+            envelope[1, b] = max(envelope[1, b], hi)
     du = u[new, n] - u[cur, n]
     kinetic += node_area[n] * du * du
     ea = u[new, n] - u[new, n - 1]
     eb = u[cur, n] - u[cur, n - 1]
     strain += area_mid[n - 1] * (strain_sigma * (ea * ea + eb * eb) + strain_cross * ea * eb)
-    return kinetic, strain, low, low_start, high, high_start
+    return kinetic, strain, low, low_chunk, high, high_chunk
 
 
 @compiled(fastmath={"nnan"})
-def first_node(u, row, half_e_over_h, start, value):
-    """The first node of the block from `start` where the stress is `value` (its last if none)."""
+def first_node(u, row, half_e_over_h, chunks, chunk, value):
+    """The first node of chunk `chunk` (`stress_chunks`) where the stress is `value` (its last if
+    none)."""
     one = np.uint64(1)
-    last = min(start + STRESS_BLOCK, u.shape[1] - 1) - 1
+    start, last = chunks[0, chunk], chunks[0, chunk + 1] - 1
     first = last
     for i in range(np.uint64(start), np.uint64(last + 1)):
         found = half_e_over_h * (u[row, i + one] - u[row, i - one]) == value
@@ -132,11 +160,12 @@ def first_node(u, row, half_e_over_h, start, value):
 
 
 @compiled(inline="always")
-def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step):
+def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step, envelope):
     """The energy terms of the new layer at m − ½, in the form each scheme conserves (or
     dissipates), into `energy[0]`; returns the balance (stored + dissipated − input: > 0 is energy
     created) and the interior stress extremes of the layer in row `rec` (the one recorded), which
-    the same pass along the tool finds (`tool_energy_and_stresses`). `r_n`: R(t_n) of the step;
+    the same pass along the tool finds (`tool_energy_and_stresses`), raising the stretches of
+    `envelope` = (the stress envelope, whether this layer counts). `r_n`: R(t_n) of the step;
     `overlaps`: the layers' before it; `potential`: Φ of the new layer."""
     u, y, ends, energy = state.u, state.y, state.ends, state.energy
     new, cur, old, ref = layer
@@ -145,8 +174,17 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
     _, spring_weight, damper_factor, _ = step.boundary
     dy = y[new] - y[cur]
     striker_kinetic = 0.5 * contact.striker_mass * dy * dy * step.inv_tau2
-    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-        u, new, cur, rec, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    tool_kinetic, tool_strain, low, low_chunk, high, high_chunk = tool_energy_and_stresses(
+        u,
+        new,
+        cur,
+        rec,
+        tool.node_area,
+        tool.area_mid,
+        step.strain_sigma,
+        step.half_e_over_h,
+        tool.stress_chunks,
+        *envelope,
     )
     tool_kinetic *= step.kinetic_factor
     tool_strain *= 0.5 * step.e_over_h
@@ -176,11 +214,11 @@ def audit_scheme_energy(state, layer, rec, r_n, overlaps, potential, contact, me
         - step.initial_energy
         - energy[0, E_EXTERNAL_WORK]
     )
-    return balance, (low, low_block, high, high_block)
+    return balance, (low, low_chunk, high, high_chunk)
 
 
 @compiled(inline="always")
-def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool, step):
+def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvil, medium, tool, step, envelope):
     """As `audit_scheme_energy` for the ends that integrate their own equations: the ends' terms
     at layer m (`flows`: the work of R, what the dampers b1, b2 dissipated and the work of the
     striker's and the anvil's weights over the step), the
@@ -201,8 +239,17 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     else:
         potential = contact_law(y[new] - u[new, 0], pressed_to(contact, ends[S_CONTACT_DEEPEST]))[1]
     stored, plastic = medium_energy(u[new, n], medium_state(ends), medium)
-    tool_kinetic, tool_strain, low, low_block, high, high_block = tool_energy_and_stresses(
-        u, new, cur, new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+    tool_kinetic, tool_strain, low, low_chunk, high, high_chunk = tool_energy_and_stresses(
+        u,
+        new,
+        cur,
+        new,
+        tool.node_area,
+        tool.area_mid,
+        step.strain_sigma,
+        step.half_e_over_h,
+        tool.stress_chunks,
+        *envelope,
     )
     energy[0, E_EXTERNAL_WORK] += work
     energy[0, E_GRAVITY_WORK] += lifted
@@ -231,7 +278,17 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
         s_tool, s_rod = striker.tool, striker.rod
         e_over_h = s_rod.youngs_modulus / s_rod.cell_length
         kinetic, strain, _, _, _, _ = tool_energy_and_stresses(
-            striker_u, new, cur, new, s_tool.node_area, s_tool.area_mid, step.strain_sigma, 0.5 * e_over_h
+            striker_u,
+            new,
+            cur,
+            new,
+            s_tool.node_area,
+            s_tool.area_mid,
+            step.strain_sigma,
+            0.5 * e_over_h,
+            s_tool.stress_chunks,
+            envelope[0],
+            False,  # the tool's envelope only
         )
         energy[0, E_STRIKER_KINETIC] = kinetic * 0.5 * s_rod.density * s_rod.cell_length * step.inv_tau2
         energy[0, E_STRIKER_STRAIN] = strain * 0.5 * e_over_h + ends[S_BACK_ENERGY]
@@ -249,7 +306,7 @@ def audit_impedance_energy(state, layer, flows, velocity, contact, striker, anvi
     ):
         balance += 0.5 * (energy[0, slot] + energy[1, slot])
     balance -= 0.5 * (energy[0, E_EXTERNAL_WORK] + energy[1, E_EXTERNAL_WORK])
-    return balance, (low, low_block, high, high_block)
+    return balance, (low, low_chunk, high, high_chunk)
 
 
 @compiled(inline="always")

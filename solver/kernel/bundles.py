@@ -11,7 +11,7 @@ from collections import namedtuple
 import numpy as np
 
 from ..compiled import compiled
-from ..layout import ENERGY_SLOTS, new_extremes
+from ..layout import ENERGY_SLOTS, ENVELOPE_BINS, new_extremes
 
 # Medium kinds (`Medium.kind`); R(t)'s kinds are `laws.FORCE_…`
 MEDIUM_LINEAR, MEDIUM_BILINEAR, MEDIUM_SMITH = 0, 1, 2
@@ -93,11 +93,14 @@ NOT_DRIVEN, DRIVEN_BY_FORCE, DRIVEN_BY_VELOCITY = 0, 1, 2
 Gravity = namedtuple("Gravity", "first last lift weight")
 """The weight of a rod's nodes from `first` to `last` (interior nodes; none when `last` < `first`):
 each node's weight W_i (N) and the lift τ²·W_i/m_i it adds to the node's explicit row (`gravity.py`)."""
-Tool = namedtuple("Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area gravity")
+Tool = namedtuple(
+    "Tool", "lower upper node_area area_mid uniform struck_end_area working_end_area gravity stress_chunks"
+)
 """The tool on its grid (`solver.grid.Grid`): the operator's weights `lower_i`, `upper_i` of the
 neighbours (all 1 when `uniform`), the nodes' areas S̄_i (`node_area·ρh` is a node's mass: half a
 cell at the ends, 0 at a massless end), the cells' areas S_{i+½}, the areas at the struck and
-working ends (their stresses are the end forces over them) and its nodes' weight (`Gravity`)."""
+working ends (their stresses are the end forces over them), its nodes' weight (`Gravity`) and its
+interior nodes in chunks, each within one stretch of its stress envelope (`audit.stress_chunks`)."""
 ToolRows = namedtuple("ToolRows", "p inv_den coefficient coefficient_product p_product")
 """The tool's rows u_1 … u_N eliminated once (`factor_tool_rows`)."""
 Rod = namedtuple(
@@ -150,10 +153,11 @@ State = namedtuple("State", "u y ends energy striker shaft_sets")
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
 the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`) and the shaft's
 sets along the tool (N+1: each node's permanent displacement against its soil)."""
-Observed = namedtuple("Observed", "extremes contacts until")
+Observed = namedtuple("Observed", "extremes contacts until envelope")
 """What a blow reports beyond its recordings: the extremes (`X_…`) over its duration, up to the
-time `until`, and the finished contact intervals (start, end; one row each, those beyond its rows
-counted only)."""
+time `until`, the finished contact intervals (start, end; one row each, those beyond its rows
+counted only), and the stress envelope: the greatest compression (row 0, as −σ) and tension
+(row 1) in each stretch of the tool (`audit.ENVELOPE_BINS`), −inf where it has no node."""
 Recorders = namedtuple(
     "Recorders",
     "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress "
@@ -210,7 +214,12 @@ def new_state(cells: int, striker_cells: int = 0) -> State:
 def new_observed(max_contacts: int, until: float = np.inf) -> Observed:
     """Nothing observed yet, with room for `max_contacts` contact intervals, over a blow whose
     duration ends at `until` (s, the kernel's time)."""
-    return Observed(extremes=new_extremes(), contacts=np.zeros((max_contacts, 2)), until=float(until))
+    return Observed(
+        extremes=new_extremes(),
+        contacts=np.zeros((max_contacts, 2)),
+        until=float(until),
+        envelope=np.full((2, ENVELOPE_BINS), -np.inf),
+    )
 
 
 @compiled()

@@ -62,7 +62,7 @@ from ..layout import (
     X_PEAK_FORCE_TIME,
     X_REBOUND_VELOCITY,
 )
-from .audit import first_node
+from .audit import first_node, stretch_of
 from .bundles import (
     S_ANVIL_DISP,
     S_ANVIL_FORCE,
@@ -186,18 +186,23 @@ def track_ends_between_layers(observed, contact_range, end_range, working_range,
 
 
 @compiled(inline="always")
-def track_stress_extremes(extremes, u, recorded, interior, rod, step):
+def track_stress_extremes(observed, u, recorded, interior, tool, rod, step):
     """The recorded layer's extreme stresses along the tool (`interior`: its interior nodes' least
-    and greatest stress with their blocks, `tool_energy_and_stresses`) against the records.
+    and greatest stress with their chunks, `tool_energy_and_stresses`, which raised the envelope's
+    stretches with them) against the records; its end stresses raise the end stretches.
 
     Not refined between nodes: next to a kink (a reflected front meeting the peak) a parabola
     through three nodes overshoots by O(h), where the nodes' own error is O(h²)."""
-    low, low_block, high, high_block = interior
+    extremes, envelope = observed.extremes, observed.envelope
+    low, low_chunk, high, high_chunk = interior
     s0, sn = recorded.struck_end_stress, recorded.working_end_stress
+    last = envelope.shape[1] - 1
+    envelope[0, 0], envelope[1, 0] = max(envelope[0, 0], -s0), max(envelope[1, 0], s0)
+    envelope[0, last], envelope[1, last] = max(envelope[0, last], -sn), max(envelope[1, last], sn)
     s_low, s_high = min(s0, low, sn), max(s0, high, sn)
-    for peak, value, inside, block, slots in (
-        (-s_low, s_low, low, low_block, COMPRESSION),
-        (s_high, s_high, high, high_block, TENSION),
+    for peak, value, inside, chunk, slots in (
+        (-s_low, s_low, low, low_chunk, COMPRESSION),
+        (s_high, s_high, high, high_chunk, TENSION),
     ):
         value_slot, place_slot, time_slot = slots
         if peak > extremes[value_slot]:
@@ -206,7 +211,7 @@ def track_stress_extremes(extremes, u, recorded, interior, rod, step):
             if value == s0:
                 node = 0
             elif value == inside:
-                node = first_node(u, recorded.row, step.half_e_over_h, block, value)
+                node = first_node(u, recorded.row, step.half_e_over_h, tool.stress_chunks, chunk, value)
             else:
                 node = step.n
             extremes[value_slot] = peak
@@ -240,12 +245,14 @@ def layer_at_end(recorded, ends, weight, until, tool):
 
 
 @compiled(fastmath={"contract"})
-def track_stresses_at_end(extremes, u, seen, weight, rod, step):
+def track_stresses_at_end(observed, u, seen, weight, rod, step):
     """The extreme stresses along the tool at the duration's end (`seen`, `layer_at_end`): each
     interior node's linear between the layer before (the row before `seen.row`) and the recorded
-    one, as its end stresses are. Once a blow, so node by node, and called, not inlined: a loop run
-    once a blow is kept out of `advance`'s body (inlined there, the anvil's steps on 2000 cells
-    measured 1.15 ns a node, against 1.02–1.15 without it)."""
+    one, as its end stresses are, in the extremes and the envelope's stretches. Once a blow, so
+    node by node, and called, not inlined: a loop run once a blow is kept out of `advance`'s body
+    (inlined there, the anvil's steps on 2000 cells measured 1.15 ns a node, against 1.02–1.15
+    without it)."""
+    extremes, envelope = observed.extremes, observed.envelope
     row, before = seen.row, (seen.row + 2) % 3
     for i in range(step.n + 1):
         if i == 0:
@@ -256,6 +263,8 @@ def track_stresses_at_end(extremes, u, seen, weight, rod, step):
             s = step.half_e_over_h * between(u[before, i + 1] - u[before, i - 1], u[row, i + 1] - u[row, i - 1], weight)
         track_end_extreme(extremes, COMPRESSION, -s, i * rod.cell_length, seen.time, seen.time)
         track_end_extreme(extremes, TENSION, s, i * rod.cell_length, seen.time, seen.time)
+        b = stretch_of(i, step.n, envelope.shape[1])
+        envelope[0, b], envelope[1, b] = max(envelope[0, b], -s), max(envelope[1, b], s)
 
 
 @compiled(inline="always")

@@ -322,7 +322,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau, velocit
 
 
 @compiled(inline="always")
-def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, medium, step):
+def start_impact(state, observed, layer, t, tool, rod, weights, contact, striker, anvil, medium, step):
     """Layer 0 by (5), (6): the tool at rest (layers 0 and −1, rows 0 and 2, as the state holds
     them: unloaded, or under gravity as `gravity.start_at_rest` set them), the striker moving at
     W1 where it strikes, δ(0) = 0 (in contact from the first instant), an anvil there between
@@ -346,8 +346,19 @@ def start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, m
     resting = 0.0  # the anvil's contact, pressed by its weight
     if anvil.present:
         resting = contact_law(ends[S_ANVIL_DISP] - u0, pressed_to(anvil.contact, ends[S_ANVIL_CONTACT_DEEPEST]))[1]
+    # the tool at rest: its interior's stresses count for no extreme (`AT_REST`)
     strain = tool_energy_and_stresses(
-        u, layer.new, 2, layer.new, tool.node_area, tool.area_mid, step.strain_sigma, step.half_e_over_h
+        u,
+        layer.new,
+        2,
+        layer.new,
+        tool.node_area,
+        tool.area_mid,
+        step.strain_sigma,
+        step.half_e_over_h,
+        tool.stress_chunks,
+        observed.envelope,
+        False,
     )[1]
     energy[0, E_MEDIUM_POTENTIAL] = stored
     energy[0, E_MEDIUM_PLASTIC] = plastic
@@ -499,7 +510,17 @@ def impedance_ends_step(state, observed, layer, t, tool, rod, contact, striker, 
     if not finite:
         return False, recorded, AT_REST, 0.0
     balance, interior = audit_impedance_energy(
-        state, layer, flows, velocity, contact, striker, anvil, medium, tool, step
+        state,
+        layer,
+        flows,
+        velocity,
+        contact,
+        striker,
+        anvil,
+        medium,
+        tool,
+        step,
+        (observed.envelope, t <= observed.until),
     )
     return True, recorded, interior, balance
 
@@ -534,7 +555,18 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
         rec, t_rec = new, t
         velocity = contact.striker_velocity if m == 1 else (3.0 * y_new - 4.0 * y[cur] + y[old]) / (2.0 * tau)
     balance, interior = audit_scheme_energy(
-        state, layer, rec, r_n, overlaps, potential, contact, medium, tool, rod, step
+        state,
+        layer,
+        rec,
+        r_n,
+        overlaps,
+        potential,
+        contact,
+        medium,
+        tool,
+        rod,
+        step,
+        (observed.envelope, t_rec <= observed.until),
     )
     ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
     ends[S_POTENTIAL_BEFORE] = potential
@@ -569,13 +601,13 @@ def record_layer(
     u, ends, extremes, until = state.u, state.ends, observed.extremes, observed.until
     seen, weight = recorded, 1.0
     if recorded.time <= until:
-        track_stress_extremes(extremes, u, recorded, interior, rod, step)
+        track_stress_extremes(observed, u, recorded, interior, tool, rod, step)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], u[recorded.row, step.n])
         extremes[X_SET] = ends[S_MEDIUM_SET]
     else:
         weight = 1.0 - (recorded.time - until) / rod.time_step
         seen = layer_at_end(recorded, ends, weight, until, tool)
-        track_stresses_at_end(extremes, u, seen, weight, rod, step)
+        track_stresses_at_end(observed, u, seen, weight, rod, step)
         reached = between(u[(recorded.row + 2) % 3, step.n], u[recorded.row, step.n], weight)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], reached)
         extremes[X_SET] = between(extremes[X_SET], ends[S_MEDIUM_SET], weight)  # the layer before's, then
@@ -652,7 +684,9 @@ def advance(
         layer = Layers(new=m % 3, cur=(m - 1) % 3, old=(m - 2) % 3, ref=(m - step.boundary.back) % 3)
         t = m * tau
         if m == 0:
-            recorded = start_impact(state, layer, t, tool, rod, weights, contact, striker, anvil, medium, step)
+            recorded = start_impact(
+                state, observed, layer, t, tool, rod, weights, contact, striker, anvil, medium, step
+            )
             interior = AT_REST
         else:
             for slot in range(ENERGY_SLOTS):
