@@ -80,10 +80,11 @@ def test_a_preset_runs_to_its_summary_plots_and_hdf5(page, stack):
                 assert drawn(page, chart), chart
             else:
                 expect(page.locator(f"figure[data-chart={chart}]")).to_contain_text(series["reason"])
-    # the stress envelope from the summary: each stretch's greatest stresses as a step along the tool
+    # the stress envelope from the summary: each stretch's greatest stresses as a step along the
+    # tool, x in mm and stresses in MPa
     envelope = {t["name"]: t for t in drawn(page, "envelope")}
     tension = envelope["greatest tension"]
-    assert tension["x"][:2] == pytest.approx([0.0, summary["stress_envelope"]["x"][1]], rel=1e-12)
+    assert tension["x"][:2] == pytest.approx([0.0, 1e3 * summary["stress_envelope"]["x"][1]], rel=1e-12)
     assert tension["y"][::2] == pytest.approx([v / 1e6 for v in summary["stress_envelope"]["tension"]], rel=1e-12)
     assert max(tension["y"]) == pytest.approx(summary["max_tensile_stress"]["value"] / 1e6, rel=1e-12)
 
