@@ -311,6 +311,14 @@ def with_the_whole_tool(
         values = [row[b] if row is not None else None for row in rows]
         if abs(b - at) <= 1 or any(v is None for v in values[-3:]) or not values[-3] < values[-2] < values[-1]:
             continue
+        # the most `quantity_error` makes of the last two differences at an order of at least
+        # LOWEST_ORDER: a stretch it cannot take past the largest is not read (an estimate on a
+        # grid not nested in the one before seeks each stretch's order by root finding)
+        d1, d2 = values[-2] - values[-3], values[-1] - values[-2]
+        r1, r2 = h[-3] / h[-2], h[-2] / h[-1]
+        most = SAFETY_FACTOR * (max(d1, d2) / (r2**LOWEST_ORDER - 1.0) + d2 + d1 / (r1**LOWEST_ORDER - 1.0))
+        if values[-1] + most <= largest["value"]:
+            continue
         found = quantity_error(h, values, formal_order)
         if found.order is None or found.order < LOWEST_ORDER:
             continue
