@@ -348,17 +348,20 @@ def estimate(
     run."""
     values = [estimated_values(s) for s in summaries]
     skip = not_estimated(summaries[-1], impact_velocity, has_medium)
+
+    def order_of(name: str) -> float:
+        """The scheme's order, or `KINK_ORDER` for a largest stress at a bend of the profile."""
+        at_a_kink = name in ENVELOPED and any(abs(summaries[-1][name]["x"] - k) <= h[-1] for k in kinks)
+        return min(formal_order, KINK_ORDER) if at_a_kink else formal_order
+
     errors = {
-        name: quantity_error(h, [v[name] for v in values], formal_order)
+        name: quantity_error(h, [v[name] for v in values], order_of(name))
         for name in estimated_names(summaries[-1])
         if name not in skip
     }
     for name, kind in ENVELOPED.items():
-        if name not in errors:
-            continue
-        if any(abs(summaries[-1][name]["x"] - kink) <= h[-1] for kink in kinks):
-            errors[name] = quantity_error(h, [v[name] for v in values], min(formal_order, KINK_ORDER))
-        errors[name] = with_the_whole_tool(errors[name], h, summaries, name, kind, formal_order)
+        if name in errors:
+            errors[name] = with_the_whole_tool(errors[name], h, summaries, name, kind, formal_order)
     # the two finest grids must agree: a grazing contact that a coarse grid still sees or misses
     # changes none of the quantities estimated by more than their differences show
     contacts = tuple(s["contacts_total"] for s in summaries[-3:])

@@ -82,9 +82,11 @@ def stress_chunks(cells: int, bins: int = ENVELOPE_BINS) -> np.ndarray:
 
 
 @compiled(inline="always")
-def stretch_of(node, n, bins):
-    """The stretch of the tool node `node` of `n` lies in (`stress_chunks`)."""
-    return min(node * bins // n, bins - 1)
+def widen(envelope, stretch, low, high):
+    """Raise the envelope's `stretch` to a least stress `low` (its compression, −low) and a
+    greatest `high` (its tension)."""
+    envelope[0, stretch] = max(envelope[0, stretch], -low)
+    envelope[1, stretch] = max(envelope[1, stretch], high)
 
 
 # One pass for the energy and the stresses, in one vectorised loop; its fast-math flags:
@@ -132,9 +134,7 @@ def tool_energy_and_stresses(
         if hi > high:
             high, high_chunk = hi, k
         if enveloped:
-            b = chunks[1, k]
-            envelope[0, b] = max(envelope[0, b], -lo)
-            envelope[1, b] = max(envelope[1, b], hi)
+            widen(envelope, chunks[1, k], lo, hi)
     du = u[new, n] - u[cur, n]
     kinetic += node_area[n] * du * du
     ea = u[new, n] - u[new, n - 1]

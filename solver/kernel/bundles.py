@@ -157,7 +157,7 @@ Observed = namedtuple("Observed", "extremes contacts until envelope")
 """What a blow reports beyond its recordings: the extremes (`X_…`) over its duration, up to the
 time `until`, the finished contact intervals (start, end; one row each, those beyond its rows
 counted only), and the stress envelope: the greatest compression (row 0, as −σ) and tension
-(row 1) in each stretch of the tool (`audit.ENVELOPE_BINS`), −inf where it has no node."""
+(row 1) in each stretch of the tool (`layout.ENVELOPE_BINS`), −inf where it has no node."""
 Recorders = namedtuple(
     "Recorders",
     "history history_stride probe_node probe_weight probes field_u field_stress field_stride striker_u striker_stress "

@@ -62,7 +62,7 @@ from ..layout import (
     X_PEAK_FORCE_TIME,
     X_REBOUND_VELOCITY,
 )
-from .audit import first_node, stretch_of
+from .audit import first_node, widen
 from .bundles import (
     S_ANVIL_DISP,
     S_ANVIL_FORCE,
@@ -196,9 +196,8 @@ def track_stress_extremes(observed, u, recorded, interior, tool, rod, step):
     extremes, envelope = observed.extremes, observed.envelope
     low, low_chunk, high, high_chunk = interior
     s0, sn = recorded.struck_end_stress, recorded.working_end_stress
-    last = envelope.shape[1] - 1
-    envelope[0, 0], envelope[1, 0] = max(envelope[0, 0], -s0), max(envelope[1, 0], s0)
-    envelope[0, last], envelope[1, last] = max(envelope[0, last], -sn), max(envelope[1, last], sn)
+    widen(envelope, 0, s0, s0)
+    widen(envelope, envelope.shape[1] - 1, sn, sn)
     s_low, s_high = min(s0, low, sn), max(s0, high, sn)
     for peak, value, inside, chunk, slots in (
         (-s_low, s_low, low, low_chunk, COMPRESSION),
@@ -244,27 +243,31 @@ def layer_at_end(recorded, ends, weight, until, tool):
     )
 
 
+@compiled(inline="always")
+def track_stress_at_end(observed, s, node, stretch, seen, rod):
+    """Node `node`'s stress `s` at the duration's end against the extremes and its `stretch` of
+    the envelope."""
+    track_end_extreme(observed.extremes, COMPRESSION, -s, node * rod.cell_length, seen.time, seen.time)
+    track_end_extreme(observed.extremes, TENSION, s, node * rod.cell_length, seen.time, seen.time)
+    widen(observed.envelope, stretch, s, s)
+
+
 @compiled(fastmath={"contract"})
-def track_stresses_at_end(observed, u, seen, weight, rod, step):
+def track_stresses_at_end(observed, u, seen, weight, tool, rod, step):
     """The extreme stresses along the tool at the duration's end (`seen`, `layer_at_end`): each
     interior node's linear between the layer before (the row before `seen.row`) and the recorded
-    one, as its end stresses are, in the extremes and the envelope's stretches. Once a blow, so
-    node by node, and called, not inlined: a loop run once a blow is kept out of `advance`'s body
-    (inlined there, the anvil's steps on 2000 cells measured 1.15 ns a node, against 1.02–1.15
-    without it)."""
-    extremes, envelope = observed.extremes, observed.envelope
+    one, as its end stresses are, in the extremes and the envelope's stretches (the interior's
+    by `tool.stress_chunks`). Once a blow, so node by node, and called, not inlined: a loop run
+    once a blow is kept out of `advance`'s body (inlined there, the anvil's steps on 2000 cells
+    measured 1.15 ns a node, against 1.02–1.15 without it)."""
     row, before = seen.row, (seen.row + 2) % 3
-    for i in range(step.n + 1):
-        if i == 0:
-            s = seen.struck_end_stress
-        elif i == step.n:
-            s = seen.working_end_stress
-        else:
+    chunks = tool.stress_chunks
+    track_stress_at_end(observed, seen.struck_end_stress, 0, 0, seen, rod)
+    for k in range(chunks.shape[1] - 1):
+        for i in range(chunks[0, k], chunks[0, k + 1]):
             s = step.half_e_over_h * between(u[before, i + 1] - u[before, i - 1], u[row, i + 1] - u[row, i - 1], weight)
-        track_end_extreme(extremes, COMPRESSION, -s, i * rod.cell_length, seen.time, seen.time)
-        track_end_extreme(extremes, TENSION, s, i * rod.cell_length, seen.time, seen.time)
-        b = stretch_of(i, step.n, envelope.shape[1])
-        envelope[0, b], envelope[1, b] = max(envelope[0, b], -s), max(envelope[1, b], s)
+            track_stress_at_end(observed, s, i, chunks[1, k], seen, rod)
+    track_stress_at_end(observed, seen.working_end_stress, step.n, observed.envelope.shape[1] - 1, seen, rod)
 
 
 @compiled(inline="always")

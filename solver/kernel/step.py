@@ -607,7 +607,7 @@ def record_layer(
     else:
         weight = 1.0 - (recorded.time - until) / rod.time_step
         seen = layer_at_end(recorded, ends, weight, until, tool)
-        track_stresses_at_end(observed, u, seen, weight, rod, step)
+        track_stresses_at_end(observed, u, seen, weight, tool, rod, step)
         reached = between(u[(recorded.row + 2) % 3, step.n], u[recorded.row, step.n], weight)
         extremes[X_MAX_PENETRATION] = max(extremes[X_MAX_PENETRATION], reached)
         extremes[X_SET] = between(extremes[X_SET], ends[S_MEDIUM_SET], weight)  # the layer before's, then
