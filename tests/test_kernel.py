@@ -116,10 +116,16 @@ def test_energy_and_stress_pass_equals_numpy(cells, strain_sigma):
     assert (low, high) == (stress.min(), stress.max())
     for value, chunk, first in ((low, low_chunk, np.argmin(stress)), (high, high_chunk, np.argmax(stress))):
         assert K.first_node(u, stressed, half_e_over_h, chunks, chunk, value) == first + 1
-    # each stretch of the envelope: its interior nodes' greatest compression and tension
+    # each stretch of the envelope: its interior nodes' greatest compression and tension, over
+    # this layer and a second, smaller one that raises some stretches and not others
+    later = 0.8 * RNG.normal(size=(3, cells + 1))
+    K.tool_energy_and_stresses(
+        later, new, cur, stressed, grid.node_area, grid.area_mid, strain_sigma, half_e_over_h, chunks, envelope, True
+    )
+    stresses = np.vstack([stress, half_e_over_h * (later[stressed, 2:] - later[stressed, :-2])])
     stretch = np.arange(1, cells) * ENVELOPE_BINS // cells
     for b in range(ENVELOPE_BINS):
-        inside = stress[stretch == b]
+        inside = stresses[:, stretch == b]
         expected = (-inside.min(), inside.max()) if inside.size else (-np.inf, -np.inf)
         assert (envelope[0, b], envelope[1, b]) == expected
 
