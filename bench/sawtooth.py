@@ -1,0 +1,125 @@
+"""The tool's sawtooth mode over a long run: seed 1's matrix-31 of `bench/matrix.py` (a 69-kg
+striker on a soft damped contact, the tool flying free for 0.22 s) on fixed grids.
+
+    .venv/bin/python bench/sawtooth.py [--cells 5837] [--coarse 23 46 92 184]
+
+The sawtooth `(−1)^(i+n)`, every node against its neighbours and every step against the last, is
+an eigenvector of the explicit scheme's interior rows at Courant number 1, at the limit of
+stability; the ends' wave bookkeeping cannot see it. Printed for the case as drawn, without its
+external force, and without its contact's damper, each on `--cells` cells: the energy the scheme
+made (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit
+scheme's strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper
+took, and how much the contact
+force alternates from step to step at a few times (the history kept every 7 steps, an odd stride,
+so that a step-to-step alternation shows as one from row to row), with the field's sawtooth
+amplitude at the end. Then the free case on `--coarse` grids over as many steps (its duration
+scaled up): whether it grows with the steps alone. Last, the linear map of one step of a uniform
+rod at Courant number 1 with the ends' wave bookkeeping (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`)
+at a struck end held by a damper b against a rigid striker and a free far end, built in NumPy
+apart from the kernel: its eigenvalue at −1, with its eigenvector the sawtooth, for several b/Z.
+About 5 minutes.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+import numpy as np
+
+from percussim.solver.case import parse_case
+from percussim.solver.controller import simulate_rod, warm_up
+from percussim.solver.grid import explicit_numerics
+from percussim.solver.matrix import draw_cases
+
+STRIDE = 7  # odd: a step-to-step alternation alternates from row to row
+TIMES = (0.05, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
+
+
+def variant(name: str) -> dict:
+    """matrix-31 as drawn, without its external force or without its contact's damper."""
+    raw = draw_cases(1, 72)[31]
+    if name == "without its external force":
+        raw.pop("force")
+    elif name == "without its contact's damper":
+        raw["contact"].pop("damping")
+    return raw
+
+
+def alternation(force: np.ndarray, time: np.ndarray, at: float) -> float:
+    """Half the largest change of the contact force from row to row over the 40 rows before `at`."""
+    i = max(2, int(np.searchsorted(time, at)))
+    return 0.5 * float(np.abs(np.diff(force[i - 40 : i])).max())
+
+
+def energy_line(energy: dict) -> str:
+    return (
+        f"energy.numerical {energy['numerical']:9.3g} J of {energy['initial'] + max(energy['external_work'], 0.0):.4g} J, "
+        f"max_excess_fraction {energy['max_excess_fraction']:.2g}, strain form at the end {energy['tool_strain']:.2g} J, "
+        f"the contact's damper {energy['dissipated_contact']:.3g} J"
+    )
+
+
+def bookkeeping_step(state: np.ndarray, cells: int, damper_over_impedance: float) -> np.ndarray:
+    """One step of the uniform rod's layers (u^{m−1}, u^{m−2}) and the struck end's G_{m−1},
+    G_{m−2}: the interior at Courant number 1, a free far end (its half cell), and the struck end
+    moved by the wave arriving over the step as a damper b against a rigid striker lets it,
+    `Δu_0 = 2Z/(Z + b)·ΔG`."""
+    n = cells
+    now, before, g_last, g_before = state[: n + 1], state[n + 1 : 2 * n + 2], state[-2], state[-1]
+    new = np.empty(n + 1)
+    new[1:n] = now[: n - 1] + now[2:] - before[1:n]
+    new[n] = 2.0 * now[n - 1] - before[n]
+    g_now = now[1] - before[0] + g_before
+    new[0] = now[0] + 2.0 / (1.0 + damper_over_impedance) * (g_now - g_last)
+    return np.concatenate([new, now, [g_now, g_last]])
+
+
+def sawtooth_eigenvalue(cells: int, damper_over_impedance: float) -> tuple[complex, float]:
+    """The step's eigenvalue nearest −1 and how far its eigenvector's layer is from the sawtooth."""
+    size = 2 * cells + 4
+    step = np.column_stack([bookkeeping_step(e, cells, damper_over_impedance) for e in np.eye(size)])
+    values, vectors = np.linalg.eig(step)
+    k = int(np.argmin(np.abs(values + 1.0)))
+    layer = np.real(vectors[: cells + 1, k] / vectors[0, k])
+    return values[k], float(np.abs(layer - (-1.0) ** np.arange(cells + 1)).max())
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--cells", type=int, default=5837)
+    parser.add_argument("--coarse", type=int, nargs="*", default=[23, 46, 92, 184])
+    args = parser.parse_args()
+    warm_up()
+    for name in ("as drawn", "without its external force", "without its contact's damper"):
+        raw = variant(name)
+        raw["outputs"] = {"history_stride": STRIDE, "fields": True, "field_stride": 100_003}
+        case = parse_case(raw)
+        result = simulate_rod(case, numerics=explicit_numerics(case, args.cells))
+        history, fields = result.history, result.fields
+        last = fields.displacement[-1]
+        sawtooth = 0.5 * np.abs(last[1:-1] - 0.5 * (last[2:] + last[:-2])).max()
+        print(f"\nmatrix-31 {name}, {args.cells} cells: {energy_line(result.summary['energy'])}")
+        print(
+            "  the contact force's step-to-step alternation (N): "
+            + ", ".join(f"{t:g} s {alternation(history['contact/force'], history['time'], t):.2g}" for t in TIMES)
+        )
+        print(f"  the tool's sawtooth at {fields.time[-1]:.4f} s: {sawtooth:.2g} m at most")
+    steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
+    print(f"\nmatrix-31 without its external force, {steps} steps on coarser grids:")
+    for cells in args.coarse:
+        raw = variant("without its external force")
+        case = parse_case(raw)
+        raw["numerics"]["duration"] = case.numerics.duration * steps / explicit_numerics(case, cells).steps
+        case = parse_case(raw)
+        print(f"  {cells:5d} cells, {case.numerics.duration:6.2f} s: ", end="", flush=True)
+        print(energy_line(simulate_rod(case.summary_only(), numerics=explicit_numerics(case, cells)).summary["energy"]))
+    print("\nA uniform rod of 20 cells, the struck end's bookkeeping with a damper b against a rigid striker:")
+    for ratio in (0.0, 0.075, 1.0, 3.0):
+        value, off = sawtooth_eigenvalue(20, ratio)
+        print(
+            f"  b/Z = {ratio:5.3f}: eigenvalue {value.real:+.12f}{value.imag:+.1e}j, its layer the sawtooth to {off:.1e}"
+        )
+
+
+if __name__ == "__main__":
+    main()
