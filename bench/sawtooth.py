@@ -6,7 +6,8 @@ striker on a soft damped contact, the tool flying free for 0.22 s) on fixed grid
 The sawtooth `(−1)^(i+n)`, every node against its neighbours and every step against the last, is
 an eigenvector of the explicit scheme's interior rows at Courant number 1, at the limit of
 stability; the ends' wave bookkeeping cannot see it. Printed for the case as drawn, without its
-external force, and without its contact's damper, each on `--cells` cells: the energy the scheme
+external force, without its contact's damper, and with a uniform tool of about its mean area,
+each on `--cells` cells: the energy the scheme
 made (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit
 scheme's strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper
 took, and how much the contact
@@ -16,8 +17,10 @@ amplitude at the end. Then the free case on `--coarse` grids over as many steps 
 scaled up): whether it grows with the steps alone. Last, the linear map of one step of a uniform
 rod at Courant number 1 with the ends' wave bookkeeping (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`)
 at a struck end held by a damper b against a rigid striker and a free far end, built in NumPy
-apart from the kernel: its eigenvalue at −1, with its eigenvector the sawtooth, for several b/Z.
-About 5 minutes.
+apart from the kernel: its eigenvalue at −1, with its eigenvector the sawtooth, for several b/Z;
+and, before it, a pulse on free rods of three profiles in NumPy: how the sawtooth grows with the
+steps on a uniform rod, an exponential taper and the same taper in straight pieces (the profiles
+of a case are straight between their stations). About 8 minutes.
 """
 
 from __future__ import annotations
@@ -42,6 +45,9 @@ def variant(name: str) -> dict:
         raw.pop("force")
     elif name == "without its contact's damper":
         raw["contact"].pop("damping")
+    elif name == "on a uniform tool":
+        raw["tool"].pop("profile")
+        raw["tool"]["area"] = 7e-4  # about its mean
     return raw
 
 
@@ -84,13 +90,44 @@ def sawtooth_eigenvalue(cells: int, damper_over_impedance: float) -> tuple[compl
     return values[k], float(np.abs(layer - (-1.0) ** np.arange(cells + 1)).max())
 
 
+PROFILES = {  # area (m²) along a 1-m free rod, x in m
+    "uniform": lambda x: 1e-3 + 0.0 * x,
+    "exponential taper": lambda x: 1.3e-3 * np.exp(-1.3 * x),
+    "the same taper in 7 straight pieces": lambda x: np.interp(
+        x, np.linspace(0.0, 1.0, 8), 1.3e-3 * np.exp(-1.3 * np.linspace(0.0, 1.0, 8))
+    ),
+}
+
+
+def pulse_sawtooth(area, cells: int, checkpoints: list[int]) -> list[float]:
+    """A Gaussian pulse of 1 mm on a free rod of `area` at Courant number 1 (the interior rows with
+    half-cell ends, in NumPy): the sawtooth's amplitude at each of `checkpoints` steps, from the
+    layers' second difference in time projected on `(−1)^i` with the nodes' masses."""
+    x = np.linspace(0.0, 1.0, cells + 1)
+    cell_area = np.array([np.mean(area(np.linspace(x[i], x[i + 1], 41))) for i in range(cells)])
+    node_area = np.concatenate([[0.5 * cell_area[0]], 0.5 * (cell_area[1:] + cell_area[:-1]), [0.5 * cell_area[-1]]])
+    lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
+    lower[1:], upper[:-1] = cell_area / node_area[1:], cell_area / node_area[:-1]
+    before, now = (1e-3 * np.exp(-(((x - 0.3 + shift) / 0.05) ** 2)) for shift in (1.0 / cells, 0.0))
+    sawtooth, found = (-1.0) ** np.arange(cells + 1), []
+    for step in range(max(checkpoints) + 1):
+        operator = np.zeros(cells + 1)
+        operator[1:] += lower[1:] * (now[:-1] - now[1:])
+        operator[:-1] += upper[:-1] * (now[1:] - now[:-1])
+        new = 2.0 * now - before + operator
+        if step in checkpoints:
+            found.append(abs(np.sum(node_area * sawtooth * (new - 2.0 * now + before))) / (4.0 * np.sum(node_area)))
+        before, now = now, new
+    return found
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     parser.add_argument("--cells", type=int, default=5837)
     parser.add_argument("--coarse", type=int, nargs="*", default=[23, 46, 92, 184])
     args = parser.parse_args()
     warm_up()
-    for name in ("as drawn", "without its external force", "without its contact's damper"):
+    for name in ("as drawn", "without its external force", "without its contact's damper", "on a uniform tool"):
         raw = variant(name)
         raw["outputs"] = {"history_stride": STRIDE, "fields": True, "field_stride": 100_003}
         case = parse_case(raw)
@@ -113,6 +150,11 @@ def main() -> None:
         case = parse_case(raw)
         print(f"  {cells:5d} cells, {case.numerics.duration:6.2f} s: ", end="", flush=True)
         print(energy_line(simulate_rod(case.summary_only(), numerics=explicit_numerics(case, cells)).summary["energy"]))
+    checkpoints = [1_000, 10_000, 100_000]
+    print("\nA 1-mm pulse on a free rod of 200 cells at Courant number 1 (NumPy), the sawtooth after")
+    print("  " + " ".join(f"{n:>10,d}" for n in checkpoints) + " steps (m)")
+    for name, area in PROFILES.items():
+        print("  " + " ".join(f"{a:10.2e}" for a in pulse_sawtooth(area, 200, checkpoints)) + f"  {name}")
     print("\nA uniform rod of 20 cells, the struck end's bookkeeping with a damper b against a rigid striker:")
     for ratio in (0.0, 0.075, 1.0, 3.0):
         value, off = sawtooth_eigenvalue(20, ratio)
