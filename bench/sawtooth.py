@@ -5,22 +5,23 @@ striker on a soft damped contact, the tool flying free for 0.22 s) on fixed grid
 
 The sawtooth `(−1)^(i+n)`, every node against its neighbours and every step against the last, is
 an eigenvector of the explicit scheme's interior rows at Courant number 1, at the limit of
-stability; the ends' wave bookkeeping cannot see it. Printed for the case as drawn, without its
-external force, without its contact's damper, and with a uniform tool of about its mean area,
-each on `--cells` cells: the energy the scheme
-made (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit
-scheme's strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper
-took, and how much the contact
-force alternates from step to step at a few times (the history kept every 7 steps, an odd stride,
-so that a step-to-step alternation shows as one from row to row), with the field's sawtooth
-amplitude at the end. Then the free case on `--coarse` grids over as many steps (its duration
-scaled up): whether it grows with the steps alone. Last, the linear map of one step of a uniform
-rod at Courant number 1 with the ends' wave bookkeeping (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`)
-at a struck end held by a damper b against a rigid striker and a free far end, built in NumPy
-apart from the kernel: its eigenvalue at −1, with its eigenvector the sawtooth, for several b/Z;
-and, before it, a pulse on free rods of three profiles in NumPy: how the sawtooth grows with the
-steps on a uniform rod, an exponential taper and the same taper in straight pieces (the profiles
-of a case are straight between their stations). About 8 minutes.
+stability; the ends' wave bookkeeping cannot see it. Printed, in order:
+1. matrix-31 as drawn, without its external force, without its contact's damper, and on a uniform
+   tool of about its mean area, each on `--cells` cells: the energy the scheme made
+   (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit scheme's
+   strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper took,
+   how much the contact force alternates from step to step at a few times (the history kept every
+   7 steps, an odd stride, so that a step-to-step alternation shows as one from row to row), and
+   the field's sawtooth at the end;
+2. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
+   whether it grows with the steps alone;
+3. in NumPy, apart from the kernel: a pulse on free rods of three profiles, how the sawtooth grows
+   with the steps on a uniform rod, an exponential taper and the same taper in straight pieces (a
+   case's profile is straight between its stations);
+4. in NumPy: the linear map of one step of a uniform rod with the ends' bookkeeping
+   (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`) at a struck end held by a damper b against a rigid
+   striker and a free far end: its eigenvalue nearest −1, with its eigenvector, for several b/Z.
+About 8 minutes.
 """
 
 from __future__ import annotations
@@ -39,7 +40,8 @@ TIMES = (0.05, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
 
 
 def variant(name: str) -> dict:
-    """matrix-31 as drawn, without its external force or without its contact's damper."""
+    """matrix-31 as drawn, without its external force, without its contact's damper, or on a
+    uniform tool."""
     raw = draw_cases(1, 72)[31]
     if name == "without its external force":
         raw.pop("force")
@@ -65,29 +67,23 @@ def energy_line(energy: dict) -> str:
     )
 
 
-def bookkeeping_step(state: np.ndarray, cells: int, damper_over_impedance: float) -> np.ndarray:
-    """One step of the uniform rod's layers (u^{m−1}, u^{m−2}) and the struck end's G_{m−1},
-    G_{m−2}: the interior at Courant number 1, a free far end (its half cell), and the struck end
-    moved by the wave arriving over the step as a damper b against a rigid striker lets it,
-    `Δu_0 = 2Z/(Z + b)·ΔG`."""
-    n = cells
-    now, before, g_last, g_before = state[: n + 1], state[n + 1 : 2 * n + 2], state[-2], state[-1]
-    new = np.empty(n + 1)
-    new[1:n] = now[: n - 1] + now[2:] - before[1:n]
-    new[n] = 2.0 * now[n - 1] - before[n]
-    g_now = now[1] - before[0] + g_before
-    new[0] = now[0] + 2.0 / (1.0 + damper_over_impedance) * (g_now - g_last)
-    return np.concatenate([new, now, [g_now, g_last]])
+def rod_weights(area, cells: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A free 1-m rod of `area` (m², of x in m) on `cells` cells: its nodes' areas (half cells at
+    the ends) and the weights of their neighbours, `lower_i = S_{i−½}/S̄_i`, `upper_i = S_{i+½}/S̄_i`."""
+    x = np.linspace(0.0, 1.0, cells + 1)
+    cell_area = np.array([np.mean(area(np.linspace(x[i], x[i + 1], 41))) for i in range(cells)])
+    node_area = np.concatenate([[0.5 * cell_area[0]], 0.5 * (cell_area[1:] + cell_area[:-1]), [0.5 * cell_area[-1]]])
+    lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
+    lower[1:], upper[:-1] = cell_area / node_area[1:], cell_area / node_area[:-1]
+    return node_area, lower, upper
 
 
-def sawtooth_eigenvalue(cells: int, damper_over_impedance: float) -> tuple[complex, float]:
-    """The step's eigenvalue nearest −1 and how far its eigenvector's layer is from the sawtooth."""
-    size = 2 * cells + 4
-    step = np.column_stack([bookkeeping_step(e, cells, damper_over_impedance) for e in np.eye(size)])
-    values, vectors = np.linalg.eig(step)
-    k = int(np.argmin(np.abs(values + 1.0)))
-    layer = np.real(vectors[: cells + 1, k] / vectors[0, k])
-    return values[k], float(np.abs(layer - (-1.0) ** np.arange(cells + 1)).max())
+def rod_step(now: np.ndarray, before: np.ndarray, lower: np.ndarray, upper: np.ndarray) -> np.ndarray:
+    """The next layer of the explicit scheme at Courant number 1, both ends free."""
+    operator = np.zeros_like(now)
+    operator[1:] += lower[1:] * (now[:-1] - now[1:])
+    operator[:-1] += upper[:-1] * (now[1:] - now[:-1])
+    return 2.0 * now - before + operator
 
 
 PROFILES = {  # area (m²) along a 1-m free rod, x in m
@@ -100,25 +96,43 @@ PROFILES = {  # area (m²) along a 1-m free rod, x in m
 
 
 def pulse_sawtooth(area, cells: int, checkpoints: list[int]) -> list[float]:
-    """A Gaussian pulse of 1 mm on a free rod of `area` at Courant number 1 (the interior rows with
-    half-cell ends, in NumPy): the sawtooth's amplitude at each of `checkpoints` steps, from the
-    layers' second difference in time projected on `(−1)^i` with the nodes' masses."""
+    """A Gaussian pulse of 1 mm on a free rod of `area`: the sawtooth's amplitude at each of
+    `checkpoints` steps, from the layers' second difference in time projected on `(−1)^i` with the
+    nodes' masses."""
+    node_area, lower, upper = rod_weights(area, cells)
     x = np.linspace(0.0, 1.0, cells + 1)
-    cell_area = np.array([np.mean(area(np.linspace(x[i], x[i + 1], 41))) for i in range(cells)])
-    node_area = np.concatenate([[0.5 * cell_area[0]], 0.5 * (cell_area[1:] + cell_area[:-1]), [0.5 * cell_area[-1]]])
-    lower, upper = np.zeros(cells + 1), np.zeros(cells + 1)
-    lower[1:], upper[:-1] = cell_area / node_area[1:], cell_area / node_area[:-1]
     before, now = (1e-3 * np.exp(-(((x - 0.3 + shift) / 0.05) ** 2)) for shift in (1.0 / cells, 0.0))
     sawtooth, found = (-1.0) ** np.arange(cells + 1), []
     for step in range(max(checkpoints) + 1):
-        operator = np.zeros(cells + 1)
-        operator[1:] += lower[1:] * (now[:-1] - now[1:])
-        operator[:-1] += upper[:-1] * (now[1:] - now[:-1])
-        new = 2.0 * now - before + operator
+        new = rod_step(now, before, lower, upper)
         if step in checkpoints:
             found.append(abs(np.sum(node_area * sawtooth * (new - 2.0 * now + before))) / (4.0 * np.sum(node_area)))
         before, now = now, new
     return found
+
+
+def bookkeeping_step(state: np.ndarray, weights: tuple, damper_over_impedance: float) -> np.ndarray:
+    """One step of a rod's layers (u^{m−1}, u^{m−2}) and the struck end's G_{m−1}, G_{m−2}
+    (`weights` = (lower, upper), `rod_weights`): the struck end moved by the wave arriving over the
+    step as a damper b against a rigid striker lets it, `Δu_0 = 2Z/(Z + b)·ΔG`."""
+    n = len(weights[0]) - 1
+    now, before, g_last, g_before = state[: n + 1], state[n + 1 : 2 * n + 2], state[-2], state[-1]
+    new = rod_step(now, before, *weights)
+    g_now = now[1] - before[0] + g_before
+    new[0] = now[0] + 2.0 / (1.0 + damper_over_impedance) * (g_now - g_last)
+    return np.concatenate([new, now, [g_now, g_last]])
+
+
+def sawtooth_eigenvalue(cells: int, damper_over_impedance: float) -> tuple[complex, float]:
+    """On a uniform rod: the step's eigenvalue nearest −1 and how far its eigenvector's layer is
+    from the sawtooth."""
+    weights = rod_weights(PROFILES["uniform"], cells)[1:]
+    size = 2 * cells + 4
+    step = np.column_stack([bookkeeping_step(e, weights, damper_over_impedance) for e in np.eye(size)])
+    values, vectors = np.linalg.eig(step)
+    k = int(np.argmin(np.abs(values + 1.0)))
+    layer = np.real(vectors[: cells + 1, k] / vectors[0, k])
+    return values[k], float(np.abs(layer - (-1.0) ** np.arange(cells + 1)).max())
 
 
 def main() -> None:
