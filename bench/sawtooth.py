@@ -4,24 +4,30 @@ striker on a soft damped contact, the tool flying free for 0.22 s) on fixed grid
     .venv/bin/python bench/sawtooth.py [--cells 5837] [--coarse 23 46 92 184]
 
 The sawtooth `(−1)^(i+n)`, every node against its neighbours and every step against the last, is
-an eigenvector of the explicit scheme's interior rows at Courant number 1, at the limit of
-stability; the ends' wave bookkeeping cannot see it. Printed, in order:
-1. matrix-31 as drawn, without its external force, without its contact's damper, and on a uniform
-   tool of about its mean area, each on `--cells` cells: the energy the scheme made
+an eigenvector of the explicit scheme's interior rows at Courant number 1 for any profile, a double
+root at the limit of stability: `(−1)^n·(α + q·n)` solves them too. Its growth a step, q^n = p^n +
+p^{n−1} (p the layer's projection on it with the nodes' masses, `amplitude`), is a constant of the
+interior rows: only the ends change it. Printed, in order:
+1. matrix-31 as drawn; without its external force (and so with its contact's tension line as stiff
+   as its pressed one, with its striker twice as fast, and with its taper, an exponential through
+   nine stations, through 180); without its contact's damper; and on a uniform tool of about its
+   mean area (`VARIANTS`), each on `--cells` cells: the energy the scheme made
    (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit scheme's
    strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper took,
    how much the contact force alternates from step to step at a few times (the history kept every
    7 steps, an odd stride, so that a step-to-step alternation shows as one from row to row), and
-   the field's sawtooth at the end;
+   the tool's sawtooth at the same times, α + q·n (from fields kept at an odd stride);
 2. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
    whether it grows with the steps alone;
-3. in NumPy, apart from the kernel: a pulse on free rods of three profiles, how the sawtooth grows
-   with the steps on a uniform rod, an exponential taper and the same taper in straight pieces (a
-   case's profile is straight between its stations);
+3. in NumPy, apart from the kernel: a pulse on free rods of three profiles, the sawtooth after
+   some steps and its growth a step q at the start and the end, on a uniform rod, an exponential
+   taper and the same taper in straight pieces (a case's profile is straight between its
+   stations), the pulse over a bend and clear of them, and the exponential taper displaced as a
+   whole (rounding then works at that size);
 4. in NumPy: the linear map of one step of a uniform rod with the ends' bookkeeping
    (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`) at a struck end held by a damper b against a rigid
    striker and a free far end: its eigenvalue nearest −1, with its eigenvector, for several b/Z.
-About 8 minutes.
+About 13 minutes.
 """
 
 from __future__ import annotations
@@ -32,19 +38,45 @@ import numpy as np
 
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up
-from percussim.solver.grid import explicit_numerics
+from percussim.solver.grid import explicit_numerics, make_grid
 from percussim.solver.matrix import draw_cases
 
 STRIDE = 7  # odd: a step-to-step alternation alternates from row to row
-TIMES = (0.05, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
+TIMES = (0.05, 0.07, 0.08, 0.09, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
+FRAMES = 440  # the fields kept over a run
+
+
+VARIANTS = (
+    "as drawn",
+    "without its external force",
+    "without its external force, its tension line as stiff as the pressed one",
+    "without its external force, its striker twice as fast",
+    "without its external force, its taper an exponential through 180 stations",
+    "without its contact's damper",
+    "on a uniform tool",
+)
 
 
 def variant(name: str) -> dict:
-    """matrix-31 as drawn, without its external force, without its contact's damper, or on a
-    uniform tool."""
+    """matrix-31 as `name` in `VARIANTS` says."""
     raw = draw_cases(1, 72)[31]
     if name == "without its external force":
         raw.pop("force")
+    elif name == "without its external force, its tension line as stiff as the pressed one":
+        raw.pop("force")
+        raw["contact"]["tension_stiffness"] = raw["contact"]["stiffness"]
+    elif name == "without its external force, its striker twice as fast":
+        raw.pop("force")
+        raw["striker"]["velocity"] *= 2.0
+    elif name == "without its external force, its taper an exponential through 180 stations":
+        raw.pop("force")
+        x, area = raw["tool"]["profile"]["x"], raw["tool"]["profile"]["area"]  # flat, then exponential
+        stations = np.linspace(x[1], x[-1], 180)
+        rate = np.log(area[-1] / area[1]) / (x[-1] - x[1])
+        raw["tool"]["profile"] = {
+            "x": [0.0, *stations.tolist()],
+            "area": [area[0], *(area[1] * np.exp(rate * (stations - x[1]))).tolist()],
+        }
     elif name == "without its contact's damper":
         raw["contact"].pop("damping")
     elif name == "on a uniform tool":
@@ -86,28 +118,36 @@ def rod_step(now: np.ndarray, before: np.ndarray, lower: np.ndarray, upper: np.n
     return 2.0 * now - before + operator
 
 
+PIECES = "the same taper in 7 straight pieces"  # bends at every seventh of the rod
 PROFILES = {  # area (m²) along a 1-m free rod, x in m
     "uniform": lambda x: 1e-3 + 0.0 * x,
     "exponential taper": lambda x: 1.3e-3 * np.exp(-1.3 * x),
-    "the same taper in 7 straight pieces": lambda x: np.interp(
-        x, np.linspace(0.0, 1.0, 8), 1.3e-3 * np.exp(-1.3 * np.linspace(0.0, 1.0, 8))
-    ),
+    PIECES: lambda x: np.interp(x, np.linspace(0.0, 1.0, 8), 1.3e-3 * np.exp(-1.3 * np.linspace(0.0, 1.0, 8))),
 }
 
 
-def pulse_sawtooth(area, cells: int, checkpoints: list[int]) -> list[float]:
-    """A Gaussian pulse of 1 mm on a free rod of `area`: the sawtooth's amplitude at each of
-    `checkpoints` steps, from the layers' second difference in time projected on `(−1)^i` with the
-    nodes' masses."""
+def amplitude(layer: np.ndarray, node_area: np.ndarray) -> float:
+    """`p`: the layer's projection on the sawtooth `(−1)^i` with the nodes' masses. Smooth layers
+    project on it only where the profile bends (the alternating sum of the nodes' areas is 0)."""
+    return float(np.sum(node_area * (-1.0) ** np.arange(len(layer)) * layer) / np.sum(node_area))
+
+
+def pulse_sawtooth(
+    area, cells: int, checkpoints: list[int], centre: float, width: float, offset: float = 0.0
+) -> list[tuple[float, float]]:
+    """A Gaussian pulse of 1 mm at `centre` of `width` (m) on a free rod of `area`, displaced
+    `offset` (m) as a whole (rounding then works at that size): at each of
+    `checkpoints` steps, the sawtooth's amplitude |p^n| and its growth a step, q^n = p^n + p^{n−1}
+    (the mode is `(−1)^n·(α + q·n)`, `amplitude`); q^0 first."""
     node_area, lower, upper = rod_weights(area, cells)
     x = np.linspace(0.0, 1.0, cells + 1)
-    before, now = (1e-3 * np.exp(-(((x - 0.3 + shift) / 0.05) ** 2)) for shift in (1.0 / cells, 0.0))
-    sawtooth, found = (-1.0) ** np.arange(cells + 1), []
-    for step in range(max(checkpoints) + 1):
-        new = rod_step(now, before, lower, upper)
+    before, now = (offset + 1e-3 * np.exp(-(((x - centre + shift) / width) ** 2)) for shift in (1.0 / cells, 0.0))
+    found = [(abs(amplitude(now, node_area)), abs(amplitude(now, node_area) + amplitude(before, node_area)))]
+    for step in range(1, max(checkpoints) + 1):
+        before, now = now, rod_step(now, before, lower, upper)
         if step in checkpoints:
-            found.append(abs(np.sum(node_area * sawtooth * (new - 2.0 * now + before))) / (4.0 * np.sum(node_area)))
-        before, now = now, new
+            p = amplitude(now, node_area)
+            found.append((abs(p), abs(p + amplitude(before, node_area))))
     return found
 
 
@@ -141,20 +181,26 @@ def main() -> None:
     parser.add_argument("--coarse", type=int, nargs="*", default=[23, 46, 92, 184])
     args = parser.parse_args()
     warm_up()
-    for name in ("as drawn", "without its external force", "without its contact's damper", "on a uniform tool"):
+    for name in VARIANTS:
         raw = variant(name)
-        raw["outputs"] = {"history_stride": STRIDE, "fields": True, "field_stride": 100_003}
         case = parse_case(raw)
-        result = simulate_rod(case, numerics=explicit_numerics(case, args.cells))
+        numerics = explicit_numerics(case, args.cells)
+        stride = numerics.steps // FRAMES | 1  # odd: the sawtooth's sign alternates from frame to frame
+        raw["outputs"] = {"history_stride": STRIDE, "fields": True, "field_stride": stride}
+        result = simulate_rod(parse_case(raw), numerics=numerics)
         history, fields = result.history, result.fields
-        last = fields.displacement[-1]
-        sawtooth = 0.5 * np.abs(last[1:-1] - 0.5 * (last[2:] + last[:-2])).max()
+        node_area = make_grid(case.tool, args.cells, True).node_area
+        steps = np.rint(fields.time / numerics.time_step)
+        signed = [(-1.0) ** n * amplitude(layer, node_area) for n, layer in zip(steps, fields.displacement)]
         print(f"\nmatrix-31 {name}, {args.cells} cells: {energy_line(result.summary['energy'])}")
         print(
             "  the contact force's step-to-step alternation (N): "
             + ", ".join(f"{t:g} s {alternation(history['contact/force'], history['time'], t):.2g}" for t in TIMES)
         )
-        print(f"  the tool's sawtooth at {fields.time[-1]:.4f} s: {sawtooth:.2g} m at most")
+        print(
+            "  the tool's sawtooth α + q·n (m): "
+            + ", ".join(f"{t:g} s {signed[int(np.abs(fields.time - t).argmin())]:.2g}" for t in TIMES)
+        )
     steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
     print(f"\nmatrix-31 without its external force, {steps} steps on coarser grids:")
     for cells in args.coarse:
@@ -165,10 +211,20 @@ def main() -> None:
         print(f"  {cells:5d} cells, {case.numerics.duration:6.2f} s: ", end="", flush=True)
         print(energy_line(simulate_rod(case.summary_only(), numerics=explicit_numerics(case, cells)).summary["energy"]))
     checkpoints = [1_000, 10_000, 100_000]
-    print("\nA 1-mm pulse on a free rod of 200 cells at Courant number 1 (NumPy), the sawtooth after")
-    print("  " + " ".join(f"{n:>10,d}" for n in checkpoints) + " steps (m)")
-    for name, area in PROFILES.items():
-        print("  " + " ".join(f"{a:10.2e}" for a in pulse_sawtooth(area, 200, checkpoints)) + f"  {name}")
+    print("\nA 1-mm pulse on a free rod of 200 cells at Courant number 1 (NumPy): the sawtooth |p| after")
+    print(
+        "  " + " ".join(f"{n:>10,d}" for n in checkpoints) + " steps (m), its growth a step |q| at 0 and 100,000 steps"
+    )
+    pulses = [(name, area, 0.3, 0.05, 0.0) for name, area in PROFILES.items()]
+    pulses.append(("the same, the pulse clear of its bends", PROFILES[PIECES], 0.357, 0.015, 0.0))
+    pulses.append(("the exponential taper displaced 0.3 m", PROFILES["exponential taper"], 0.3, 0.05, 0.3))
+    for name, area, centre, width, offset in pulses:
+        found = pulse_sawtooth(area, 200, checkpoints, centre, width, offset)
+        print(
+            "  "
+            + " ".join(f"{p:10.2e}" for p, _ in found[1:])
+            + f"  {found[0][1]:9.2e} {found[-1][1]:9.2e}  {name} (at {centre} m, {width} m wide)"
+        )
     print("\nA uniform rod of 20 cells, the struck end's bookkeeping with a damper b against a rigid striker:")
     for ratio in (0.0, 0.075, 1.0, 3.0):
         value, off = sawtooth_eigenvalue(20, ratio)
