@@ -9,48 +9,57 @@ root at the limit of stability: `(−1)^n·(α + q·n)` solves them too. Its gro
 p^{n−1} (p the layer's projection on it with the nodes' masses, `amplitude`), is a constant of the
 interior rows: only the ends change it. Printed, in order:
 1. matrix-31 as drawn; without its external force (and so with its contact's tension line as stiff
-   as its pressed one, with its striker twice as fast, and with its taper, an exponential through
-   nine stations, through 180); without its contact's damper; and on a uniform tool of about its
-   mean area (`VARIANTS`), each on `--cells` cells: the energy the scheme made
+   as its pressed one, with its striker three times as fast, and with its taper, an exponential
+   through nine stations, through 180); without its contact's damper; and on a uniform tool of
+   about its mean area (`VARIANTS`), each on `--cells` cells: the energy the scheme made
    (`energy.numerical`, < 0 is energy created; `max_excess_fraction`), what the explicit scheme's
    strain form holds at the end (< 0 only with a sawtooth in it), what the contact's damper took,
    how much the contact force alternates from step to step at a few times (the history kept every
    7 steps, an odd stride, so that a step-to-step alternation shows as one from row to row), and
    the tool's sawtooth at the same times, α + q·n (from fields kept at an odd stride);
-2. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
+2. the contact force and the sawtooth over the first 0.1 s without the external force: the
+   kernel's, at the striker's speed and three times it, and those of the same equations written
+   apart from the kernel (`replica_steps`, in Numba), with how closely its contact force follows
+   the kernel's over the first steps (they part with the rounding afterwards);
+3. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
    whether it grows with the steps alone;
-3. in NumPy, apart from the kernel: a pulse on free rods of three profiles, the sawtooth after
+4. in NumPy, apart from the kernel: a pulse on free rods of three profiles, the sawtooth after
    some steps and its growth a step q at the start and the end, on a uniform rod, an exponential
    taper and the same taper in straight pieces (a case's profile is straight between its
    stations), the pulse over a bend and clear of them, and the exponential taper displaced as a
    whole (rounding then works at that size);
-4. in NumPy: the linear map of one step of a uniform rod with the ends' bookkeeping
+5. in NumPy: the linear map of one step of a uniform rod with the ends' bookkeeping
    (`G_m = u_1^{m−1} − u_0^{m−2} + G_{m−2}`) at a struck end held by a damper b against a rigid
    striker and a free far end: its eigenvalue nearest −1, with its eigenvector, for several b/Z.
-About 13 minutes.
+About 14 minutes.
 """
 
 from __future__ import annotations
 
 import argparse
 
+import numba
 import numpy as np
 
 from percussim.solver.case import parse_case
 from percussim.solver.controller import simulate_rod, warm_up
-from percussim.solver.grid import explicit_numerics, make_grid
+from percussim.solver.grid import explicit_numerics, make_grid, wave_speed
+from percussim.solver.kernel.struck_end import SDIRK_GAMMA, limited_slope
 from percussim.solver.matrix import draw_cases
 
 STRIDE = 7  # odd: a step-to-step alternation alternates from row to row
 TIMES = (0.05, 0.07, 0.08, 0.09, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
 FRAMES = 440  # the fields kept over a run
+FIRST_STEPS_SPAN = 2e-4  # s: the first steps, over which the replica's force is compared step by step
+REPLICA_SPAN = 0.1  # s: how long the kernel's run without its force is compared with the replica's
+COMPARED = {"without its external force": 1.0, "without its external force, its striker three times as fast": 3.0}
 
 
 VARIANTS = (
     "as drawn",
     "without its external force",
     "without its external force, its tension line as stiff as the pressed one",
-    "without its external force, its striker twice as fast",
+    "without its external force, its striker three times as fast",
     "without its external force, its taper an exponential through 180 stations",
     "without its contact's damper",
     "on a uniform tool",
@@ -65,9 +74,9 @@ def variant(name: str) -> dict:
     elif name == "without its external force, its tension line as stiff as the pressed one":
         raw.pop("force")
         raw["contact"]["tension_stiffness"] = raw["contact"]["stiffness"]
-    elif name == "without its external force, its striker twice as fast":
+    elif name == "without its external force, its striker three times as fast":
         raw.pop("force")
-        raw["striker"]["velocity"] *= 2.0
+        raw["striker"]["velocity"] *= 3.0  # not a power of two, by which floating point scales exactly
     elif name == "without its external force, its taper an exponential through 180 stations":
         raw.pop("force")
         x, area = raw["tool"]["profile"]["x"], raw["tool"]["profile"]["area"]  # flat, then exponential
@@ -89,6 +98,12 @@ def alternation(force: np.ndarray, time: np.ndarray, at: float) -> float:
     """Half the largest change of the contact force from row to row over the 40 rows before `at`."""
     i = max(2, int(np.searchsorted(time, at)))
     return 0.5 * float(np.abs(np.diff(force[i - 40 : i])).max())
+
+
+def at(history: dict, signed: tuple, t: float) -> str:
+    """The contact force and the sawtooth at `t`, from a run's history and its sawtooth's samples."""
+    row = int(np.abs(history["time"] - t).argmin())
+    return f"{t:g} s {history['contact/force'][row]:.3g} N {signed[1][int(np.abs(signed[0] - t).argmin())]:.2g}"
 
 
 def energy_line(energy: dict) -> str:
@@ -151,6 +166,91 @@ def pulse_sawtooth(
     return found
 
 
+@numba.njit
+def replica_stage(base: tuple, g: float, v: float, striker: tuple, contact: tuple, impedance: float) -> tuple:
+    """One implicit stage `X = base + g·X'` of (y, w, u_0): the contact's force, linear on the line
+    the stage lands on, and the rates."""
+    mass, _ = striker
+    c1, c0, b1 = contact
+    y, w, u0 = base
+    free = y + g * w - u0 - 2.0 * g * v  # the overlap were the force off
+    compliance = g * g / mass + g / impedance
+    give = compliance * b1 / g
+    target = (free + give * (y - u0)) / (1.0 + give)
+    stiffness = c1 if target >= 0.0 else c0
+    delta = target / (1.0 + compliance / (1.0 + give) * stiffness)
+    force = stiffness * delta + b1 * (delta - (y - u0)) / g
+    w_rate = -force / mass
+    return force, (w + g * w_rate, w_rate, force / impedance + 2.0 * v)
+
+
+@numba.njit
+def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every: int) -> np.ndarray:
+    """The same equations as the kernel's, written apart from it: the tapered tool at Courant number
+    1 (`rod` = (lower, upper, node_area, τ, Z at the struck end)), a lumped striker (`striker` =
+    (m1, its speed)) on a linear contact (`contact` = (c1, c0, b1)) integrated over each step by the
+    two-stage SDIRK, the incoming waves from the ends' bookkeeping with the kernel's slope
+    (`limited_slope`), a free far end; no force R. Rows (time, sawtooth α + q·n, contact force)
+    every `every` steps."""
+    lower, upper, node_area, tau, impedance = rod
+    n = len(lower) - 1
+    u = np.zeros((3, n + 1))
+    sign = np.ones(n + 1)
+    sign[1::2] = -1.0
+    y, w = 0.0, striker[1]
+    waves = np.zeros(4)  # G_{m−1}, G_{m−2} at the struck end, then at the far end
+    rates = np.zeros(4)  # the incoming waves' mean and slope over the step, struck end then far end
+    g = SDIRK_GAMMA * tau
+    out = np.zeros((steps // every + 1, 3))
+    for m in range(1, steps + 1):
+        new, cur, old = m % 3, (m - 1) % 3, (m - 2) % 3
+        for i in range(1, n):
+            u[new, i] = (
+                2.0 * u[cur, i]
+                - u[old, i]
+                + lower[i] * (u[cur, i - 1] - u[cur, i])
+                + upper[i] * (u[cur, i + 1] - u[cur, i])
+            )
+        for k in range(2):
+            inner, edge = (1, 0) if k == 0 else (n - 1, n)
+            last, before = waves[2 * k], waves[2 * k + 1]
+            now = u[cur, inner] - u[old, edge] + before
+            after = u[new, inner] - u[cur, edge] + last
+            rates[2 * k] = (now - last) / tau
+            rates[2 * k + 1] = limited_slope((last - before) / tau, rates[2 * k], (after - now) / tau, tau)
+            waves[2 * k], waves[2 * k + 1] = now, last
+        start, slope = rates[0] - 0.5 * tau * rates[1], rates[1]
+        x = (y, w, u[cur, 0])
+        _, k1 = replica_stage(x, g, start + slope * g, striker, contact, impedance)
+        span = (1.0 - SDIRK_GAMMA) * tau
+        base = (x[0] + span * k1[0], x[1] + span * k1[1], x[2] + span * k1[2])
+        force, k2 = replica_stage(base, g, start + slope * tau, striker, contact, impedance)
+        y, w, u[new, 0] = base[0] + g * k2[0], base[1] + g * k2[1], base[2] + g * k2[2]
+        start, slope = rates[2] - 0.5 * tau * rates[3], rates[3]
+        u[new, n] = u[cur, n] + span * 2.0 * (start + slope * g) + g * 2.0 * (start + slope * tau)
+        if m % every == 0:
+            parity = 1.0 if m % 2 == 0 else -1.0
+            out[m // every] = (m * tau, parity * np.sum(node_area * sign * u[new]) / np.sum(node_area), force)
+    return out
+
+
+def replica(raw: dict, cells: int, duration: float, every: int) -> np.ndarray:
+    """`replica_steps` of the case `raw` (a lumped striker on a linear contact, no force, no medium)
+    on `cells` cells over `duration` s."""
+    case = parse_case(raw)
+    numerics = explicit_numerics(case, cells)
+    grid = make_grid(case.tool, cells, True)
+    impedance = case.tool.density * wave_speed(case.tool) * grid.end_area[0]
+    contact = case.contact
+    return replica_steps(
+        (grid.lower, grid.upper, grid.node_area, numerics.time_step, impedance),
+        (case.striker.mass, case.striker.velocity),
+        (contact.stiffness, contact.tension_stiffness, contact.damping),
+        round(duration / numerics.time_step),
+        every,
+    )
+
+
 def bookkeeping_step(state: np.ndarray, weights: tuple, damper_over_impedance: float) -> np.ndarray:
     """One step of a rod's layers (u^{m−1}, u^{m−2}) and the struck end's G_{m−1}, G_{m−2}
     (`weights` = (lower, upper), `rod_weights`): the struck end moved by the wave arriving over the
@@ -181,6 +281,7 @@ def main() -> None:
     parser.add_argument("--coarse", type=int, nargs="*", default=[23, 46, 92, 184])
     args = parser.parse_args()
     warm_up()
+    kept = {}  # the runs compared with the replica: their histories and sawtooth
     for name in VARIANTS:
         raw = variant(name)
         case = parse_case(raw)
@@ -191,7 +292,12 @@ def main() -> None:
         history, fields = result.history, result.fields
         node_area = make_grid(case.tool, args.cells, True).node_area
         steps = np.rint(fields.time / numerics.time_step)
-        signed = [(-1.0) ** n * amplitude(layer, node_area) for n, layer in zip(steps, fields.displacement)]
+        signed = (
+            fields.time,
+            [(-1.0) ** n * amplitude(layer, node_area) for n, layer in zip(steps, fields.displacement)],
+        )
+        if name in COMPARED:
+            kept[COMPARED[name]] = history, signed
         print(f"\nmatrix-31 {name}, {args.cells} cells: {energy_line(result.summary['energy'])}")
         print(
             "  the contact force's step-to-step alternation (N): "
@@ -199,8 +305,30 @@ def main() -> None:
         )
         print(
             "  the tool's sawtooth α + q·n (m): "
-            + ", ".join(f"{t:g} s {signed[int(np.abs(fields.time - t).argmin())]:.2g}" for t in TIMES)
+            + ", ".join(f"{t:g} s {signed[1][int(np.abs(signed[0] - t).argmin())]:.2g}" for t in TIMES)
         )
+    print(f"\nmatrix-31 without its external force, {args.cells} cells, its contact force and sawtooth (m):")
+    early = [t for t in TIMES if t <= REPLICA_SPAN]
+    for label, speed in (("the kernel", 1.0), ("the kernel, its striker three times as fast", 3.0)):
+        history, signed = kept[speed]
+        print(f"  {label}: " + ", ".join(at(history, signed, t) for t in early))
+    raw = variant("without its external force")
+    raw["numerics"]["duration"], raw["outputs"] = FIRST_STEPS_SPAN, {"history_stride": 1}
+    first = simulate_rod(parse_case(raw), numerics=explicit_numerics(parse_case(raw), args.cells)).history
+    rows = replica(variant("without its external force"), args.cells, FIRST_STEPS_SPAN, 1)
+    count = min(len(first["time"]), len(rows)) - 1
+    force = first["contact/force"][1 : count + 1]
+    print(
+        f"  over the first {count} steps the replica's contact force is the kernel's to "
+        f"{np.max(np.abs(rows[1 : count + 1, 2] - force) / np.abs(force)):.2g} (relative)"
+    )
+    rows = replica(variant("without its external force"), args.cells, REPLICA_SPAN, 1001)
+    print(
+        "  the same equations apart from the kernel: "
+        + ", ".join(
+            f"{t:g} s {rows[k, 2]:.3g} N {rows[k, 1]:.2g}" for t in early for k in [np.abs(rows[:, 0] - t).argmin()]
+        )
+    )
     steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
     print(f"\nmatrix-31 without its external force, {steps} steps on coarser grids:")
     for cells in args.coarse:
