@@ -20,7 +20,8 @@ interior rows: only the ends change it. Printed, in order:
 2. the contact force and the sawtooth over the first 0.1 s without the external force: the
    kernel's, at the striker's speed and three times it, and those of the same equations written
    apart from the kernel (`replica_steps`, in Numba), with how closely its contact force follows
-   the kernel's over the first steps (they part with the rounding afterwards);
+   the kernel's over the first steps (they part with the rounding afterwards), its interior rows
+   rounded as the kernel's are, term by term, and on increments (`FORMS`);
 3. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
    whether it grows with the steps alone;
 4. in NumPy, apart from the kernel: a pulse on free rods of three profiles, the sawtooth after
@@ -52,6 +53,13 @@ TIMES = (0.05, 0.07, 0.08, 0.09, 0.1, 0.15, 0.19, 0.2, 0.205, 0.21, 0.215, 0.22)
 FRAMES = 440  # the fields kept over a run
 FIRST_STEPS_SPAN = 2e-4  # s: the first steps, over which the replica's force is compared step by step
 REPLICA_SPAN = 0.1  # s: how long the kernel's run without its force is compared with the replica's
+# How the replica rounds an interior row, u^{m+1} = 2u^m − u^{m−1} + Λu^m, where u is a
+# displacement of up to tenths of a metre and Λu (`lower`, `upper`) a difference far smaller
+FORMS = (
+    "as the kernel: (2u^m − u^{m−1}) + Λu^m",
+    "term by term: ((2u^m − u^{m−1}) + S_{i−½}·(…)) + S_{i+½}·(…)",
+    "on increments: d^{m+1} = d^m + Λu^m, u^{m+1} = u^m + d^{m+1}",
+)
 COMPARED = {"without its external force": 1.0, "without its external force, its striker three times as fast": 3.0}
 
 
@@ -185,16 +193,17 @@ def replica_stage(base: tuple, g: float, v: float, striker: tuple, contact: tupl
 
 
 @numba.njit
-def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every: int) -> np.ndarray:
+def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every: int, form: int) -> np.ndarray:
     """The same equations as the kernel's, written apart from it: the tapered tool at Courant number
     1 (`rod` = (lower, upper, node_area, τ, Z at the struck end)), a lumped striker (`striker` =
     (m1, its speed)) on a linear contact (`contact` = (c1, c0, b1)) integrated over each step by the
     two-stage SDIRK, the incoming waves from the ends' bookkeeping with the kernel's slope
-    (`limited_slope`), a free far end; no force R. Rows (time, sawtooth α + q·n, contact force)
-    every `every` steps."""
+    (`limited_slope`), a free far end; no force R. The interior rows rounded in the `form` of
+    `FORMS`. Rows (time, sawtooth α + q·n, contact force) every `every` steps."""
     lower, upper, node_area, tau, impedance = rod
     n = len(lower) - 1
     u = np.zeros((3, n + 1))
+    increments = np.zeros(n + 1)  # u^m − u^{m−1} at the interior nodes, for `form` 2
     sign = np.ones(n + 1)
     sign[1::2] = -1.0
     y, w = 0.0, striker[1]
@@ -205,12 +214,14 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
     for m in range(1, steps + 1):
         new, cur, old = m % 3, (m - 1) % 3, (m - 2) % 3
         for i in range(1, n):
-            u[new, i] = (
-                2.0 * u[cur, i]
-                - u[old, i]
-                + lower[i] * (u[cur, i - 1] - u[cur, i])
-                + upper[i] * (u[cur, i + 1] - u[cur, i])
-            )
+            left, right = lower[i] * (u[cur, i - 1] - u[cur, i]), upper[i] * (u[cur, i + 1] - u[cur, i])
+            if form == 0:  # as the kernel rounds it: the operator summed, then added
+                u[new, i] = (2.0 * u[cur, i] - u[old, i]) + (left + right)
+            elif form == 1:  # term by term
+                u[new, i] = ((2.0 * u[cur, i] - u[old, i]) + left) + right
+            else:  # on increments: the step's increment kept apart from the displacement
+                increments[i] += left + right
+                u[new, i] = u[cur, i] + increments[i]
         for k in range(2):
             inner, edge = (1, 0) if k == 0 else (n - 1, n)
             last, before = waves[2 * k], waves[2 * k + 1]
@@ -234,9 +245,9 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
     return out
 
 
-def replica(raw: dict, cells: int, duration: float, every: int) -> np.ndarray:
+def replica(raw: dict, cells: int, duration: float, every: int, form: int = 0) -> np.ndarray:
     """`replica_steps` of the case `raw` (a lumped striker on a linear contact, no force, no medium)
-    on `cells` cells over `duration` s."""
+    on `cells` cells over `duration` s, its interior rows rounded in the `form` of `FORMS`."""
     case = parse_case(raw)
     numerics = explicit_numerics(case, cells)
     grid = make_grid(case.tool, cells, True)
@@ -248,6 +259,7 @@ def replica(raw: dict, cells: int, duration: float, every: int) -> np.ndarray:
         (contact.stiffness, contact.tension_stiffness, contact.damping),
         round(duration / numerics.time_step),
         every,
+        form,
     )
 
 
@@ -322,13 +334,19 @@ def main() -> None:
         f"  over the first {count} steps the replica's contact force is the kernel's to "
         f"{np.max(np.abs(rows[1 : count + 1, 2] - force) / np.abs(force)):.2g} (relative)"
     )
-    rows = replica(variant("without its external force"), args.cells, REPLICA_SPAN, 1001)
-    print(
-        "  the same equations apart from the kernel: "
-        + ", ".join(
-            f"{t:g} s {rows[k, 2]:.3g} N {rows[k, 1]:.2g}" for t in early for k in [np.abs(rows[:, 0] - t).argmin()]
-        )
-    )
+    for form, how in enumerate(FORMS):
+        for speed in (1.0, 3.0):
+            raw = variant("without its external force")
+            raw["striker"]["velocity"] *= speed
+            rows = replica(raw, args.cells, REPLICA_SPAN, 1001, form)
+            print(
+                f"  the same equations apart from the kernel, {how}{', three times as fast' if speed > 1 else ''}: "
+                + ", ".join(
+                    f"{t:g} s {rows[k, 2]:.3g} N {rows[k, 1]:.2g}"
+                    for t in early
+                    for k in [np.abs(rows[:, 0] - t).argmin()]
+                )
+            )
     steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
     print(f"\nmatrix-31 without its external force, {steps} steps on coarser grids:")
     for cells in args.coarse:
