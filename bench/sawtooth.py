@@ -21,7 +21,8 @@ interior rows: only the ends change it. Printed, in order:
    kernel's, at the striker's speed and three times it, and those of the same equations written
    apart from the kernel (`replica_steps`, in Numba), with how closely its contact force follows
    the kernel's over the first steps (they part with the rounding afterwards), its interior rows
-   rounded as the kernel's are, term by term, and on increments (`FORMS`);
+   added whole to the displacement, as the kernel's were, term by term, and summed, as the
+   kernel's are (`FORMS`);
 3. the case without its force on `--coarse` grids over as many steps (its duration scaled up):
    whether it grows with the steps alone;
 4. in NumPy, apart from the kernel: a pulse on free rods of three profiles, the sawtooth after
@@ -56,10 +57,11 @@ REPLICA_SPAN = 0.1  # s: how long the kernel's run without its force is compared
 # How the replica rounds an interior row, u^{m+1} = 2u^m − u^{m−1} + Λu^m, where u is a
 # displacement of up to tenths of a metre and Λu (`lower`, `upper`) a difference far smaller
 FORMS = (
-    "as the kernel: (2u^m − u^{m−1}) + Λu^m",
+    "added whole, as the kernel did before it summed them: (2u^m − u^{m−1}) + Λu^m",
     "term by term: ((2u^m − u^{m−1}) + S_{i−½}·(…)) + S_{i+½}·(…)",
-    "on increments: d^{m+1} = d^m + Λu^m, u^{m+1} = u^m + d^{m+1}",
+    "summed, as the kernel does: d^{m+1} = d^m + Λu^m, u^{m+1} = u^m + d^{m+1}",
 )
+SUMMED = 2  # the kernel's form (`rows.explicit_interior`)
 COMPARED = {"without its external force": 1.0, "without its external force, its striker three times as fast": 3.0}
 
 
@@ -215,11 +217,11 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
         new, cur, old = m % 3, (m - 1) % 3, (m - 2) % 3
         for i in range(1, n):
             left, right = lower[i] * (u[cur, i - 1] - u[cur, i]), upper[i] * (u[cur, i + 1] - u[cur, i])
-            if form == 0:  # as the kernel rounds it: the operator summed, then added
+            if form == 0:  # added whole
                 u[new, i] = (2.0 * u[cur, i] - u[old, i]) + (left + right)
             elif form == 1:  # term by term
                 u[new, i] = ((2.0 * u[cur, i] - u[old, i]) + left) + right
-            else:  # on increments: the step's increment kept apart from the displacement
+            else:  # summed: the step's increment kept apart from the displacement
                 increments[i] += left + right
                 u[new, i] = u[cur, i] + increments[i]
         for k in range(2):
@@ -245,7 +247,7 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
     return out
 
 
-def replica(raw: dict, cells: int, duration: float, every: int, form: int = 0) -> np.ndarray:
+def replica(raw: dict, cells: int, duration: float, every: int, form: int = SUMMED) -> np.ndarray:
     """`replica_steps` of the case `raw` (a lumped striker on a linear contact, no force, no medium)
     on `cells` cells over `duration` s, its interior rows rounded in the `form` of `FORMS`."""
     case = parse_case(raw)

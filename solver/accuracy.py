@@ -433,8 +433,6 @@ def assess(
 
 ERROR_WARNING = 0.01  # an estimated error above this is worth a warning
 ENERGY_WARNING = 0.01  # so is energy lost or created by the scheme, as a fraction of the input
-# A strain form below this fraction of the input is the tool's sawtooth (docs/numerics.md), not rounding
-SAWTOOTH_WARNING = 1e-4
 
 
 def _percent(fraction: float) -> str:
@@ -449,8 +447,7 @@ def _listed(errors: dict[str, QuantityError], limit: float) -> str:
 def accuracy_warnings(found: Estimate, summary: dict, tolerance: float | None, unmet: str = "") -> list[str]:
     """The warnings an estimate calls for: a tolerance not met, an estimated error over 1% on a
     fixed grid (with the grid that would meet 1%), grids that disagree on the contacts, and energy
-    the scheme lost or created beyond 1% of the input (from the tool's sawtooth, when its strain
-    form ends negative); each with the numbers and what to change."""
+    the scheme lost or created beyond 1% of the input; each with the numbers and what to change."""
     out = []
     if tolerance is not None:
         if unmet or found.worst > tolerance or not found.same_contacts:
@@ -502,14 +499,5 @@ def accuracy_warnings(found: Estimate, summary: dict, tolerance: float | None, u
                 f"(energy.numerical = {energy['numerical']:.4g} J): {fix}"
             )
         if max(-lost, created) > ENERGY_WARNING:
-            if energy["tool_strain"] < -SAWTOOTH_WARNING * budget:
-                # the explicit scheme's strain form is negative only with a sawtooth in the tool
-                fix = (
-                    "the tool ends holding a grid-scale sawtooth (every node against its neighbours, "
-                    f"every step against the last; energy.tool_strain = {energy['tool_strain']:.4g} J), "
-                    "which no end damps and whose motion the contact's damper is charged for: finer "
-                    "grids let it grow, a coarser grid or a shorter duration keeps it smaller, and the "
-                    "histories ring with it"
-                )
             out.append(f"the scheme created {_percent(max(-lost, created))} of the input energy at some instant: {fix}")
     return out

@@ -406,12 +406,14 @@ def test_a_result_that_was_not_recorded_is_run_again_to_the_same_outputs(monkeyp
 
 
 @pytest.mark.slow
-def test_a_sawtooth_no_end_damps_is_named_where_the_energy_it_seems_to_make_is_warned_of():
+def test_a_tool_that_barely_strains_for_long_grows_no_sawtooth():
     """Seed 1's matrix-31 without its external force, on 2917 cells at Courant number 1: a soft
-    damped contact on a tool flying free for 0.22 s. The tool's sawtooth (every node against its
-    neighbours, every step against the last) grows, the contact's damper is charged for its motion
-    and the audit finds a third of the input energy made; the warning names the sawtooth and says
-    that finer grids let it grow, where it would otherwise advise a tighter tolerance."""
+    damped contact on a tapered tool flying free for 0.22 s, the striker settled on it. With its
+    interior rows added to the displacement whole, the rounding grew the tool's sawtooth (every
+    node against its neighbours, every step against the last) where the tool barely strained: the
+    contact's damper was charged for its motion and the audit found a third of the input energy
+    made, the sawtooth 1.4e-8 m all along the tool. In summed form (`rows.explicit_interior`) it
+    stays at the rounding's size."""
     from percussim.solver.matrix import draw_cases
 
     raw = draw_cases(1, 72)[31]
@@ -420,7 +422,6 @@ def test_a_sawtooth_no_end_damps_is_named_where_the_energy_it_seems_to_make_is_w
     result = simulate(parse_case(merge(raw, {"numerics": {"scheme": "explicit", "cells": 2917}, "outputs": outputs})))
     energy = result.summary["energy"]
     last = result.fields.displacement[-1]
-    sawtooth = np.abs(last[1:-1] - 0.5 * (last[2:] + last[:-2])).min()  # all along the tool
-    assert sawtooth > 1e-9 and energy["tool_strain"] < 0 and energy["max_excess_fraction"] > 0.01
-    [warning] = [w for w in result.summary["warnings"] if "created" in w]
-    assert "sawtooth" in warning and "finer grids let it grow" in warning and "tighter" not in warning
+    sawtooth = np.abs(last[1:-1] - 0.5 * (last[2:] + last[:-2])).max()
+    assert sawtooth < 1e-10 and energy["max_excess_fraction"] < 1e-4
+    assert not [w for w in result.summary["warnings"] if "created" in w]

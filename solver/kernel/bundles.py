@@ -148,11 +148,13 @@ Shaft = namedtuple("Shaft", "first last resistance stiffness damping_factor inv_
 """The soil along the tool's side, node by node from `first` to `last` (interior nodes; none when
 `last` < `first`): each node's ultimate resistance r_i (N), its stiffness r_i/q_i (N/m), Smith's damping
 factor J_i (s/m) and τ²/m_i, m_i the node's mass (`shaft.py`)."""
-State = namedtuple("State", "u y ends energy striker shaft_sets")
+State = namedtuple("State", "u y ends energy striker shaft_sets increments striker_increments")
 """What a step carries to the next: the tool's layers `u` (3 × (N+1)) and the striker's face `y`
 (3), the ends' slots (`S_…`), the energy terms (`energy[0, E_…]` at the last layer, `energy[1]` at
-the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`) and the shaft's
-sets along the tool (N+1: each node's permanent displacement against its soil)."""
+the one before), an elastic striker's layers (3 × (N_s+1); its node 0 is `y`), the shaft's sets
+along the tool (N+1: each node's permanent displacement against its soil), and the explicit
+scheme's increments `u^m − u^{m−1}` of the tool's and the striker's interior nodes, kept apart from
+the layers (`rows.explicit_interior`)."""
 Observed = namedtuple("Observed", "extremes contacts until envelope")
 """What a blow reports beyond its recordings: the extremes (`X_…`) over its duration, up to the
 time `until`, the finished contact intervals (start, end; one row each, those beyond its rows
@@ -208,6 +210,8 @@ def new_state(cells: int, striker_cells: int = 0) -> State:
         energy=np.zeros((2, ENERGY_SLOTS)),
         striker=np.zeros((3, striker_cells + 1)),
         shaft_sets=np.zeros(cells + 1),
+        increments=np.zeros(cells + 1),
+        striker_increments=np.zeros(striker_cells + 1),
     )
 
 

@@ -37,10 +37,12 @@ def no_gravity() -> Gravity:
 
 
 @compiled(inline="always")
-def weigh_rows(u, new, gravity):
-    """The weight's lift on each node's explicit row, in row `new` of `u`."""
+def weigh_rows(u, increments, new, gravity):
+    """The weight's lift on each node's explicit row, in row `new` of `u` and in the node's
+    increment."""
     for i in range(np.uint64(gravity.first), np.uint64(gravity.last + 1)):
         u[new, i] += gravity.lift[i]
+        increments[i] += gravity.lift[i]
 
 
 # A function of its own, its sum free to be reordered (`reassoc`, a change of rounding only): as a

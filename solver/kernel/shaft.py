@@ -43,7 +43,7 @@ def no_shaft() -> Shaft:
 # order (`reassoc`, a change of rounding only). A step on a pile's shaft costs about a quarter of
 # what it did node by node.
 @compiled(fastmath={"contract", "reassoc"})
-def shaft_on_rows(u, layer, shaft, sets, energy, tau):
+def shaft_on_rows(u, increments, layer, shaft, sets, energy, tau):
     """The soil's force on each interior node of layer n in the explicit rows of row `new` of `u`
     (which hold the new layer without it), each node's set `sets[i]` moved where it slips; its
     work over the step added to `E_TO_SHAFT`."""
@@ -67,6 +67,7 @@ def shaft_on_rows(u, layer, shaft, sets, energy, tau):
         static = limit if slipping else static
         sets[i] = 0.5 * (after + before) - static / k if slipping else set_
         u[new, i] = after
+        increments[i] += after - row
         work += (static + damper / c * (after - before)) * 0.5 * (after - before)
     energy[0, E_TO_SHAFT] += work
 

@@ -197,6 +197,7 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
         for i in range(striker_u.shape[1]):
             striker_u[row, i] = at
             striker_u[row_before, i] = at - velocity * tau
+            state.striker_increments[i] = velocity * tau
         for last, before in (FACE_INCOMING, BACK_INCOMING):
             ends[last] = 0.0  # G of the layer in `row` (only its differences count)
             ends[before] = -0.5 * velocity * tau
@@ -261,6 +262,7 @@ def rest_tool(m, state, contact, anvil):
     energy[0, E_TOOL_KINETIC] = energy[0, E_TOOL_STRAIN] = energy[0, E_MEDIUM_POTENTIAL] = 0.0
     energy[0, E_CONTACT_POTENTIAL] += contacts_after - contacts_before
     u[:, :] = at
+    state.increments[:] = 0.0
     for last, before in (INCOMING, FAR_INCOMING):  # no wave arrives at either end
         ends[last] = ends[before] = 0.0
     ends[S_MEDIUM_FORCE] = ends[S_MEDIUM_FORCE_BEFORE] = ends[S_MEDIUM_FORCE_EARLIER] = 0.0
@@ -695,15 +697,15 @@ def advance(
             # until the substitution.
             if not weights.impedance_ends:
                 working_end_row(u, layer, rows, rod, weights, medium, step)
-            right_hand_sides(u, layer, tool, rows, rod, weights, step)
+            right_hand_sides(u, state.increments, layer, tool, rows, rod, weights, step)
             # the explicit scheme's interior rows are final here (none has a shaft otherwise); the
             # soil's and the weight's loops are calls of their own, made only where they have nodes
             if shaft.last >= shaft.first:
-                shaft_on_rows(u, layer, shaft, state.shaft_sets, energy, tau)
+                shaft_on_rows(u, state.increments, layer, shaft, state.shaft_sets, energy, tau)
             if tool.gravity.last >= tool.gravity.first:
                 energy[0, E_GRAVITY_WORK] += gravity_work(u, layer, tool.gravity)
             if striker.elastic:
-                explicit_interior(striker_u, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
+                explicit_interior(striker_u, state.striker_increments, layer, striker.tool, 1.0, striker_u.shape[1] - 1)
                 if striker.tool.gravity.last >= striker.tool.gravity.first:
                     energy[0, E_GRAVITY_WORK] += gravity_work(striker_u, layer, striker.tool.gravity)
             if weights.impedance_ends:
