@@ -110,10 +110,15 @@ def alternation(force: np.ndarray, time: np.ndarray, at: float) -> float:
     return 0.5 * float(np.abs(np.diff(force[i - 40 : i])).max())
 
 
+def nearest(times: np.ndarray, t: float) -> int:
+    """The index of the sample nearest `t` in `times`."""
+    return int(np.abs(np.asarray(times) - t).argmin())
+
+
 def at(history: dict, signed: tuple, t: float) -> str:
     """The contact force and the sawtooth at `t`, from a run's history and its sawtooth's samples."""
-    row = int(np.abs(history["time"] - t).argmin())
-    return f"{t:g} s {history['contact/force'][row]:.3g} N {signed[1][int(np.abs(signed[0] - t).argmin())]:.2g}"
+    force = history["contact/force"][nearest(history["time"], t)]
+    return f"{t:g} s {force:.3g} N {signed[1][nearest(signed[0], t)]:.2g}"
 
 
 def energy_line(energy: dict) -> str:
@@ -319,7 +324,7 @@ def main() -> None:
         )
         print(
             "  the tool's sawtooth α + q·n (m): "
-            + ", ".join(f"{t:g} s {signed[1][int(np.abs(signed[0] - t).argmin())]:.2g}" for t in TIMES)
+            + ", ".join(f"{t:g} s {signed[1][nearest(signed[0], t)]:.2g}" for t in TIMES)
         )
     print(f"\nmatrix-31 without its external force, {args.cells} cells, its contact force and sawtooth (m):")
     early = [t for t in TIMES if t <= REPLICA_SPAN]
@@ -344,9 +349,8 @@ def main() -> None:
             print(
                 f"  the same equations apart from the kernel, {how}{', three times as fast' if speed > 1 else ''}: "
                 + ", ".join(
-                    f"{t:g} s {rows[k, 2]:.3g} N {rows[k, 1]:.2g}"
+                    f"{t:g} s {rows[nearest(rows[:, 0], t), 2]:.3g} N {rows[nearest(rows[:, 0], t), 1]:.2g}"
                     for t in early
-                    for k in [np.abs(rows[:, 0] - t).argmin()]
                 )
             )
     steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
