@@ -18,7 +18,8 @@ compilation, the contenders of a case timed in alternation so that a busy machin
    once, so that a step is a vectorised pass for the right-hand sides, one sweep and one
    substitution with the precomputed factors (a fused multiply-add a node on the critical path of
    each, split as the kernel splits them into 4 segments swept as independent chains, with their
-   carries; no recurrence at all for the explicit scheme) and the scalar contact solve; the energy
+   carries; no recurrence at all for the explicit scheme, whose rows are summed as the kernel's,
+   each node's increment kept apart) and the scalar contact solve; the energy
    sums and the stress extremes in one pass of 8 independent lanes, which vectorises. It computes
    what the summary needs (extremes, energy, contact intervals, in the kernel's slots) and is
    checked against Numba: co-impact time and energy terms should agree to about 1e-9; the peak
@@ -302,7 +303,7 @@ def c_run(lib: ctypes.CDLL, s: Setup) -> dict[str, float]:
     }
     parameters = np.array([values[name] for name in C_PARAMETERS])
     state, observed = K.new_state(s.n), K.new_observed(MAX_CONTACTS)
-    work = np.zeros(4 * (s.n + 1))
+    work = np.zeros(5 * (s.n + 1))
     status = lib.run(
         s.n,
         s.num.steps,

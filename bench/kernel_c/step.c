@@ -139,7 +139,7 @@ static void record_stress(double *ext, int slot, double sign, double value, cons
 }
 
 /* Layers 0 … steps of the case in prm[] on n cells. u: 3·(n+1) (layer m in row m % 3), y: 3,
-   work: 4·(n+1), ends/ext/en: the kernel's ends (zeros), extremes (from new_extremes()) and
+   work: 5·(n+1) (zeros), ends/ext/en: the kernel's ends (zeros), extremes (from new_extremes()) and
    energy (zeros), contacts: max_contacts × 2. Returns 0, or 1 on a non-finite value. */
 int run(long n, long steps, const double *prm, double *u, double *y, double *work,
         double *ends, double *ext, double *en, double *contacts, long max_contacts)
@@ -151,6 +151,7 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
     const Law law = {prm[P_C1], prm[P_ALPHA], prm[P_C0]};
     const long stride = n + 1;
     double *p = work, *g = work + stride, *cp = work + 2 * stride, *pp = work + 3 * stride;
+    double *d = work + 4 * stride; /* the explicit rows' increments, from rest */
 
     /* boundary_weights() */
     const double ew = end_masses ? wn : 1.0;
@@ -250,9 +251,12 @@ int run(long n, long steps, const double *prm, double *u, double *y, double *wor
                 q1 = fma(p[i], q1, un[i]);
                 un[i] = q1;
             }
-        } else {  /* explicit (σ = 0, v = u^n): uncoupled rows, no recurrence */
-            for (long i = n - 1; i >= 1; i--)
-                un[i] = 2.0 * uc[i] - uo[i] + r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1]);
+        } else {  /* explicit (σ = 0, v = u^n): uncoupled rows, no recurrence; in the kernel's
+                     summed form, each node's increment d = u^m − u^{m−1} kept apart */
+            for (long i = n - 1; i >= 1; i--) {
+                d[i] += r * (uc[i - 1] - 2.0 * uc[i] + uc[i + 1]);
+                un[i] = uc[i] + d[i];
+            }
             q1 = un[1];
         }
         const double v_1 = wc * uc[1] + wo * uo[1], v_0 = wc * uc[0] + wo * uo[0];
