@@ -1,4 +1,5 @@
-"""The service's side of the job queue: publish a job, tell whether the broker is reachable.
+"""The service's side of the job queue: publish a job, tell which jobs the broker holds and whether
+it is reachable.
 
 The API only publishes; it never imports the worker's Celery app, whose module configures itself
 from the environment when imported. Publishing with an app made from the service's own settings
@@ -8,6 +9,7 @@ folder); `common.broker` gives both sides the same broker configuration.
 
 from __future__ import annotations
 
+import json
 import os
 from pathlib import Path
 
@@ -77,6 +79,34 @@ class JobQueue:
         with self.app.connection_for_read() as connection:
             # Declared, not only looked up: before the first message there is no queue yet.
             return connection.default_channel.queue_declare(self.app.conf.task_default_queue).message_count
+
+    def held(self) -> set[str]:
+        """The jobs whose messages the broker holds: waiting for a worker, or (Redis) delivered to
+        one and not yet acknowledged, which Redis keeps apart until the job ends. kombu has no way
+        to look at a queue without taking from it, so each transport's store is read as kombu
+        keeps it: the embedded queue's files, Redis's lists (one a priority) and its hash of
+        unacknowledged messages."""
+        self._folder_made()
+        queue = self.app.conf.task_default_queue
+        with self.app.connection_for_read() as connection:
+            channel = connection.default_channel
+            if self.settings.embedded:
+                payloads = []
+                for path in self.queue_folder.glob(f"*.{queue}.msg"):
+                    try:
+                        payloads.append(json.loads(path.read_bytes()))
+                    except FileNotFoundError:  # a worker took it meanwhile
+                        continue
+            else:
+                client = channel.client
+                keys = {channel._q_for_pri(queue, priority) for priority in channel.priority_steps}
+                payloads = [json.loads(raw) for key in keys for raw in client.lrange(key, 0, -1)]
+                payloads += [json.loads(raw)[0] for raw in client.hvals(channel.unacked_key)]
+            return {
+                channel.Message(payload, channel=channel).decode()[0][0]
+                for payload in payloads
+                if payload["headers"].get("task") == RUN_JOB
+            }
 
     def problem(self) -> str | None:
         """Why the broker cannot be reached now, or None if it can."""

@@ -7,7 +7,7 @@ job recorded running whose beat has lapsed for longer than the redelivery time a
 `RESTORE_MARGIN` (by then Celery would have delivered it again) is queued again from its record by
 a thread beside the API (`background`); one whose worker died under it `MAX_ATTEMPTS` times fails,
 saying so: a case that kills its worker must not kill every worker in turn. A job queued that long
-while the broker holds no message at all is published again too. A message the broker did keep as
+whose message the broker does not hold is published again too, however many others wait. A message the broker did keep as
 well is harmless: a worker delivered a job that another runs, with a fresh beat, does
 not run it (`worker.tasks._take`). Every change is conditional, so API replicas doing the same
 queue each job once.
@@ -75,12 +75,16 @@ def recover(settings: Settings) -> list[str]:
 
 
 def _unpublished(jobs: JobStore, queue: JobQueue, before: datetime) -> list[str]:
-    """The jobs queued since before then while the broker holds no message at all: theirs were lost
-    (a broker that lost its last writes), for a worker takes one message at a time and starts its
-    job at once. Each is marked queued again now, by one caller of several."""
-    if queue.depth() > 0:
-        return []  # messages still wait: none of theirs can be told lost
-    again = [job_id for job_id in jobs.unpublished(before) if jobs.queued_again(job_id, before)]
+    """The jobs queued since before then whose message the broker does not hold: theirs were lost
+    (a broker that lost its last writes), for a worker that takes a message starts its job at
+    once. The jobs are read before the messages, so that a message taken in between is counted
+    lost, never a lost one held: its job is then published twice, which is harmless. Each is
+    marked queued again now, by one caller of several."""
+    waiting = jobs.unpublished(before)
+    if not waiting:
+        return []
+    held = queue.held()
+    again = [job_id for job_id in waiting if job_id not in held and jobs.queued_again(job_id, before)]
     for job_id in again:
         log.warning("job %s waited queued with no message in the broker: queued again", job_id)
     return again

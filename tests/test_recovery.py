@@ -6,10 +6,12 @@ Redis, is `tests/test_faults.py`."""
 
 from __future__ import annotations
 
+import json
 import threading
 import time
 
 import pytest
+import redis
 from conftest import BASE_CASE
 
 from percussim.common import store
@@ -17,6 +19,7 @@ from percussim.common.broker import queue_folder
 from percussim.common.settings import Settings
 from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
 from percussim.service import recovery
+from percussim.testing.live_stack import RedisServer
 from percussim.worker import tasks
 
 LAPSE = 1.0  # s: ALIVE_WITHIN for these tests, so that a beat lapses within the test (renewed every third of it)
@@ -153,10 +156,22 @@ def test_a_pass_beside_the_api_that_fails_is_logged_and_the_next_runs(caplog):
     assert "recovery: the database is unavailable: down; trying again later" in caplog.text
 
 
-def test_a_queued_job_whose_message_is_lost_is_published_again_once_the_broker_holds_none(tmp_path, quick):
-    """A broker that lost its last writes: a job recorded queued with no message. While messages
-    wait, none can be told lost; once none does, a job queued for longer than the silence is
-    published again, once."""
+def delivered(queue) -> list[str]:
+    """Take every message waiting in the queue: their jobs, in order."""
+    with queue.app.connection_for_read() as connection:
+        messages = connection.SimpleQueue("celery", no_ack=True)
+        found = []
+        while True:
+            try:
+                found.append(messages.get(timeout=0.2).payload[0][0])
+            except messages.Empty:
+                return found
+
+
+def test_a_queued_job_whose_message_is_lost_is_published_again_while_others_wait(tmp_path, quick):
+    """A broker that lost its last writes: a job recorded queued with no message. Once queued for
+    longer than the silence it is published again, once, while the message of another job still
+    waits; that job is not."""
     from percussim.service.queue import JobQueue
 
     settings = Settings(results_dir=tmp_path, job_time_limit=0.2, redelivery_seconds=0.5)
@@ -164,23 +179,43 @@ def test_a_queued_job_whose_message_is_lost_is_published_again_once_the_broker_h
     lost = jobs.create(BASE_CASE)["id"]  # recorded; its message never reached the broker
     waiting = jobs.create(BASE_CASE)["id"]
     queue.enqueue(waiting)
+    assert queue.held() == {waiting}
     assert recovery.recover(settings) == []  # too recent
     time.sleep(0.6)
-    assert recovery.recover(settings) == []  # a message waits: the broker is not empty
-
-    def delivered() -> list[str]:
-        with queue.app.connection_for_read() as connection:
-            messages = connection.SimpleQueue("celery", no_ack=True)
-            found = []
-            while True:
-                try:
-                    found.append(messages.get(timeout=0.2).payload[0][0])
-                except messages.Empty:
-                    return found
-
-    assert delivered() == [waiting]
-    jobs.start(waiting, "w1@x")  # a worker took it
     assert recovery.recover(settings) == [lost]
-    assert queue.depth() == 1 and jobs.get(lost)["status"] == QUEUED
-    assert delivered() == [lost]
+    assert queue.held() == {waiting, lost} and jobs.get(lost)["status"] == QUEUED
     assert recovery.recover(settings) == []  # queued again just now: not lost yet
+    assert delivered(queue) == [waiting, lost]
+
+
+def test_redis_holds_a_message_a_worker_took_and_not_one_it_lost(tmp_path, quick):
+    """On a real Redis: of three queued jobs, one message waits, one is delivered to a worker that
+    has not acknowledged it (Redis keeps it apart until then), one is gone from the list. Only the
+    last job is published again."""
+    from percussim.service.queue import JobQueue
+
+    server = RedisServer(tmp_path / "redis")
+    server.start()
+    try:
+        settings = Settings(results_dir=tmp_path, broker_url=server.url, job_time_limit=0.2, redelivery_seconds=0.5)
+        jobs, queue = JobStore(settings), JobQueue(settings)
+        waiting, taken, lost = (jobs.create(BASE_CASE)["id"] for _ in range(3))
+        queue.enqueue(waiting, taken, lost)
+        broker = redis.Redis.from_url(server.url)
+        [raw] = [raw for raw in broker.lrange("celery", 0, -1) if lost in json.loads(raw)["headers"]["argsrepr"]]
+        assert broker.lrem("celery", 1, raw) == 1
+        with queue.app.connection_for_read() as connection:
+            worker = connection.SimpleQueue("celery", no_ack=False)  # as a worker takes a message
+            message = worker.get(timeout=2)
+            assert message.payload[0][0] in (waiting, taken)
+            if message.payload[0][0] == waiting:  # the group may publish in any order
+                waiting, taken = taken, waiting
+            assert broker.llen("celery") == 1 and broker.hlen("unacked") == 1
+            assert queue.held() == {waiting, taken}
+            time.sleep(0.6)
+            assert recovery.recover(settings) == [lost]
+            assert queue.held() == {waiting, taken, lost}
+            message.ack()
+        assert queue.held() == {waiting, lost}
+    finally:
+        server.stop()
