@@ -130,6 +130,11 @@ def test_a_bad_setting_is_one_line_naming_the_variable_with_exit_2(tmp_path):
     assert (
         refused.returncode == 2 and refused.stderr == "percussim: PERCUSSIM_JOB_TIME_LIMIT=-1: must be greater than 0\n"
     )
+    other = percussim({"PERCUSSIM_BROKER_URL": "amqp://guest@localhost//"}, "worker")
+    assert other.returncode == 2 and other.stderr == (
+        "percussim: PERCUSSIM_BROKER_URL=amqp://guest@localhost//: must be a Redis URL (redis://host:6379/0, "
+        "rediss://, redis+socket:// or sentinel://), or unset for the embedded queue\n"
+    )
     # 1e8 and 1e3 are whole numbers: the limit applies (fig3 on the paper's grid takes 4820 steps)
     assert percussim({"PERCUSSIM_MAX_STEPS": "1e8"}, "run", "fig3").returncode == 0
     small = percussim({"PERCUSSIM_MAX_STEPS": "1e3"}, "run", "fig3")

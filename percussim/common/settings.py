@@ -13,12 +13,13 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Annotated, Any
 
-from pydantic import BeforeValidator, Field, ValidationError, model_validator
+from pydantic import BeforeValidator, Field, ValidationError, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from percussim.solver.limits import Limits
 
 PREFIX = "PERCUSSIM_"
+REDIS_SCHEMES = ("redis", "rediss", "redis+socket", "sentinel")
 
 
 def _whole(value: Any) -> Any:
@@ -80,6 +81,17 @@ class Settings(BaseSettings):
     max_body_bytes: Whole = Field(default=2_000_000, ge=1024, description="largest request body accepted")
     api_keys: str | None = Field(default=None, description="comma-separated API keys; none: no keys needed")
     cors_origins: str | None = Field(default=None, description="comma-separated origins browsers may call from")
+
+    @field_validator("broker_url")
+    @classmethod
+    def _a_redis_broker(cls, url: str | None) -> str | None:
+        # The workers' redelivery and the recovery of lost messages read Redis's own keys.
+        if url and url.split("://", 1)[0] not in REDIS_SCHEMES:
+            raise ValueError(
+                "a Redis URL (redis://host:6379/0, rediss://, redis+socket:// or sentinel://), or unset for "
+                "the embedded queue"
+            )
+        return url
 
     @model_validator(mode="after")
     def _redelivery_after_the_time_limit(self) -> Settings:
