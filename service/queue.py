@@ -84,7 +84,7 @@ class JobQueue:
         """The jobs whose messages the broker holds: waiting for a worker, or (Redis) delivered to
         one and not yet acknowledged, which Redis keeps apart until the job ends. kombu has no way
         to look at a queue without taking from it, so each transport's store is read as kombu
-        keeps it: the embedded queue's files, Redis's lists (one a priority) and its hash of
+        keeps it: the embedded queue's files, Redis's lists (one for each priority) and its hash of
         unacknowledged messages."""
         self._folder_made()
         queue = self.app.conf.task_default_queue

@@ -7,10 +7,10 @@ job recorded running whose beat has lapsed for longer than the redelivery time a
 `RESTORE_MARGIN` (by then Celery would have delivered it again) is queued again from its record by
 a thread beside the API (`background`); one whose worker died under it `MAX_ATTEMPTS` times fails,
 saying so: a case that kills its worker must not kill every worker in turn. A job queued that long
-whose message the broker does not hold is published again too, however many others wait. A message the broker did keep as
-well is harmless: a worker delivered a job that another runs, with a fresh beat, does
-not run it (`worker.tasks._take`). Every change is conditional, so API replicas doing the same
-queue each job once.
+whose message the broker does not hold is published again too, however many others wait. A
+message the broker did keep as well is harmless: a worker delivered a job that another runs, with
+a fresh beat, does not run it (`worker.tasks._take`). Every change is conditional, so API
+replicas doing the same queue each job once.
 """
 
 from __future__ import annotations
