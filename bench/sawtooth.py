@@ -342,16 +342,12 @@ def main() -> None:
         f"{np.max(np.abs(rows[1 : count + 1, 2] - force) / np.abs(force)):.2g} (relative)"
     )
     for form, how in enumerate(FORMS):
-        for speed in (1.0, 3.0):
-            raw = variant("without its external force")
-            raw["striker"]["velocity"] *= speed
-            rows = replica(raw, args.cells, REPLICA_SPAN, 1001, form)
+        for name, speed in COMPARED.items():
+            rows = replica(variant(name), args.cells, REPLICA_SPAN, 1001, form)
+            samples = [(t, rows[nearest(rows[:, 0], t)]) for t in early]
             print(
                 f"  the same equations apart from the kernel, {how}{', three times as fast' if speed > 1 else ''}: "
-                + ", ".join(
-                    f"{t:g} s {rows[nearest(rows[:, 0], t), 2]:.3g} N {rows[nearest(rows[:, 0], t), 1]:.2g}"
-                    for t in early
-                )
+                + ", ".join(f"{t:g} s {row[2]:.3g} N {row[1]:.2g}" for t, row in samples)
             )
     steps = explicit_numerics(parse_case(variant("as drawn")), args.cells).steps
     print(f"\nmatrix-31 without its external force, {steps} steps on coarser grids:")
