@@ -19,7 +19,7 @@ from percussim.common.broker import queue_folder
 from percussim.common.settings import Settings
 from percussim.common.store import FAILED, QUEUED, RUNNING, JobStore
 from percussim.service import recovery
-from percussim.testing.live_stack import RedisServer
+from percussim.testing.live_stack import redis_server
 from percussim.worker import tasks
 
 LAPSE = 1.0  # s: ALIVE_WITHIN for these tests, so that a beat lapses within the test (renewed every third of it)
@@ -194,14 +194,12 @@ def test_redis_holds_a_message_a_worker_took_and_not_one_it_lost(tmp_path, quick
     last job is published again."""
     from percussim.service.queue import JobQueue
 
-    server = RedisServer(tmp_path / "redis")
-    server.start()
-    try:
-        settings = Settings(results_dir=tmp_path, broker_url=server.url, job_time_limit=0.2, redelivery_seconds=0.5)
+    with redis_server(tmp_path / "redis") as url:
+        settings = Settings(results_dir=tmp_path, broker_url=url, job_time_limit=0.2, redelivery_seconds=0.5)
         jobs, queue = JobStore(settings), JobQueue(settings)
         waiting, taken, lost = (jobs.create(BASE_CASE)["id"] for _ in range(3))
         queue.enqueue(waiting, taken, lost)
-        broker = redis.Redis.from_url(server.url)
+        broker = redis.Redis.from_url(url)
         [raw] = [raw for raw in broker.lrange("celery", 0, -1) if lost in json.loads(raw)["headers"]["argsrepr"]]
         assert broker.lrem("celery", 1, raw) == 1
         with queue.app.connection_for_read() as connection:
@@ -217,5 +215,3 @@ def test_redis_holds_a_message_a_worker_took_and_not_one_it_lost(tmp_path, quick
             assert queue.held() == {waiting, taken, lost}
             message.ack()
         assert queue.held() == {waiting, lost}
-    finally:
-        server.stop()
