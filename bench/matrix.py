@@ -29,6 +29,7 @@ solver searches again (about a minute on two processes).
 from __future__ import annotations
 
 import argparse
+import functools
 import hashlib
 import inspect
 import json
@@ -76,6 +77,7 @@ def _cached(kind: str, case: dict, depends_on: str) -> Path:
     return CACHE / f"{kind}-{hashlib.sha256(text.encode()).hexdigest()[:16]}.json"
 
 
+@functools.cache
 def solver_source() -> str:
     """The solver's whole source: what a cached fixed-grid run depends on besides its case. A
     version raised by hand was missed once, and the matrix then counted grids searched against an
