@@ -15,7 +15,10 @@ For every case:
 - a run under each tolerance (`numerics.tolerance`, the limits raised): its true error on every
   quantity it estimates, its own estimate, and its work (node-steps over all its grids) against
   that grid's; a silent miss is a run whose estimate is below its true error while that is beyond
-  the tolerance.
+  the tolerance;
+- the cheapest fixed grid as accurate as each run's answer turned out to be, from the same search:
+  the run's work against it separates what the ladder's grids cost from how far within the
+  tolerance its estimate's margins land it.
 
 Then, for each of the paper's presets, the time to a 1%-accurate answer (the default accuracy)
 after compilation, least of several runs, and its true error.
@@ -41,7 +44,7 @@ from pathlib import Path
 
 from marked import write_marked
 
-from percussim.solver import characteristics, matrix
+from percussim.solver import adaptive, characteristics, matrix
 from percussim.solver.accuracy import estimated_values
 from percussim.solver.adaptive import explicit_numerics
 from percussim.solver.case import parse_case
@@ -155,19 +158,21 @@ def fixed_grids(case_json: dict, ref: dict) -> list[dict]:
     return rows
 
 
-def cheapest_fixed(rows: list[dict]) -> dict[float, dict | None]:
-    """For each tolerance, the least work of a fixed grid from which every finer one meets it
-    (None: not within FIXED_WORK_CAP)."""
-    found = {}
-    for tol in TOLERANCES:
-        best = None
-        for row in reversed(rows):
-            if row["worst"] > tol:
-                break
-            best = row
-        # a grid counts only if the search went finer than it while still meeting the tolerance
-        found[tol] = best if best is not None and best is not rows[-1] else None
-    return found
+def cheapest_within(rows: list[dict], target: float) -> dict | None:
+    """The least work of a fixed grid from which every finer one is within `target` (None: not
+    within FIXED_WORK_CAP)."""
+    best = None
+    for row in reversed(rows):
+        if row["worst"] > target:
+            break
+        best = row
+    # a grid counts only if the search went finer than it while still within the target
+    return best if best is not None and best is not rows[-1] else None
+
+
+# The least true error a fixed grid is sought for: the searches stop once four grids in a row are
+# within it, and a reference 10× tighter than the tightest tolerance vouches for no less
+OWN_ACCURACY_FLOOR = min(TOLERANCES) / 20
 
 
 def tolerance_run(case, tol: float, ref: dict) -> dict:
@@ -185,6 +190,7 @@ def tolerance_run(case, tol: float, ref: dict) -> dict:
         "work": sum((r["cells"] + 1) * (r["steps"] + 1) for r in summary["runs"]),
         "final_work": (summary["runs"][-1]["cells"] + 1) * (summary["runs"][-1]["steps"] + 1),
         "cells": [r["cells"] for r in summary["runs"]],
+        "on_fewest_grids": len(summary["runs"]) == adaptive.MIN_RUNS,
         "seconds": seconds,
         "warnings": summary["warnings"],
         "missed": [name for name in ref["values"] if name not in estimate],
@@ -210,16 +216,23 @@ def measure(case_json: dict) -> dict:
     ref = reference(case_json)
     if "skipped" in ref:
         return {"name": case_json["name"], "case": case_json, "reference": ref, "runs": {}}
-    fixed = cheapest_fixed(fixed_grids(case_json, ref))
+    rows = fixed_grids(case_json, ref)
     runs = {}
     for tol in TOLERANCES:
         if not counted(ref, tol):
             continue
         run = tolerance_run(case, tol, ref)
-        best = fixed[tol]
+        best = cheapest_within(rows, tol)
         run["cheapest_cells"] = best["cells"] if best else None
         run["ratio"] = run["work"] / best["work"] if best else None
         run["final_ratio"] = run["final_work"] / best["work"] if best else None
+        # against a fixed grid as accurate as the answer turned out to be: what the ladder's work
+        # costs beside what its answer is worth, apart from how far below the tolerance it lands
+        as_accurate = cheapest_within(
+            rows, max(run["worst"], OWN_ACCURACY_FLOOR, 10 * max(ref["uncertainty"].values(), default=0.0))
+        )
+        run["own_cells"] = as_accurate["cells"] if as_accurate else None
+        run["own_ratio"] = run["work"] / as_accurate["work"] if as_accurate else None
         runs[str(tol)] = run
     return {"name": case_json["name"], "case": case_json, "reference": ref, "runs": runs}
 
@@ -277,6 +290,7 @@ def summarise(results: list[dict]) -> dict:
     for tol in TOLERANCES:
         runs = [r["runs"][str(tol)] for r in results if str(tol) in r["runs"]]
         ratios = [r["ratio"] for r in runs if r["ratio"] is not None]
+        own = [r["own_ratio"] for r in runs if r["own_ratio"] is not None]
         worst = [r["worst"] / tol for r in runs]
         out[str(tol)] = {
             "cases": len(runs),
@@ -291,6 +305,18 @@ def summarise(results: list[dict]) -> dict:
             "cost_median": statistics.median(ratios) if ratios else None,
             "cost_worst": max(ratios) if ratios else None,
             "cost_counted": len(ratios),
+            "own_accuracy_median": statistics.median(own) if own else None,
+            "own_accuracy_counted": len(own),
+            # where the answer lands within the tolerance: its estimate above its true error, and
+            # the tolerance above its estimate
+            "estimate_over_truth_median": statistics.median(
+                r["estimated"] / r["worst"] for r in runs if r["worst"] > 0
+            ),
+            "tolerance_over_estimate_median": statistics.median(
+                tol / r["estimated"] for r in runs if r["estimated"] > 0
+            ),
+            # ladders that met it on their fewest grids: their first grid, not the estimate, set their work
+            "on_fewest_grids": sum(r["on_fewest_grids"] for r in runs),
             # the least any start could cost on the grid the ladder ended on: that grid alone
             "final_grid_median": statistics.median(r["final_ratio"] for r in runs if r["ratio"] is not None)
             if ratios
@@ -309,11 +335,15 @@ def overview(stats: dict, preset_rows: list[dict], count: int, seed: int) -> str
         "reference. Cost: its work (node-steps over all its grids) against the cheapest fixed grid "
         "that meets the same tolerance, found in hindsight; its final grid alone against the same "
         "grid is the least a start nearer the answer (from a neighbour in a study) could cost where "
-        "the ladder ends as it does. Each run has the service's limits raised "
+        "the ladder ends as it does. As accurate: its work against the cheapest fixed grid whose "
+        f"true error is no larger than its own (or than {OWN_ACCURACY_FLOOR:g} and 10× the reference's uncertainty, "
+        "if larger), found in hindsight the same way: what the answer costs beside what it turned "
+        "out to be worth, apart from how far within the tolerance it lands. Each run has the "
+        "service's limits raised "
         "tenfold, so that its ladder stops on its own account.",
         "",
-        "| tolerance | cases | worst true error / tolerance | beyond it | beyond 1.5× | estimate below the truth | silent misses (that and beyond it) | say 'not met' | stopped by a limit | cost: median | worst | its final grid alone: median | cases with a cheapest grid |",
-        "|---|---|---|---|---|---|---|---|---|---|---|---|---|",
+        "| tolerance | cases | worst true error / tolerance | beyond it | beyond 1.5× | estimate below the truth | silent misses (that and beyond it) | say 'not met' | stopped by a limit | cost: median | worst | its final grid alone: median | cases with a cheapest grid | as accurate: median | cases |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     for tol in TOLERANCES:
         s = stats[str(tol)]
@@ -321,9 +351,20 @@ def overview(stats: dict, preset_rows: list[dict], count: int, seed: int) -> str
             f"| {tol:g} | {s['cases']} | {s['worst_ratio_to_tol']:.2f} | {s['beyond_tol']} | "
             f"{s['beyond_1_5_tol']} | {s['estimate_below_truth']} | {s['silent_misses']} | {s['said_not_met']} | "
             f"{s['stopped_by_a_limit']} | {s['cost_median']:.2f}× | {s['cost_worst']:.2f}× | "
-            f"{s['final_grid_median']:.2f}× | {s['cost_counted']} |"
+            f"{s['final_grid_median']:.2f}× | {s['cost_counted']} | {s['own_accuracy_median']:.2f}× | "
+            f"{s['own_accuracy_counted']} |"
         )
     lines += [
+        "",
+        "Where the answers land, medians: "
+        + "; ".join(
+            f"at {tol:g} the estimate {stats[str(tol)]['estimate_over_truth_median']:.1f}× the true error "
+            f"and the tolerance {stats[str(tol)]['tolerance_over_estimate_median']:.1f}× the estimate, "
+            f"{stats[str(tol)]['on_fewest_grids']} of {stats[str(tol)]['cases']} ladders ending on their "
+            f"fewest grids ({adaptive.MIN_RUNS})"
+            for tol in TOLERANCES
+        )
+        + ".",
         "",
         f"Each of the paper's presets at the default accuracy (1%), after compilation, least of "
         f"{PRESET_REPEATS} runs (the reference solves the paper's model only; `bench/device_presets.py` "
@@ -352,24 +393,28 @@ def table(results: list[dict], stats: dict, preset_rows: list[dict], seed: int) 
     lines += [
         "",
         "Every case (true error and estimate, worst over the quantities; cost against "
-        "the cheapest fixed grid, whose cells are given):",
+        "the cheapest fixed grid, and against the cheapest as accurate as the answer, whose cells are given):",
         "",
-        "| case | reference contacts | 1e-2: true | estimate | cost (cells) | 1e-3: true | estimate | cost (cells) |",
-        "|---|---|---|---|---|---|---|---|",
+        "| case | reference contacts | 1e-2: true | estimate | cost (cells) | as accurate (cells) "
+        "| 1e-3: true | estimate | cost (cells) | as accurate (cells) |",
+        "|---|---|---|---|---|---|---|---|---|---|",
     ]
     for r in results:
         if "skipped" in r["reference"]:
-            lines.append(f"| {r['name']}: {describe(r['case'])} | left out: {r['reference']['skipped']} | | | | | | |")
+            lines.append(
+                f"| {r['name']}: {describe(r['case'])} | left out: {r['reference']['skipped']} | | | | | | | | |"
+            )
             continue
         cells = []
         for tol in TOLERANCES:
             run = r["runs"].get(str(tol))
             if run is None:
                 uncertainty = max(r["reference"]["uncertainty"].values())
-                cells.append(f"not counted: the reference's uncertainty is {uncertainty:.1e} | |")
+                cells.append(f"not counted: the reference's uncertainty is {uncertainty:.1e} | | |")
                 continue
             ratio = f"{run['ratio']:.2f}× ({run['cheapest_cells']})" if run["ratio"] else "no fixed grid"
-            cells.append(f"{run['worst']:.1e} | {run['estimated']:.1e} | {ratio}")
+            own = f"{run['own_ratio']:.2f}× ({run['own_cells']})" if run["own_ratio"] else "no fixed grid"
+            cells.append(f"{run['worst']:.1e} | {run['estimated']:.1e} | {ratio} | {own}")
         lines.append(
             f"| {r['name']}: {describe(r['case'])} | {r['reference']['contacts']} | " + " | ".join(cells) + " |"
         )
@@ -407,7 +452,8 @@ def main() -> None:
                 result["name"],
                 " ".join(
                     f"{tol}: true {runs[tol]['worst']:.1e} est {runs[tol]['estimated']:.1e} "
-                    f"cost {runs[tol]['ratio'] or float('nan'):.2f} cells {runs[tol]['cells']}"
+                    f"cost {runs[tol]['ratio'] or float('nan'):.2f} as accurate "
+                    f"{runs[tol]['own_ratio'] or float('nan'):.2f} cells {runs[tol]['cells']}"
                     for tol in runs
                 ),
                 flush=True,
