@@ -214,7 +214,7 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
     sign = np.ones(n + 1)
     sign[1::2] = -1.0
     y, w = 0.0, striker[1]
-    waves = np.zeros(4)  # G_{m−1}, G_{m−2} at the struck end, then at the far end
+    waves = np.zeros(6)  # G_{m−1}, G_{m−2}, G_{m−3} at the struck end, then at the far end
     rates = np.zeros(4)  # the incoming waves' mean and slope over the step, struck end then far end
     g = SDIRK_GAMMA * tau
     out = np.zeros((steps // every + 1, 3))
@@ -231,12 +231,14 @@ def replica_steps(rod: tuple, striker: tuple, contact: tuple, steps: int, every:
                 u[new, i] = u[cur, i] + increments[i]
         for k in range(2):
             inner, edge = (1, 0) if k == 0 else (n - 1, n)
-            last, before = waves[2 * k], waves[2 * k + 1]
+            last, before, earlier = waves[3 * k], waves[3 * k + 1], waves[3 * k + 2]
             now = u[cur, inner] - u[old, edge] + before
             after = u[new, inner] - u[cur, edge] + last
             rates[2 * k] = (now - last) / tau
-            rates[2 * k + 1] = limited_slope((last - before) / tau, rates[2 * k], (after - now) / tau, tau)
-            waves[2 * k], waves[2 * k + 1] = now, last
+            rates[2 * k + 1] = limited_slope(
+                (before - earlier) / tau, (last - before) / tau, rates[2 * k], (after - now) / tau, tau
+            )
+            waves[3 * k], waves[3 * k + 1], waves[3 * k + 2] = now, last, before
         start, slope = rates[0] - 0.5 * tau * rates[1], rates[1]
         x = (y, w, u[cur, 0])
         _, k1 = replica_stage(x, g, start + slope * g, striker, contact, impedance)

@@ -21,8 +21,7 @@ SUBSET = (0, 3, 4, 5, 7, 9, 10, 11, 14, 16, 22)
 TIGHT = (3, 11)  # also at 1e-3
 
 
-def solved_within(index: int, tol: float) -> None:
-    data = CASES[index]
+def solved_within(data: dict, tol: float) -> None:
     case = parse_case(data)
     reference = converged_reference(case, target=tol / 20, max_cells=60_000)
     assert max(reference.uncertainty.values(), default=0.0) <= tol / 10, reference.uncertainty
@@ -42,10 +41,20 @@ def solved_within(index: int, tol: float) -> None:
 @pytest.mark.slow
 @pytest.mark.parametrize("index", SUBSET)
 def test_a_case_of_the_matrix_is_within_one_percent(index):
-    solved_within(index, 1e-2)
+    solved_within(CASES[index], 1e-2)
 
 
 @pytest.mark.slow
 @pytest.mark.parametrize("index", TIGHT)
 def test_a_case_of_the_matrix_is_within_a_tenth_of_a_percent(index):
-    solved_within(index, 1e-3)
+    solved_within(CASES[index], 1e-3)
+
+
+@pytest.mark.slow
+def test_a_spike_returned_by_a_stiff_medium_is_resolved_within_one_percent():
+    """Seed 4's matrix-6: a contact damper about the tool's impedance sends a front down the tool
+    at impact, and the stiff medium returns it as a spike that relaxes in Z/c2 (6 µs). Where it
+    meets the struck end, its damper pulls: the largest tension, 22.4 MPa. On grids that read the
+    spike's start at its mean over a step (up to 300 cells) it stayed under the working end's
+    15.9 MPa, on which 16 to 128 cells agreed to 1e-5: the answer at 1% was 29% off, estimated 0.2%."""
+    solved_within(next(c for c in draw_cases(4, 7) if c["name"] == "matrix-6"), 1e-2)

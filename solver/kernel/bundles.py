@@ -20,7 +20,7 @@ MEDIUM_LINEAR, MEDIUM_BILINEAR, MEDIUM_SMITH = 0, 1, 2
 # striker is in contact and since when; the end forces and the contact potential at the last
 # recorded layers (m−1, m−2, m−3); for the ends that integrate their own equations, the
 # striker's velocity and the incoming waves' displacements G at the struck end and at the
-# working end, at layers m−1, m−2
+# working end, at layers m−1, m−2 (m−3 below)
 S_IN_CONTACT, S_CONTACT_START = 0, 1
 S_FORCE_BEFORE, S_FORCE_BEFORE_THAT, S_FORCE_EARLIER = 2, 3, 4  # the contact force
 S_MEDIUM_FORCE, S_MEDIUM_FORCE_BEFORE, S_MEDIUM_FORCE_EARLIER = 5, 6, 7
@@ -49,12 +49,15 @@ S_CONTACT_DEEPEST, S_ANVIL_CONTACT_DEEPEST = 32, 33
 S_TRANSFERRED, S_TRANSFER_FORCE, S_TRANSFER_DISP = 34, 35, 36
 S_BLOW_START = 37  # when the present blow started: a driving history's time counts from it
 S_LAUNCH_VELOCITY = 38  # the present blow's striker was launched at (W1, or what a drive gave it)
-END_SLOTS = 39
-# The waves arriving at an end: the slots of their displacements G_{m−1} and G_{m−2}
-INCOMING = (S_INCOMING, S_INCOMING_BEFORE)  # at the tool's struck end
-FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE)  # at its working end
-FACE_INCOMING = (S_FACE_INCOMING, S_FACE_INCOMING_BEFORE)  # at an elastic striker's face
-BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE)  # at its back end
+# The incoming waves' displacements G at layer m−3, at each end as above: whether the wave was
+# quiet before a jump (`limited_slope`)
+S_INCOMING_EARLIER, S_FAR_INCOMING_EARLIER, S_FACE_INCOMING_EARLIER, S_BACK_INCOMING_EARLIER = 39, 40, 41, 42
+END_SLOTS = 43
+# The waves arriving at an end: the slots of their displacements G_{m−1}, G_{m−2} and G_{m−3}
+INCOMING = (S_INCOMING, S_INCOMING_BEFORE, S_INCOMING_EARLIER)  # at the tool's struck end
+FAR_INCOMING = (S_FAR_INCOMING, S_FAR_INCOMING_BEFORE, S_FAR_INCOMING_EARLIER)  # at its working end
+FACE_INCOMING = (S_FACE_INCOMING, S_FACE_INCOMING_BEFORE, S_FACE_INCOMING_EARLIER)  # at an elastic striker's face
+BACK_INCOMING = (S_BACK_INCOMING, S_BACK_INCOMING_BEFORE, S_BACK_INCOMING_EARLIER)  # at its back end
 
 # The ends' own state over one step, where they integrate their own equations (`integrate_ends`
 # fills it from the layer and the slots, the ends advance it, the new layer takes it back).

@@ -61,7 +61,8 @@ def start_at_rest(state, rest) -> None:
     """The state before a run (`new_state`'s) at the rest `rest` (`solver.rest.Rest`): layers 0
     and −1 (rows 0 and 2) at its displacements, the shaft's sets, the medium's force and state,
     the anvil on its contact, and the waves arriving at each end as a static strain sends them
-    (`incoming_wave`: G_{−1} = 0, G_0 half the end cell's stretch, so an end at rest stays there).
+    (`incoming_wave`: G_{−1} = 0, G_0 half the end cell's stretch and G_{−2} minus that, so an
+    end at rest stays there).
     `start_impact` counts the energy it stores."""
     u, ends = state.u, state.ends
     u[0] = rest.u
@@ -73,6 +74,10 @@ def start_at_rest(state, rest) -> None:
     ends[S_ANVIL_DISP] = rest.anvil_displacement
     ends[S_ANVIL_FORCE] = rest.anvil_force
     ends[S_ANVIL_CONTACT_DEEPEST] = rest.anvil_overlap
-    for (last, before), stretch in ((INCOMING, rest.u[1] - rest.u[0]), (FAR_INCOMING, rest.u[-2] - rest.u[-1])):
+    for (last, before, earlier), stretch in (
+        (INCOMING, rest.u[1] - rest.u[0]),
+        (FAR_INCOMING, rest.u[-2] - rest.u[-1]),
+    ):
+        ends[earlier] = -0.5 * stretch
         ends[before] = 0.0
         ends[last] = 0.5 * stretch

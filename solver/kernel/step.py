@@ -198,9 +198,10 @@ def launch_striker(state, row, row_before, at, contact, striker, tau):
             striker_u[row, i] = at
             striker_u[row_before, i] = at - velocity * tau
             state.striker_increments[i] = velocity * tau
-        for last, before in (FACE_INCOMING, BACK_INCOMING):
+        for last, before, earlier in (FACE_INCOMING, BACK_INCOMING):
             ends[last] = 0.0  # G of the layer in `row` (only its differences count)
             ends[before] = -0.5 * velocity * tau
+            ends[earlier] = -velocity * tau  # the same wave the step before
         for mean, slope in ((S_BACK_MEAN, S_BACK_SLOPE), (S_BACK_MEAN_BEFORE, S_BACK_SLOPE_BEFORE)):
             ends[mean] = 0.5 * velocity
             ends[slope] = 0.0
@@ -263,8 +264,8 @@ def rest_tool(m, state, contact, anvil):
     energy[0, E_CONTACT_POTENTIAL] += contacts_after - contacts_before
     u[:, :] = at
     state.increments[:] = 0.0
-    for last, before in (INCOMING, FAR_INCOMING):  # no wave arrives at either end
-        ends[last] = ends[before] = 0.0
+    for last, before, earlier in (INCOMING, FAR_INCOMING):  # no wave arrives at either end
+        ends[last] = ends[before] = ends[earlier] = 0.0
     ends[S_MEDIUM_FORCE] = ends[S_MEDIUM_FORCE_BEFORE] = ends[S_MEDIUM_FORCE_EARLIER] = 0.0
 
 
