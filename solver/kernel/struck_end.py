@@ -359,10 +359,10 @@ def limited_slope(earlier, before, now, after, tau):
     returned by a stiff spring at the far end, relaxing in Z/c2) falls by more than a quarter of
     the jump in the step behind it; the quiet stretch before the jump tells it from an extremum
     (seed 4's matrix-6: on 128 cells the spike's start read at its mean was 29% low, and the
-    tension it makes at the struck end 23% low or more up to 300 cells). At an extremum, or an oscillation
-    from step to step, the two sides are alike, the change before is no quieter, and none is
-    taken, as minmod does: taking one there let a grid-scale ringing at the struck end grow over
-    millions of steps (matrix-31 on 11,674 cells)."""
+    tension it makes at the struck end 23% low or more up to 300 cells). At an extremum, or an
+    oscillation from step to step, the two sides are alike, the change before is no quieter, and
+    none is taken, as minmod does: taking one there let a grid-scale ringing at the struck end
+    grow over millions of steps (matrix-31 on 11,674 cells)."""
     left, right = now - before, after - now
     if left * right > 0.0:
         return (left if abs(left) < abs(right) else right) / tau
