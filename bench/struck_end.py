@@ -91,7 +91,7 @@ def main() -> None:
         overlap = (0.5 * summary["peak_contact_force"]["value"] / contact.stiffness) ** (1.0 / (1.0 + contact.exponent))
         spring = contact_spring(overlap, contact)[0]
         linear = contact._replace(exponent=0.0, stiffness=spring / overlap)
-        events = np.zeros((4, 3))
+        events = np.zeros((4, 4))
         waves = (0.0, 0.0, 0.0, 0.0)
         columns = []
         for law, gap in ((contact, overlap), (linear, overlap), (contact, -overlap)):

@@ -99,7 +99,8 @@ class BlowLog:
             run[L.X_CONTACTS] += x[L.X_CONTACTS]
             run[L.X_MIN_CONTACT_STEPS] = min(run[L.X_MIN_CONTACT_STEPS], x[L.X_MIN_CONTACT_STEPS])
         first = self.blows[0]["extremes"]
-        run[L.X_CO_IMPACT], run[L.X_REBOUND_VELOCITY] = first[L.X_CO_IMPACT], first[L.X_REBOUND_VELOCITY]
+        for slot in (L.X_CO_IMPACT, L.X_REBOUND_VELOCITY, L.X_FADE_TIME):
+            run[slot] = first[slot]
         return run
 
     def envelope(self) -> np.ndarray:

@@ -41,6 +41,7 @@ import numpy as np
 from .case import Case
 from .compiled import compiled
 from .grid import area_integral, tool_area, wave_speed
+from .layout import GRAZING
 
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
 
@@ -51,7 +52,8 @@ O_TENSION, O_TENSION_X, O_TENSION_TIME = 5, 6, 7
 O_CO_IMPACT, O_REBOUND, O_CONTACTS = 8, 9, 10
 O_EXTERNAL_WORK, O_MEDIUM_DISSIPATED, O_MEDIUM_DISPLACEMENT = 11, 12, 13
 O_IN_CONTACT, O_CONTACT_START = 14, 15
-OBSERVED = 16
+O_FADE = 16  # how long the overlap took to cross rounding where the first contact ended
+OBSERVED = 17
 
 STIFFNESS_STEP = 0.25  # a substep's length times the end's fastest rate
 MIN_SUBSTEPS = 4
@@ -221,6 +223,10 @@ def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
                 if count == 0:
                     obs[O_CO_IMPACT] = stop
                     obs[O_REBOUND] = out[1]
+                    incoming = _arriving(stop, p, wave)
+                    parted = _contact_force(out[0], out[1], out[2], incoming, p[0], p[1], p[2], p[3], z)
+                    rate = out[1] - (incoming + parted) / z
+                    obs[O_FADE] = GRAZING * (abs(out[0]) + abs(out[2])) / max(abs(rate), 1e-300)
                 obs[O_CONTACTS] = count + 1
                 obs[O_IN_CONTACT] = 0.0
             else:
@@ -391,6 +397,7 @@ class Reference:
     cells: int
     co_impact_time: float | None
     striker_rebound_velocity: float | None
+    contact_fade_time: float | None
     peak_contact_force: float
     peak_contact_force_time: float
     max_compressive_stress: float
@@ -472,7 +479,7 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
         [case.medium.stiffness if case.medium else 0.0, case.medium.damping if case.medium else 0.0, end_areas[1]]
     )
     obs = np.zeros(OBSERVED)
-    obs[O_CO_IMPACT] = obs[O_REBOUND] = np.nan
+    obs[O_CO_IMPACT] = obs[O_REBOUND] = obs[O_FADE] = np.nan
     stride = max(1, steps // history_points) if history_points else 0
     history = np.zeros((4, steps // stride + 1 if stride else 0))
     kept = _run(h, tau, steps, last_fraction, cell_area, cell_z, striker, medium, obs, history, stride)
@@ -483,6 +490,7 @@ def solve(case: Case, cells: int, history_points: int = 0) -> Reference:
         cells=cells,
         co_impact_time=None if math.isnan(obs[O_CO_IMPACT]) else float(obs[O_CO_IMPACT]),
         striker_rebound_velocity=None if math.isnan(obs[O_REBOUND]) else float(obs[O_REBOUND]),
+        contact_fade_time=None if math.isnan(obs[O_FADE]) else float(obs[O_FADE]),
         peak_contact_force=float(obs[O_PEAK_FORCE]),
         peak_contact_force_time=float(obs[O_PEAK_FORCE_TIME]),
         max_compressive_stress=float(obs[O_COMPRESSION]),

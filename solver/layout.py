@@ -34,7 +34,15 @@ X_MIN_CONTACT_STEPS = 13  # fewest steps any finished contact interval was resol
 X_MAX_PENETRATION = 14  # the working end's deepest penetration into the medium
 X_MAX_TRANSFERRED = 15  # the most work done on the tool through its struck end (EMX)
 X_SET = 16  # the medium's permanent penetration where the blow's duration ends
-EXTREME_SLOTS = 17
+# How long the overlap took, where the first contact ended, to cross the rounding of the
+# displacements (`GRAZING`) at the rate it fell then: next to nothing where the faces part; where a
+# contact fades out, held by a link that relaxes slowly, of the order of that link's time, and
+# rounding then sets the contact's end
+X_FADE_TIME = 17
+EXTREME_SLOTS = 18
+
+# An overlap within this fraction of the ends' displacements is rounding: it changes no contact
+GRAZING = 1e-12
 
 # Energy slots (`energy[0, …]` at the last layer, `energy[1, …]` at the one before): running work
 # and dissipation, and the stored terms
@@ -64,6 +72,7 @@ def new_extremes() -> np.ndarray:
     x = np.zeros(EXTREME_SLOTS)
     x[X_CO_IMPACT] = np.nan
     x[X_REBOUND_VELOCITY] = np.nan
+    x[X_FADE_TIME] = np.nan
     x[X_FAILED_TIME] = np.nan
     x[X_MIN_CONTACT_STEPS] = np.inf
     x[X_MAX_PENETRATION] = -np.inf

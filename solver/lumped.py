@@ -231,6 +231,7 @@ class ContactLog:
     in_contact: bool = True
     first_end: float = math.nan
     rebound_velocity: float = math.nan
+    fade_time: float = math.nan
 
     def observe(self, seg: Segment) -> None:
         if not seg.crossed:
@@ -238,6 +239,8 @@ class ContactLog:
         if seg.contact and seg.t1 > self.start:  # a zero-length touch is no contact
             if not self.intervals:
                 self.first_end, self.rebound_velocity = seg.t1, float(seg.end[V1])
+                rounding = L.GRAZING * (abs(seg.end[X1]) + abs(seg.end[X2]))
+                self.fade_time = float(rounding / max(abs(seg.end[V1] - seg.end[V2]), 1e-300))
             self.intervals.append((self.start, seg.t1))
         elif not seg.contact:
             self.start = seg.t1
@@ -378,6 +381,7 @@ def fill_extremes(log: ContactLog, peak: tuple[float, float], stress: np.ndarray
     extremes[L.X_CONTACTS] = len(log.intervals)
     extremes[L.X_CO_IMPACT] = log.first_end
     extremes[L.X_REBOUND_VELOCITY] = log.rebound_velocity
+    extremes[L.X_FADE_TIME] = log.fade_time
     extremes[L.X_ENERGY_EXCESS] = excess
     return extremes
 

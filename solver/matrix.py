@@ -140,6 +140,7 @@ def reference_left_out(case: Case, reference: Reference) -> dict[str, str]:
         case.impact_velocity,
         reference.initial + max(reference.external_work, 0.0),
         case.medium is not None,
+        reference.contact_fade_time,
     )
 
 

@@ -152,6 +152,11 @@ class Summary(_Part):
     scheme: str
     numerics: ResolvedNumerics
     co_impact_time: float | None = Field(description="end of the first contact, s; null if it never ends")
+    contact_fade_time: float | None = Field(
+        description="where the first contact ended, how long its overlap took to cross the rounding of the "
+        "displacements, s: next to nothing where the faces part, a slow link's relaxation time where the contact "
+        "fades out (its end is then set by rounding, and co_impact_time is not estimated); null if it never ends"
+    )
     contacts: list[Contact] = Field(description=f"the contact intervals (the first {MAX_CONTACTS})")
     contacts_total: int = Field(description="how many contacts, counting those not listed")
     peak_contact_force: PeakForce
@@ -322,6 +327,7 @@ def build_summary(
         "scheme": numerics.scheme,
         "numerics": numerics.as_dict(),
         "co_impact_time": _number(extremes[L.X_CO_IMPACT]),
+        "contact_fade_time": _number(extremes[L.X_FADE_TIME]),
         "contacts": intervals,
         "contacts_total": count + (0 if open_contact is None else 1),
         "peak_contact_force": {"value": float(extremes[L.X_PEAK_FORCE]), "time": float(extremes[L.X_PEAK_FORCE_TIME])},

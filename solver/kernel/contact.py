@@ -155,3 +155,20 @@ def crossing(before_that, before, now):
         if 0.0 <= x <= 1.0:
             return x
     return linear
+
+
+@compiled(inline="always")
+def crossing_rate(before_that, before, now, at):
+    """The overlap's change per step where `crossing` put its zero (`at`), on the same parabola
+    (the same straight line)."""
+    if not (before_that == before_that):
+        return now - before
+    return 0.5 * (now - before_that) + (now + before_that - 2.0 * before) * at
+
+
+@compiled(inline="always")
+def fade_time(rounding, rate):
+    """How long an overlap changing at `rate` (δ1') takes to cross `rounding` (`GRAZING` of the
+    displacements): where a contact ends, next to nothing if the faces part, a slow link's
+    relaxation time if the contact fades out."""
+    return rounding / max(abs(rate), 1e-300)

@@ -56,6 +56,7 @@ from ..layout import (
     TENSION,
     X_CO_IMPACT,
     X_CONTACTS,
+    X_FADE_TIME,
     X_MAX_TRANSFERRED,
     X_MIN_CONTACT_STEPS,
     X_PEAK_FORCE,
@@ -81,7 +82,7 @@ from .bundles import (
     S_TRANSFERRED,
     Recorded,
 )
-from .contact import crossing, external_force
+from .contact import crossing, crossing_rate, external_force, fade_time
 
 
 @compiled(inline="always")
@@ -96,9 +97,10 @@ def node_stress(u, recorded, i, step):
 
 
 @compiled(inline="always")
-def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
-    """A change of the overlap's sign at `t_cross`: opens or closes a contact interval (δ ≥ 0 is
-    contact); the first one to close sets the co-impact time and the rebound velocity. Past the
+def track_contact(ends, observed, t_cross, velocity, fade, into_contact, tau):
+    """A change of the overlap's sign at `t_cross`, the striker moving at `velocity` and the
+    overlap crossing rounding in `fade` (`fade_time`): opens or closes a contact interval (δ ≥ 0 is
+    contact); the first one to close sets the co-impact time, the rebound velocity and the fade. Past the
     blow's duration (`observed.until`, within its last step) nothing changes: the contact is as
     it stood where the duration ends."""
     if t_cross > observed.until:
@@ -117,6 +119,7 @@ def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
         if k == 0:
             extremes[X_CO_IMPACT] = t_cross
             extremes[X_REBOUND_VELOCITY] = velocity
+            extremes[X_FADE_TIME] = fade
         ends[S_IN_CONTACT] = 0.0
     elif not in_contact and into_contact:
         ends[S_IN_CONTACT] = 1.0
@@ -124,12 +127,15 @@ def track_contact(ends, observed, t_cross, velocity, into_contact, tau):
 
 
 @compiled(inline="always")
-def track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau):
+def track_overlap(ends, observed, overlaps, delta, m, t, velocity, rounding, tau):
     """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
-    `Overlaps`: a change of sign placed on the parabola through the last three overlaps."""
+    `Overlaps`: a change of sign placed on the parabola through the last three overlaps, which
+    crosses the displacements' `rounding` in `fade_time`."""
     if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
-        t_cross = t - tau + tau * crossing(overlaps.old if m >= 2 else np.nan, overlaps.cur, delta)
-        track_contact(ends, observed, t_cross, velocity, delta >= 0.0, tau)
+        before_that = overlaps.old if m >= 2 else np.nan
+        at = crossing(before_that, overlaps.cur, delta)
+        fade = fade_time(rounding, crossing_rate(before_that, overlaps.cur, delta, at) / tau)
+        track_contact(ends, observed, t - tau + tau * at, velocity, fade, delta >= 0.0, tau)
 
 
 @compiled(inline="always")

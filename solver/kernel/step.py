@@ -26,6 +26,7 @@ from ..layout import (
     E_TOOL_STRAIN,
     E_WITHDRAWN,
     ENERGY_SLOTS,
+    GRAZING,
     X_FAILED_TIME,
     X_MAX_PENETRATION,
     X_SET,
@@ -302,6 +303,7 @@ def start_blow(m, state, observed, contact, striker, anvil, medium, tau, velocit
             mean_velocity(ends[S_IMPULSE], launched_at(contact, ends[S_LAUNCH_VELOCITY]), striker)
             if striker.elastic
             else ends[S_STRIKER_VELOCITY],
+            np.nan,  # withdrawn, not parted
             False,
             tau,
         )
@@ -476,7 +478,7 @@ def integrate_ends(state, observed, layer, t, tool, rod, contact, striker, anvil
         free_back_end(striker_u, layer, ends, striker, tau)
         velocity = mean_velocity(end_state[END_IMPULSE], contact, striker)
     for k in range(crossings):
-        track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 2] > 0.0, tau)
+        track_contact(ends, observed, events[k, 0], events[k, 1], events[k, 3], events[k, 2] > 0.0, tau)
     return True, velocity, end_state[END_CONTACT_FORCE], end_state[END_ANVIL_FORCE], far_state[WORK_FORCE], flows
 
 
@@ -573,7 +575,8 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
     )
     ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
     ends[S_POTENTIAL_BEFORE] = potential
-    track_overlap(ends, observed, overlaps, delta, m, t, velocity, tau)
+    rounding = GRAZING * (abs(y_new) + abs(u0_new))
+    track_overlap(ends, observed, overlaps, delta, m, t, velocity, rounding, tau)
     return True, recorded_at(rec, t_rec, velocity, contact_force, contact_force, medium_force, tool), interior, balance
 
 
@@ -679,7 +682,7 @@ def advance(
     tau = rod.time_step
     # the ends' states and the struck end's events within a step (`integrate_ends`), lent to each
     # step `uncounted`: `scratch` holds them through the loop
-    scratch = (np.empty(STRUCK_END_STATE), np.empty(WORKING_END_STATE), np.empty((4, 3)))
+    scratch = (np.empty(STRUCK_END_STATE), np.empty(WORKING_END_STATE), np.empty((4, 4)))
     n_hist = 0
     n_field = 0
 

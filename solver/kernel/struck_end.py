@@ -9,6 +9,7 @@ import math
 
 from ..compiled import compiled
 from ..laws import FORCE_ABS_SINE, FORCE_PULSE
+from ..layout import GRAZING
 from .bundles import (
     BACK_INCOMING,
     END_ANVIL_CONTACT_DEEPEST,
@@ -36,6 +37,7 @@ from .contact import (
     contact_spring,
     cushion_loss,
     external_force,
+    fade_time,
     linear_branch,
     pressed_to,
     quotient_force,
@@ -71,8 +73,6 @@ SDIRK_MONOTONE = 2.0
 # rate the tool brakes the striker at: the bias then falls as τ² with the rest of the scheme's error.
 STIFF_RISE_STEPS = 4.0
 MAX_SUBSTEPS = 100_000
-# An overlap within this fraction of the ends' displacements is rounding: it changes no contact
-GRAZING = 1e-12
 # An anvil's oscillation between its contacts: substeps keep its phase within this a substep (about
 # 30 a period), at most this many a step
 ANVIL_PHASE = 0.2
@@ -323,6 +323,13 @@ def hermite(a, b, rate_a, rate_b, span, s):
     )
 
 
+@compiled(inline="always")
+def hermite_rate(a, b, rate_a, rate_b, span, s):
+    """The rate of the cubic of `hermite` at fraction s."""
+    s2 = s * s
+    return 6.0 * (s2 - s) * (a - b) / span + (3.0 * s2 - 4.0 * s + 1.0) * rate_a + (3.0 * s2 - 2.0 * s) * rate_b
+
+
 @compiled()
 def hermite_root(a, b, rate_a, rate_b, span):
     """Where in [0, 1] the cubic of `hermite` crosses zero (a and b of opposite signs)."""
@@ -455,7 +462,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     anvil), δ1_m and δ2_m the deepest overlaps of the contacts (a cushion's, `laws.contact_law`).
     Returns the work of R and what the contacts' dampers and cushions dissipated over the step, the
     number of changes of sign of δ1 (the contact's overlap), each written to `events` (time,
-    striker velocity, +1 into contact or −1 out of it; at most `events.shape[0]`; an elastic
+    striker velocity, +1 into contact or −1 out of it, `fade_time`; at most `events.shape[0]`; an elastic
     striker's velocity is its mean, its momentum over its mass), `(largest F1, its time)` and
     `(largest F2, its time, least F2, its time)` at the substeps' ends (a stiff contact's substeps
     see a peak the layers miss).
@@ -527,9 +534,8 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         # rounding, with no force: the contact ends as δ falls to the rounding's size, and a new
         # one starts only at twice that, so that rounding neither prolongs it nor starts others.
         # A cushion's faces part where its force ends, at its set δ_p = (1 − e²)·δ_m.
-        edge = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
-        if not in_contact:
-            edge *= 2.0
+        rounding = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
+        edge = rounding if in_contact else 2.0 * rounding
         edge += (1.0 - contact.restitution * contact.restitution) * deep1
         if (d2 >= edge) != in_contact and count < events.shape[0]:
             r_a = force_on_substep(t_a, t_a, t_b, force)
@@ -545,7 +551,8 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
                 striker,
                 anvil,
             )
-            s = hermite_root(overlaps[0] - edge, d2 - edge, overlap_rates(k_a, anvil)[0], rate2, span)
+            rate_a = overlap_rates(k_a, anvil)[0]
+            s = hermite_root(overlaps[0] - edge, d2 - edge, rate_a, rate2, span)
             in_contact = not in_contact
             events[count, 0] = t_a + s * span
             if striker.elastic:
@@ -553,6 +560,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
             else:
                 events[count, 1] = hermite(x[1], x2[1], k_a[1], k2[1], span, s)
             events[count, 2] = 1.0 if in_contact else -1.0
+            events[count, 3] = fade_time(rounding, hermite_rate(overlaps[0], d2, rate_a, rate2, span, s))
             count += 1
         x, f, f_end, impulse, overlaps = x2, f2, e2, impulse_b, (d2, a2)
         # the overlaps as the state gives them (the audit reads them so), not the stages' roots
