@@ -939,6 +939,10 @@ class CaseError(ValueError):
         self.errors = errors
         super().__init__("; ".join(f"{e.field}: {e.message}" for e in errors))
 
+    def __reduce__(self):
+        # rebuilt from its errors, not its message: a pool's worker hands it back pickled
+        return CaseError, (self.errors,)
+
 
 _MESSAGES = {
     "missing": "is required",

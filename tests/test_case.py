@@ -1,6 +1,7 @@
 """Invalid cases are refused with the field path and a reason an engineer reads."""
 
 import json
+import multiprocessing
 
 import pytest
 from conftest import BASE_CASE, merge
@@ -16,6 +17,15 @@ def _refusal(changes: dict) -> dict[str, str]:
     with pytest.raises(CaseError) as caught:
         parse_case(merge(BASE_CASE, changes))
     return {e.field: e.message for e in caught.value.errors}
+
+
+def test_a_refusal_raised_in_a_pools_worker_comes_back_whole():
+    """A process pool hands a worker's exception back pickled; rebuilt from its message, a
+    refusal broke the pool's result thread and left its caller waiting forever (here, a timeout)."""
+    with multiprocessing.Pool(1) as pool:
+        with pytest.raises(CaseError) as caught:
+            pool.apply_async(parse_case, (merge(BASE_CASE, {"striker": {"mass": -1.0}}),)).get(timeout=60)
+    assert [(e.field, e.message) for e in caught.value.errors] == [("striker.mass", "must be > 0.0")]
 
 
 @pytest.mark.parametrize(
