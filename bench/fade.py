@@ -4,9 +4,9 @@
     .venv/bin/python bench/fade.py [--seeds 1 2 3 4] [--processes 2]
 
 For every preset at the default accuracy and every case of the matrices drawn with `--seeds` (at
-a tolerance of 1e-2 under the raised limits, as `bench/matrix.py` solves them), the summary's `contact_fade_time` over its
-`co_impact_time`, and the same ratio of the characteristics solver on the case's first reference
-grid: next to nothing where the faces part, a slow link's share of the contact where it fades out.
+a tolerance of 1e-2 under the raised limits, as `bench/matrix.py` solves them), the summary's
+`contact_fade_time` over its `co_impact_time`, and the same ratio of the characteristics solver on
+the case's first reference grid: next to nothing where the faces part, a slow link's share of the contact where it fades out.
 Then the first contacts over `FADE_FRACTION`, and where the characteristics solver ends seed 4's
 matrix-68 on three grids (rounding's, not the grid's, where the contact fades out).
 """

@@ -44,8 +44,8 @@ MEDIUM_FRACTION = 0.01  # of the input energy (initial + external work)
 # of those times, is rounding's, not the grid's (seed 4's matrix-68: 53 µs on every grid from 87 to
 # 2784 cells, 73 and 118 µs on the characteristics' grids). A first contact that parts takes about
 # 1e-12 of its length (the presets'); the rock drill's piston, which comes to rest on the tool,
-# 1.6e-4. Near the line: seed 4's matrix-47, a contact that chatters and says 'not met', 7.6e-4 on its finest grid
-# and 4.7e-3 on the one before (`bench/fade.py`).
+# 1.6e-4. Near the line: seed 4's matrix-47, a contact that chatters and says 'not met', 7.6e-4
+# on its finest grid and 4.7e-3 on the one before (`bench/fade.py`).
 FADE_FRACTION = 1e-3
 
 

@@ -41,7 +41,7 @@ import numpy as np
 from .case import Case
 from .compiled import compiled
 from .grid import area_integral, tool_area, wave_speed
-from .layout import GRAZING
+from .kernel.contact import fade_time, rounding_of
 
 FORCE_NONE, FORCE_SINE, FORCE_ABS_SINE, FORCE_PULSE = 0, 1, 2, 3
 
@@ -225,8 +225,7 @@ def _struck_end_step(t_step, tau, s, wave, p, obs, prev):
                     obs[O_REBOUND] = out[1]
                     incoming = _arriving(stop, p, wave)
                     parted = _contact_force(out[0], out[1], out[2], incoming, p[0], p[1], p[2], p[3], z)
-                    rate = out[1] - (incoming + parted) / z
-                    obs[O_FADE] = GRAZING * (abs(out[0]) + abs(out[2])) / max(abs(rate), 1e-300)
+                    obs[O_FADE] = fade_time(rounding_of(out[0], out[2]), out[1] - (incoming + parted) / z)
                 obs[O_CONTACTS] = count + 1
                 obs[O_IN_CONTACT] = 0.0
             else:

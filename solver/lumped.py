@@ -33,6 +33,7 @@ from .case import Case, Force
 from .controller import HISTORY_PATHS, force_law
 from .errors import Cancelled, NumericalFailure
 from .grid import ResolvedNumerics, contact_time_estimate, resolve_numerics, tool_area, tool_mass, tool_mass_ahead
+from .kernel.contact import fade_time, rounding_of
 from .result import CancelCheck, ProgressCallback, Result
 from .summary import MAX_CONTACTS, build_summary
 
@@ -239,8 +240,8 @@ class ContactLog:
         if seg.contact and seg.t1 > self.start:  # a zero-length touch is no contact
             if not self.intervals:
                 self.first_end, self.rebound_velocity = seg.t1, float(seg.end[V1])
-                rounding = L.GRAZING * (abs(seg.end[X1]) + abs(seg.end[X2]))
-                self.fade_time = float(rounding / max(abs(seg.end[V1] - seg.end[V2]), 1e-300))
+                rounding = rounding_of(seg.end[X1], seg.end[X2])
+                self.fade_time = float(fade_time(rounding, seg.end[V1] - seg.end[V2]))
             self.intervals.append((self.start, seg.t1))
         elif not seg.contact:
             self.start = seg.t1

@@ -8,6 +8,7 @@ import math
 
 from .. import laws
 from ..compiled import compiled
+from ..layout import GRAZING
 from .bundles import Contact
 
 _external_force = compiled(inline="always")(laws.external_force)
@@ -167,8 +168,15 @@ def crossing_rate(before_that, before, now, at):
 
 
 @compiled(inline="always")
+def rounding_of(first, second):
+    """The rounding of an overlap between two faces displaced by `first` and `second`: within it,
+    an overlap changes no contact (`GRAZING`)."""
+    return GRAZING * (abs(first) + abs(second))
+
+
+@compiled(inline="always")
 def fade_time(rounding, rate):
-    """How long an overlap changing at `rate` (δ1') takes to cross `rounding` (`GRAZING` of the
-    displacements): where a contact ends, next to nothing if the faces part, a slow link's
-    relaxation time if the contact fades out."""
+    """How long an overlap changing at `rate` (δ1') takes to cross its `rounding` (`rounding_of`):
+    where a contact ends, next to nothing if the faces part, a slow link's relaxation time if the
+    contact fades out."""
     return rounding / max(abs(rate), 1e-300)

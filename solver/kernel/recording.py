@@ -82,7 +82,7 @@ from .bundles import (
     S_TRANSFERRED,
     Recorded,
 )
-from .contact import crossing, crossing_rate, external_force, fade_time
+from .contact import crossing, crossing_rate, external_force, fade_time, rounding_of
 
 
 @compiled(inline="always")
@@ -127,14 +127,16 @@ def track_contact(ends, observed, t_cross, velocity, fade, into_contact, tau):
 
 
 @compiled(inline="always")
-def track_overlap(ends, observed, overlaps, delta, m, t, velocity, rounding, tau):
-    """The contact intervals from the new overlap `delta` (layer m at `t`) and the layers'
-    `Overlaps`: a change of sign placed on the parabola through the last three overlaps, which
-    crosses the displacements' `rounding` in `fade_time`."""
+def track_overlap(ends, observed, overlaps, faces, m, t, velocity, tau):
+    """The contact intervals from the new overlap between the `faces` (the striker's and the
+    struck end's displacements at layer m, at `t`) and the layers' `Overlaps`: a change of sign
+    placed on the parabola through the last three overlaps, which crosses the faces' rounding in
+    `fade_time`."""
+    delta = faces[0] - faces[1]
     if (delta >= 0.0) != (ends[S_IN_CONTACT] != 0.0):
         before_that = overlaps.old if m >= 2 else np.nan
         at = crossing(before_that, overlaps.cur, delta)
-        fade = fade_time(rounding, crossing_rate(before_that, overlaps.cur, delta, at) / tau)
+        fade = fade_time(rounding_of(faces[0], faces[1]), crossing_rate(before_that, overlaps.cur, delta, at) / tau)
         track_contact(ends, observed, t - tau + tau * at, velocity, fade, delta >= 0.0, tau)
 
 

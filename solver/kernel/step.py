@@ -26,7 +26,6 @@ from ..layout import (
     E_TOOL_STRAIN,
     E_WITHDRAWN,
     ENERGY_SLOTS,
-    GRAZING,
     X_FAILED_TIME,
     X_MAX_PENETRATION,
     X_SET,
@@ -575,8 +574,7 @@ def scheme_ends_step(state, observed, layer, m, t, tool, rows, rod, weights, con
     )
     ends[S_POTENTIAL_BEFORE_THAT] = ends[S_POTENTIAL_BEFORE]
     ends[S_POTENTIAL_BEFORE] = potential
-    rounding = GRAZING * (abs(y_new) + abs(u0_new))
-    track_overlap(ends, observed, overlaps, delta, m, t, velocity, rounding, tau)
+    track_overlap(ends, observed, overlaps, (y_new, u0_new), m, t, velocity, tau)
     return True, recorded_at(rec, t_rec, velocity, contact_force, contact_force, medium_force, tool), interior, balance
 
 

@@ -9,7 +9,6 @@ import math
 
 from ..compiled import compiled
 from ..laws import FORCE_ABS_SINE, FORCE_PULSE
-from ..layout import GRAZING
 from .bundles import (
     BACK_INCOMING,
     END_ANVIL_CONTACT_DEEPEST,
@@ -41,6 +40,7 @@ from .contact import (
     linear_branch,
     pressed_to,
     quotient_force,
+    rounding_of,
     solve_overlap,
 )
 
@@ -534,7 +534,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         # rounding, with no force: the contact ends as δ falls to the rounding's size, and a new
         # one starts only at twice that, so that rounding neither prolongs it nor starts others.
         # A cushion's faces part where its force ends, at its set δ_p = (1 − e²)·δ_m.
-        rounding = GRAZING * (abs(x[0]) + abs(x[2] if anvil.present else x[4]))
+        rounding = rounding_of(x[0], x[2] if anvil.present else x[4])
         edge = rounding if in_contact else 2.0 * rounding
         edge += (1.0 - contact.restitution * contact.restitution) * deep1
         if (d2 >= edge) != in_contact and count < events.shape[0]:
