@@ -160,3 +160,42 @@ def test_a_gap_the_step_cannot_close_takes_one_substep_and_an_overlap_its_stiffn
     assert count(-overlap, speed) == count(-overlap, -speed) == 1  # closing by a step's worth, and opening
     # a gap of half a step's closing, closing fast enough to reach the same overlap within the step
     assert count(-0.5 * speed * tau, (overlap + 0.5 * speed * tau) / tau) == pressed
+
+
+@pytest.mark.parametrize("exponent", [0.2, 0.5])
+@pytest.mark.parametrize("restitution, deepest", [(1.0, 0.0), (0.8, 1.5e-4), (0.8, 4e-4)])
+@pytest.mark.parametrize("give", [1e-3, 1.0, 1e3])  # compliance·Φ''(target): soft to stiff balances
+def test_a_contacts_balance_stops_at_its_root_to_rounding(exponent, restitution, deepest, give):
+    """A stage's balance `δ + C·Φ'(δ) = target` (`solve_spring_balance`) accepts a Newton step once
+    what it leaves, bounded by the law's curvature (`spring_curvature`), is within rounding of the
+    overlap, instead of taking one more step to confirm it: its root agrees with Brent's, found to
+    rounding on the same law, within the solve's own scale (1e-15 of its bracket), from guesses
+    near and far, on a power law and on a cushion below, at and above the overlap it was pressed
+    to. Accepting every first step inside the bracket fails 16 of these 18."""
+    from scipy.optimize import brentq
+
+    from percussim.solver import laws
+    from percussim.solver.kernel.struck_end import solve_spring_balance
+
+    contact = K.Contact(
+        striker_mass=1.0,
+        striker_velocity=1.0,
+        stiffness=1e11,
+        exponent=exponent,
+        tension_stiffness=0.0,
+        damping=0.0,
+        impedance=1.0,
+        restitution=restitution,
+        deepest=deepest,
+    )
+
+    def spring(delta):
+        return laws.contact_spring(delta, 1e11, exponent, 0.0, restitution, deepest)
+
+    for target in (1e-4, 3e-4, 6e-4):
+        compliance = give / laws.contact_spring(target, 1e11, exponent, 0.0)[1]  # the loading law's
+        root = brentq(lambda d: d + compliance * spring(d)[0] - target, 0.0, target, xtol=1e-300, rtol=8.9e-16)
+        bracket = 1e-15 * (target + abs(target - compliance * spring(target)[0]))  # the solve's own scale
+        for guess in (target, 1.05 * root, 0.5 * root, 0.0):
+            delta = solve_spring_balance(target, compliance, guess, contact)
+            assert abs(delta - root) <= bracket, (target, guess, delta, root)

@@ -98,11 +98,16 @@ def quotient_force(delta, ref, ref_potential, contact):
     return spring, 0.5 * stiffness
 
 
+ROUNDING = 2.0**-53  # a double's relative rounding
+
+
 @compiled(inline="always")
-def bracketed_newton_step(x, g, slope, lo, hi, scale):
+def bracketed_newton_step(x, g, slope, lo, hi, scale, curvature=math.inf):
     """One Newton step on an increasing g, g(x) = `g`, g'(x) = `slope`, within the bracket [lo, hi]
     narrowed by the sign of g; a step that leaves it is replaced by bisection. Returns the new x,
-    the bracket, and whether the step or the bracket is within `scale`."""
+    the bracket, and whether the step or the bracket is within `scale`, or what a Newton step Δ
+    leaves to go is within rounding of the new x: at most `curvature`·Δ², `curvature` a bound on
+    |g''|/(2g') about x (which saves the step that would only confirm it)."""
     if g > 0.0:
         hi = x
     else:
@@ -110,7 +115,9 @@ def bracketed_newton_step(x, g, slope, lo, hi, scale):
     x_new = x - g / slope
     if not lo < x_new < hi:
         x_new = 0.5 * (lo + hi)
-    return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
+        return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
+    step = abs(x_new - x)
+    return x_new, lo, hi, step <= scale or hi - lo <= scale or curvature * step * step <= ROUNDING * abs(x_new)
 
 
 @compiled()

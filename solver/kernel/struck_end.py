@@ -107,10 +107,28 @@ def solve_spring_balance(target, compliance, guess, contact):
         g = x + compliance * spring - target
         if g == 0.0:
             return x
-        x, lo, hi, done = bracketed_newton_step(x, g, 1.0 + compliance * stiffness, lo, hi, scale)
+        x, lo, hi, done = bracketed_newton_step(
+            x, g, 1.0 + compliance * stiffness, lo, hi, scale, spring_curvature(x, contact)
+        )
         if done:
             return x
     return x
+
+
+@compiled(inline="always")
+def spring_curvature(delta, contact):
+    """A bound on |g''|/(2g') of a balance `g(δ) = δ + compliance·Φ'(δ) − target` within half the
+    way from δ to where the law's pressed branch starts: Φ'''/(2Φ'') = α/(2(δ − δ_0)) at most,
+    δ_0 that start (0, or a cushion's set while it unloads); inf beyond it, or as near the
+    overlap a cushion was pressed to, where Φ'' jumps."""
+    origin = 0.0
+    if contact.restitution < 1.0:
+        if abs(delta - contact.deepest) <= 0.5 * delta:
+            return math.inf
+        if delta < contact.deepest:
+            origin = contact.deepest * (1.0 - contact.restitution * contact.restitution)
+    reach = delta - origin
+    return contact.exponent / reach if reach > 0.0 else math.inf
 
 
 @compiled(inline="always")
@@ -151,17 +169,17 @@ def body_rates(x, g, force, end_force, r, v_in, v_face, contact, striker, anvil)
     _, w, _, w_a, _ = x
     if striker.elastic:
         w_rate = 0.0
-        y_rate = 2.0 * v_face - force / striker.impedance
+        y_rate = 2.0 * v_face - force * (1.0 / striker.impedance)
     else:
-        w_rate = (r + striker.weight - force) / contact.striker_mass
+        w_rate = (r + striker.weight - force) * (1.0 / contact.striker_mass)
         y_rate = w + g * w_rate
     ya_rate = wa_rate = 0.0
     impedance = contact.impedance
     if anvil.present:
-        wa_rate = (force - end_force + anvil.weight) / anvil.mass
+        wa_rate = (force - end_force + anvil.weight) * (1.0 / anvil.mass)
         ya_rate = w_a + g * wa_rate
         impedance = anvil.contact.impedance
-    return y_rate, w_rate, ya_rate, wa_rate, end_force / impedance + 2.0 * v_in
+    return y_rate, w_rate, ya_rate, wa_rate, end_force * (1.0 / impedance) + 2.0 * v_in
 
 
 @compiled(inline="always")
@@ -184,9 +202,11 @@ def overlap_rates(rates, anvil):
 def spring_stage(free, base, compliance, g, guess, contact):
     """`(F, δ)` of one contact within a stage: `δ = free − compliance·F`,
     `F = Φ'(δ) + b·(δ − base)/g` (its damper sees the stage's δ' = (δ − base)/g)."""
-    give = compliance * contact.damping / g
-    delta = solve_spring_balance((free + give * base) / (1.0 + give), compliance / (1.0 + give), guess, contact)
-    return contact_spring(delta, contact)[0] + contact.damping * (delta - base) / g, delta
+    damper = contact.damping * (1.0 / g)
+    give = compliance * damper
+    share = 1.0 / (1.0 + give)
+    delta = solve_spring_balance((free + give * base) * share, compliance * share, guess, contact)
+    return contact_spring(delta, contact)[0] + damper * (delta - base), delta
 
 
 @compiled()
@@ -200,21 +220,22 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
     increasing function whose slope is at least det K/K11, so one evaluation brackets its root."""
     a, b, t = gives
     det_c = a * b + a * t + b * t
-    d1, d2 = contact.damping / g, end.damping / g
-    k11 = (b + t) / det_c + d1
-    k12 = b / det_c
-    k22 = (a + b) / det_c + d2
-    r1 = ((b + t) * free[0] + b * free[1]) / det_c + d1 * base[0]
-    r2 = (b * free[0] + (a + b) * free[1]) / det_c + d2 * base[1]
+    inverse_c, inverse_g = 1.0 / det_c, 1.0 / g
+    d1, d2 = contact.damping * inverse_g, end.damping * inverse_g
+    k11 = (b + t) * inverse_c + d1
+    k12 = b * inverse_c
+    k22 = (a + b) * inverse_c + d2
+    r1 = ((b + t) * free[0] + b * free[1]) * inverse_c + d1 * base[0]
+    r2 = (b * free[0] + (a + b) * free[1]) * inverse_c + d2 * base[1]
     if contact.exponent == 0.0 and end.exponent == 0.0:
         # two linear contacts: on the lines the guess lies on, the balance is a 2×2 linear system;
         # a root that lies on those lines is the root (the balance is a convex minimum's)
         s1, o1, low1, high1 = linear_branch(guess[0], contact)
         s2, o2, low2, high2 = linear_branch(guess[1], end)
         a11, a22 = k11 + s1, k22 + s2
-        det = a11 * a22 - k12 * k12
-        delta1 = ((r1 - o1) * a22 - k12 * (r2 - o2)) / det
-        delta2 = (a11 * (r2 - o2) - k12 * (r1 - o1)) / det
+        inverse = 1.0 / (a11 * a22 - k12 * k12)
+        delta1 = ((r1 - o1) * a22 - k12 * (r2 - o2)) * inverse
+        delta2 = (a11 * (r2 - o2) - k12 * (r1 - o1)) * inverse
         if low1 <= delta1 <= high1 and low2 <= delta2 <= high2:
             return (
                 s1 * delta1 + o1 + d1 * (delta1 - base[0]),
@@ -222,7 +243,7 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
                 delta1,
                 delta2,
             )
-    least_slope = ((1.0 + d1 * (a + b) + d2 * (b + t)) / det_c + d1 * d2) / k11
+    least_slope = ((1.0 + d1 * (a + b) + d2 * (b + t)) * inverse_c + d1 * d2) / k11
     delta1, delta2 = guess
     lo = hi = scale = 0.0
     for k in range(100):
@@ -256,20 +277,23 @@ def stage_forces(x, g, r, v_in, v_face, guess, contact, striker, anvil):
     two in δ1 = y − y_a, δ2 = y_a − u_0 with an anvil (`anvil_balance`). `guess`: (δ1, δ2).
     Returns `(F1, F2, δ1, δ2)`."""
     # where each body would be were the forces off, and how it gives way to them
+    # (mobilities, 1/m and 1/Z, as factors: a division each would lengthen the stage's chain)
     if striker.elastic:
-        y_free, give = x[0] + 2.0 * g * v_face, g / striker.impedance
+        y_free, give = x[0] + 2.0 * g * v_face, g * (1.0 / striker.impedance)
     else:
-        m1 = contact.striker_mass
-        y_free, give = x[0] + g * (x[1] + g * (r + striker.weight) / m1), g * g / m1
+        mobility = 1.0 / contact.striker_mass
+        y_free, give = x[0] + g * (x[1] + g * (r + striker.weight) * mobility), g * g * mobility
     u_free = x[4] + 2.0 * g * v_in
     if not anvil.present:
-        force, delta = spring_stage(y_free - u_free, x[0] - x[4], give + g / contact.impedance, g, guess[0], contact)
+        compliance = give + g * (1.0 / contact.impedance)
+        force, delta = spring_stage(y_free - u_free, x[0] - x[4], compliance, g, guess[0], contact)
         return force, force, delta, 0.0
-    ya_free = x[2] + g * (x[3] + g * anvil.weight / anvil.mass)
+    anvil_mobility = 1.0 / anvil.mass
+    ya_free = x[2] + g * (x[3] + g * anvil.weight * anvil_mobility)
     return anvil_balance(
         (y_free - ya_free, ya_free - u_free),
         (x[0] - x[2], x[2] - x[4]),
-        (give, g * g / anvil.mass, g / anvil.contact.impedance),
+        (give, g * g * anvil_mobility, g * (1.0 / anvil.contact.impedance)),
         g,
         guess,
         contact,
@@ -399,14 +423,14 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
     b1 = contact.damping
     end = anvil.contact if anvil.present else contact
     z = end.impedance
-    end_rate = end_force / z + 2.0 * v_in
+    end_rate = end_force * (1.0 / z) + 2.0 * v_in
     if not anvil.present:
         stiffness = reached_stiffness(y - u0, w - end_rate, span, contact)
         if striker.elastic:
             z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
-            return substeps(stiffness / (z_both + b1), span, SDIRK_MONOTONE)
-        limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) / contact.striker_mass * tau)
-        return substeps(stiffness / (z + b1), span, limit)
+            return substeps(stiffness * (1.0 / (z_both + b1)), span, SDIRK_MONOTONE)
+        limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) * (1.0 / contact.striker_mass) * tau)
+        return substeps(stiffness * (1.0 / ((z + b1) * limit)), span, 1.0)
     k1 = reached_stiffness(y - y_a, w - w_a, span, contact)
     k2 = reached_stiffness(y_a - u0, w_a - end_rate, span, end)
     b2 = end.damping
