@@ -113,11 +113,12 @@ def bracketed_newton_step(x, g, slope, lo, hi, scale, curvature=math.inf):
     else:
         lo = x
     x_new = x - g / slope
-    if not lo < x_new < hi:
+    newton = lo < x_new < hi
+    if not newton:
         x_new = 0.5 * (lo + hi)
-        return x_new, lo, hi, abs(x_new - x) <= scale or hi - lo <= scale
     step = abs(x_new - x)
-    return x_new, lo, hi, step <= scale or hi - lo <= scale or curvature * step * step <= ROUNDING * abs(x_new)
+    settled = newton and curvature * step * step <= ROUNDING * abs(x_new)
+    return x_new, lo, hi, step <= scale or hi - lo <= scale or settled
 
 
 @compiled()

@@ -428,9 +428,9 @@ def struck_substeps(x, end_force, span, v_in, contact, striker, anvil, tau):
         stiffness = reached_stiffness(y - u0, w - end_rate, span, contact)
         if striker.elastic:
             z_both = 1.0 / (1.0 / z + 1.0 / striker.impedance)
-            return substeps(stiffness * (1.0 / (z_both + b1)), span, SDIRK_MONOTONE)
+            return substeps(stiffness / (z_both + b1), span, SDIRK_MONOTONE)
         limit = min(SDIRK_MONOTONE, STIFF_RISE_STEPS * (z + b1) * (1.0 / contact.striker_mass) * tau)
-        return substeps(stiffness * (1.0 / ((z + b1) * limit)), span, 1.0)
+        return substeps(stiffness, span, (z + b1) * limit)  # (k/(Z + b1))·h within limit
     k1 = reached_stiffness(y - y_a, w - w_a, span, contact)
     k2 = reached_stiffness(y_a - u0, w_a - end_rate, span, end)
     b2 = end.damping
