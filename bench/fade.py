@@ -16,7 +16,7 @@ from __future__ import annotations
 import argparse
 from multiprocessing import Pool
 
-from matrix import RAISED
+from matrix import COUNT, RAISED
 
 from percussim.solver.accuracy import FADE_FRACTION
 from percussim.solver.case import parse_case
@@ -25,8 +25,6 @@ from percussim.solver.matrix import draw_cases, reference_cells
 from percussim.solver.presets import preset_names
 from percussim.solver.simulate import simulate
 from percussim.testing import at_default_accuracy
-
-COUNT = 72  # cases a matrix draws, as bench/matrix.py
 
 
 def share(fade: float | None, length: float | None) -> float | None:

@@ -68,6 +68,7 @@ REFERENCE_CELLS = 110_000
 REFERENCE_WORK = 3e10
 FIXED_WORK_CAP = 5e8  # node-steps: the fixed-grid search stops there
 PRESET_REPEATS = 20
+COUNT = 72  # cases a matrix draws
 # The runs under a tolerance: the service's limits raised tenfold, so that a ladder stops on its own
 # account (met, or saying why not), not on a limit (one that does is counted apart); a run on the
 # largest grid they allow takes minutes (a ladder_trade setting that never converges meets them).
@@ -425,7 +426,7 @@ def matrix_parser(description: str) -> argparse.ArgumentParser:
     """The options of a bench over the matrix: which cases, on how many processes, and --write."""
     parser = argparse.ArgumentParser(description=description)
     parser.add_argument("--seed", type=int, default=1)
-    parser.add_argument("--count", type=int, default=72)
+    parser.add_argument("--count", type=int, default=COUNT)
     parser.add_argument("--processes", type=int, default=2)
     parser.add_argument("--write", action="store_true")
     return parser
