@@ -4,11 +4,11 @@ its address falls in, to the C library's function it is in (libm's `sin`, `pow`)
 
     .venv/bin/python bench/kernel_profile.py [--presets fig3 fig9] [--cells 128] [--seconds 5]
 
-Needs `perf` (Debian's linux-perf) and leave to read the CPU's counters
-(`kernel.perf_event_paranoid` ≤ 2, or root). The kernel's functions are compiled by Numba at run
-time, in memory no file names: the runs' process writes where each one starts (every overload of
-the `solver.kernel` modules' compiled functions), and a function is taken to run from its start to
-the next one's. A function compiled `inline="always"` is part of every function that calls it: most
+Needs `perf` (Debian's linux-perf) with permission to sample (`kernel.perf_event_paranoid` ≤ 2,
+or root), and `nm` (binutils). Numba compiles the kernel into memory that no file names, so perf
+cannot name it: the runs' process finds each of the solver's compiled functions in the compiled
+kernel's cache (its name and size, from the object code there) and asks Numba's JIT engine where it
+was loaded. A function compiled `inline="always"` is part of every function that calls it: most
 of a step (the tool's interior, the incoming waves, the working end, the ends' audit, the records)
 is inside `advance`; the struck end's step (`struck_end_step`), its contact balance
 (`solve_spring_balance`) and the pass along the tool for its energy and stresses
@@ -124,6 +124,8 @@ def attribute(samples: str, functions: list[tuple[int, int, str]], start: float,
             parts["Python (set-up, summary, NumPy)"] += 1
         elif (k := bisect_right(addresses, ip)) > 0 and ip < functions[k - 1][0] + functions[k - 1][1]:
             parts[functions[k - 1][2]] += 1
+        elif dso.startswith("/tmp/perf-"):  # perf's name for code no file holds: compiled, not from the cache
+            parts["compiled, not in the cache"] += 1
         else:
             parts["other (system)"] += 1
     return parts
