@@ -170,8 +170,9 @@ def test_a_contacts_balance_stops_at_its_root_to_rounding(exponent, restitution,
     what it leaves, bounded by the law's curvature (`spring_curvature`), is within rounding of the
     overlap, instead of taking one more step to confirm it: its root agrees with Brent's, found to
     rounding on the same law, within the solve's own scale (1e-15 of its bracket), from guesses
-    near and far, on a power law and on a cushion below, at and above the overlap it was pressed
-    to. Accepting every first step inside the bracket fails 16 of these 18."""
+    near and far, on a power law (pressed, where its steps keep no bracket) and on a cushion below,
+    at and above the overlap it was pressed to; the force it returns with the root is the law's
+    there, to rounding. Accepting every first step fails all 18."""
     from scipy.optimize import brentq
 
     from percussim.solver import laws
@@ -197,5 +198,6 @@ def test_a_contacts_balance_stops_at_its_root_to_rounding(exponent, restitution,
         root = brentq(lambda d: d + compliance * spring(d)[0] - target, 0.0, target, xtol=1e-300, rtol=8.9e-16)
         bracket = 1e-15 * (target + abs(target - compliance * spring(target)[0]))  # the solve's own scale
         for guess in (target, 1.05 * root, 0.5 * root, 0.0):
-            delta = solve_spring_balance(target, compliance, guess, contact)
+            delta, force = solve_spring_balance(target, compliance, guess, contact)
             assert abs(delta - root) <= bracket, (target, guess, delta, root)
+            assert abs(force - spring(delta)[0]) <= 4e-16 * spring(delta)[0], (target, guess, force)

@@ -32,6 +32,7 @@ from .bundles import (
     Anvil,
 )
 from .contact import (
+    ROUNDING,
     bracketed_newton_step,
     contact_spring,
     cushion_loss,
@@ -87,32 +88,49 @@ def substeps(rate, span, limit):
 
 @compiled()
 def solve_spring_balance(target, compliance, guess, contact):
-    """δ with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique and lies between
-    `target` and `target − compliance·Φ'(target)`, where `bracketed_newton_step` finds it (on one
-    linear branch, directly)."""
+    """`(δ, Φ'(δ))` with `δ + compliance·Φ'(δ) = target`: Φ' increases, so the root is unique.
+
+    Pressed on a power law that is no cushion (target > 0, so that the root is δ > 0), the balance
+    `g(δ) = δ + compliance·c1·δ^(1+α) − target` is convex where δ > 0: Newton's first step from any
+    δ > 0 (`guess`, else `target`) lands at the root or beyond it, and the next fall to it, with no
+    bracket to keep. A step Δ is the last once what it leaves, at most α/δ·Δ² (`spring_curvature`),
+    is within rounding of δ; Φ'(δ) is then the law's tangent at the step's start, exact to the same
+    rounding. Otherwise the root lies between `target` and `target − compliance·Φ'(target)`, where
+    `bracketed_newton_step` finds it (on one linear branch, directly)."""
+    if target > 0.0 and contact.exponent > 0.0 and contact.restitution == 1.0:
+        x = guess if guess > 0.0 else target
+        for _ in range(100):
+            spring, stiffness = contact_spring(x, contact)
+            step = (x + compliance * spring - target) / (1.0 + compliance * stiffness)
+            x -= step
+            if not x > 0.0:
+                break  # rounded below a root next to nothing: bracketed below
+            if spring_curvature(x, contact) * step * step <= ROUNDING * x:
+                return x, spring - stiffness * step
     other = target - compliance * contact_spring(target, contact)[0]
     lo, hi = min(target, other), max(target, other)
     if lo == hi:
-        return target
+        return target, contact_spring(target, contact)[0]
     # on one line of the law the root is direct: in separation, or pressed on a linear contact's
     # (a cushion's set, unloading or loading line)
     if hi <= 0.0 or (lo >= 0.0 and contact.exponent == 0.0):
         slope, offset, _, high = linear_branch(lo, contact)
         if hi <= high:
-            return (target - compliance * offset) / (1.0 + compliance * slope)
+            x = (target - compliance * offset) / (1.0 + compliance * slope)
+            return x, contact_spring(x, contact)[0]
     x = min(max(guess, lo), hi)
     scale = 1e-15 * (abs(lo) + abs(hi))
     for _ in range(100):
         spring, stiffness = contact_spring(x, contact)
         g = x + compliance * spring - target
         if g == 0.0:
-            return x
+            break
         x, lo, hi, done = bracketed_newton_step(
             x, g, 1.0 + compliance * stiffness, lo, hi, scale, spring_curvature(x, contact)
         )
         if done:
-            return x
-    return x
+            break
+    return x, contact_spring(x, contact)[0]
 
 
 @compiled(inline="always")
@@ -205,8 +223,8 @@ def spring_stage(free, base, compliance, g, guess, contact):
     damper = contact.damping * (1.0 / g)
     give = compliance * damper
     share = 1.0 / (1.0 + give)
-    delta = solve_spring_balance((free + give * base) * share, compliance * share, guess, contact)
-    return contact_spring(delta, contact)[0] + damper * (delta - base), delta
+    delta, spring = solve_spring_balance((free + give * base) * share, compliance * share, guess, contact)
+    return spring + damper * (delta - base), delta
 
 
 @compiled()
@@ -247,7 +265,7 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
     delta1, delta2 = guess
     lo = hi = scale = 0.0
     for k in range(100):
-        delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)
+        delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)[0]
         stiffness1 = contact_spring(delta1, contact)[1]
         spring2, stiffness2 = contact_spring(delta2, end)
         h = k12 * delta1 + k22 * delta2 + spring2 - r2
@@ -260,7 +278,7 @@ def anvil_balance(free, base, gives, g, guess, contact, end):
         slope = least_slope + stiffness2 + k12 * k12 * stiffness1 / (k11 * (k11 + stiffness1))
         delta2, lo, hi, done = bracketed_newton_step(delta2, h, slope, lo, hi, scale)
         if done:
-            delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)
+            delta1 = solve_spring_balance((r1 - k12 * delta2) / k11, 1.0 / k11, delta1, contact)[0]
             break
     return (
         contact_spring(delta1, contact)[0] + d1 * (delta1 - base[0]),
@@ -520,6 +538,9 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
     f_max, t_max = f, t0
     e_max, te_max, e_min, te_min = f_end, t0, f_end, t0
     overlaps = (x[0] - (x[2] if anvil.present else x[4]), x[2] - x[4])
+    # and their rates (R moves neither): each stage's balance starts from the overlaps carried to
+    # its instant along them, to the second order for the substep's end
+    closing = overlap_rates(body_rates(x, 0.0, f, f_end, 0.0, v_start, face_start, contact, striker, anvil), anvil)
     t_stop = t0
     sub = tau
     while t_a < t_end:
@@ -539,13 +560,19 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
         v2 = v_start + v_slope * (t_b - t0)
         face1 = face_start + face_slope * (t1 - t0)
         face2 = face_start + face_slope * (t_b - t0)
-        f1, e1, d1, a1 = stage_forces(x, g, r1, v1, face1, overlaps, contact, striker, anvil)
+        guess = (overlaps[0] + g * closing[0], overlaps[1] + g * closing[1])
+        f1, e1, d1, a1 = stage_forces(x, g, r1, v1, face1, guess, contact, striker, anvil)
         k1 = body_rates(x, g, f1, e1, r1, v1, face1, contact, striker, anvil)
+        rate1, end_rate1 = overlap_rates(k1, anvil)
         base = moved(x, (1.0 - gamma) * span, k1, striker)
-        f2, e2, d2, a2 = stage_forces(base, g, r2, v2, face2, (d1, a1), contact, striker, anvil)
+        bend = 0.5 * span * span / g  # the rates' change from the start to stage 1, carried to t_b
+        guess = (
+            overlaps[0] + span * closing[0] + bend * (rate1 - closing[0]),
+            overlaps[1] + span * closing[1] + bend * (end_rate1 - closing[1]),
+        )
+        f2, e2, d2, a2 = stage_forces(base, g, r2, v2, face2, guess, contact, striker, anvil)
         k2 = body_rates(base, g, f2, e2, r2, v2, face2, contact, striker, anvil)
         x2 = moved(base, g, k2, striker)
-        rate1, end_rate1 = overlap_rates(k1, anvil)
         rate2, end_rate2 = overlap_rates(k2, anvil)
         work += span * ((1.0 - gamma) * r1 * (x[1] + g * k1[1]) + gamma * r2 * x2[1])
         dissipated += span * (
@@ -586,7 +613,7 @@ def struck_end_step(t0, tau, state, waves, contact, striker, anvil, force, event
             events[count, 2] = 1.0 if in_contact else -1.0
             events[count, 3] = fade_time(rounding, hermite_rate(overlaps[0], d2, rate_a, rate2, span, s))
             count += 1
-        x, f, f_end, impulse, overlaps = x2, f2, e2, impulse_b, (d2, a2)
+        x, f, f_end, impulse, overlaps, closing = x2, f2, e2, impulse_b, (d2, a2), (rate2, end_rate2)
         # the overlaps as the state gives them (the audit reads them so), not the stages' roots
         deeper1, lost1 = deepened(contact, deep1, x[0] - (x[2] if anvil.present else x[4]))
         deeper2, lost2 = deepened(anvil.contact, deep2, x[2] - x[4])
