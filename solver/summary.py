@@ -245,7 +245,7 @@ def stress_envelope(case: Case, envelope: np.ndarray) -> dict:
     bins = envelope.shape[1]
 
     def values(row: np.ndarray) -> list[float | None]:
-        return [float(v) if np.isfinite(v) else None for v in row]
+        return [v if math.isfinite(v) else None for v in row.tolist()]
 
     return {
         "x": [case.tool.length * k / bins for k in range(bins + 1)],
