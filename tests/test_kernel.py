@@ -197,7 +197,7 @@ def test_a_contacts_balance_stops_at_its_root_to_rounding(exponent, restitution,
         compliance = give / laws.contact_spring(target, 1e11, exponent, 0.0)[1]  # the loading law's
         root = brentq(lambda d: d + compliance * spring(d)[0] - target, 0.0, target, xtol=1e-300, rtol=8.9e-16)
         bracket = 1e-15 * (target + abs(target - compliance * spring(target)[0]))  # the solve's own scale
-        for guess in (target, 1.05 * root, 0.5 * root, 0.0):
+        for guess in (target, 1.05 * root, 0.5 * root, 0.0, 1e3 * root, 1e-9 * root):
             delta, force = solve_spring_balance(target, compliance, guess, contact)
             assert abs(delta - root) <= bracket, (target, guess, delta, root)
             assert abs(force - spring(delta)[0]) <= 4e-16 * spring(delta)[0], (target, guess, force)
