@@ -14,8 +14,11 @@ two sweeps' answers are: what the cheap sweep's speed is bought with.
 
 `--spread` instead solves each variant of the tolerance's sweep alone, in this process, and prints
 how its time is spread over the variants: the median and the 90th percentile, the share of the
-costliest twentieth, the share of the work on each variant's final grid (what no start from a
-neighbour can save), and the costliest variants with their grids and what their estimate says.
+costliest twentieth, the share of the work on each variant's final grid and on the grids its own
+estimate needs (what no start from a neighbour can save), and the costliest variants with their
+grids and what their estimate says. Then it solves them again, in turn, each ladder reaching its
+first estimate on the final grid of its nearest neighbour solved before it, and prints that time
+against the first.
 """
 
 from __future__ import annotations
@@ -24,9 +27,13 @@ import argparse
 import math
 import tempfile
 import time
+from collections.abc import Callable
 from pathlib import Path
+from unittest import mock
 
-from percussim.solver.adaptive import solve
+from percussim.solver import adaptive
+from percussim.solver.accuracy import Accuracy
+from percussim.solver.adaptive import CLIMB, MIN_RUNS, solve
 from percussim.solver.controller import warm_up
 from percussim.solver.presets import preset_json
 from percussim.solver.simulate import run_sweep
@@ -59,15 +66,35 @@ def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], f
     return sweep["rows"], time.perf_counter() - start
 
 
+def alone(cases: list, first: Callable[[int, list], int | None] | None = None) -> list[tuple[float, Accuracy]]:
+    """Each case solved alone in this process, in turn: its time and accuracy. `first(k, solved)`,
+    given the cases solved before the k-th, is that case's coarsest grid, or None for the ladder's
+    own a-priori one (`first_cells`); the larger of the two is taken."""
+    solved: list[tuple[float, Accuracy]] = []
+    for k, case in enumerate(cases):
+        start_on = first(k, solved) if first else None
+        own = adaptive.first_cells
+        chosen = own if start_on is None else (lambda case, tol: max(own(case, tol), start_on))
+        with mock.patch.object(adaptive, "first_cells", chosen):
+            start = time.perf_counter()
+            _, accuracy = solve(case)
+        solved.append((time.perf_counter() - start, accuracy))
+    return solved
+
+
+def work(accuracy: Accuracy) -> list[int]:
+    """The node-steps of each grid a ladder ran."""
+    return [(n.cells + 1) * (n.steps + 1) for n in accuracy.runs]
+
+
 def spread(grid: dict[str, list[float]]) -> None:
-    """Each variant of the tolerance's sweep alone: how the sweep's time is spread over them."""
+    """Each variant of the tolerance's sweep alone: how the sweep's time is spread over them, and
+    what a start from a neighbour's final grid does to it."""
     sweep = Sweep(case=CASES["tolerance 1e-2"], parameters=grid)
-    runs = []
-    for values, case in variants(sweep.model_copy(update={"case": sweep.case.summary_only()})):
-        start = time.perf_counter()
-        _, accuracy = solve(case)
-        runs.append((time.perf_counter() - start, values, accuracy))
-    runs.sort(key=lambda run: run[0])
+    found = list(variants(sweep.model_copy(update={"case": sweep.case.summary_only()})))
+    cases = [case for _, case in found]
+    cold = alone(cases)
+    runs = sorted(((took, values, accuracy) for (values, _), (took, accuracy) in zip(found, cold)), key=lambda r: r[0])
     seconds = [run[0] for run in runs]
     total, count = sum(seconds), len(seconds)
     costly = max(1, count // 20)
@@ -77,20 +104,44 @@ def spread(grid: dict[str, list[float]]) -> None:
         f"  the costliest {costly} ({100 * costly / count:.0f}%) take {100 * sum(seconds[-costly:]) / total:.0f}% of it:"
     )
     # What any start could save: each variant must still run its final grid, for its own answer,
-    # and at least one coarser grid, for its own estimate.
-    work = [[(n.cells + 1) * (n.steps + 1) for n in accuracy.runs] for _, _, accuracy in runs]
-    ladders, finals = sum(map(sum, work)), sum(w[-1] for w in work)
-    halves = sum(w[-1] + w[-1] / 4 for w in work)  # the final grid and one half as fine
+    # and the coarser grids its own estimate needs: `MIN_RUNS` in all, each `CLIMB` times finer.
+    works = [work(accuracy) for _, accuracy in cold]
+    ladders, finals = sum(map(sum, works)), sum(w[-1] for w in works)
+    least = sum(w[-1] * CLIMB ** (-2 * k) for w in works for k in range(MIN_RUNS))
     print(
         f"  node-steps: {ladders:.3g} on the variants' ladders; {100 * finals / ladders:.0f}% of them on their final "
-        f"grids, {100 * halves / ladders:.0f}% with one grid half as fine: a start from a neighbour that went "
-        f"straight to each variant's final grid would leave at least that much of the work"
+        f"grids, {100 * least / ladders:.0f}% on those and the {MIN_RUNS - 1} coarser grids each one's own estimate "
+        "needs: the least a start from a neighbour could leave, were it to go straight to each variant's final grid"
     )
     for took, values, accuracy in reversed(runs[-5:]):
         met = "not met" if any("not met" in w for w in accuracy.warnings) else "met"
         worst = accuracy.estimate.worst if accuracy.estimate else float("nan")
         grids = ", ".join(str(n.cells) for n in accuracy.runs)
         print(f"    {took:6.2f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
+    # The start a study could take: each variant's fourth grid, its first with an estimate, on
+    # the final grid of its nearest neighbour solved before it (the one before it along either
+    # parameter; the coarser of the two), its ladder and its own estimate as they are from there.
+    side = len(next(reversed(grid.values())))
+
+    def neighbour_grid(k: int, solved: list) -> int | None:
+        near = [solved[q][1].runs[-1].cells for q in (k - 1, k - side) if q >= 0 and (q != k - 1 or k % side)]
+        return min(near) if near else None
+
+    apart = [neighbour_grid(k, cold) / a.runs[-1].cells for k, (_, a) in enumerate(cold) if k]
+    print(
+        f"  a variant's final grid against its nearest neighbour's: within 1.5× in "
+        f"{sum(1 / 1.5 <= r <= 1.5 for r in apart)} of {len(apart)}, the neighbour's 2× finer or more in "
+        f"{sum(r >= 2 for r in apart)}, 2× coarser or more in {sum(r <= 0.5 for r in apart)}"
+    )
+    started = alone(
+        cases, lambda k, solved: (g := neighbour_grid(k, solved)) and math.ceil(g / CLIMB ** (MIN_RUNS - 1))
+    )
+    moved = sum(a.runs[-1].cells != c.runs[-1].cells for (_, a), (_, c) in zip(started, cold))
+    again = sum(took for took, _ in started)
+    print(
+        f"  each started on its nearest neighbour's final grid: {again:.1f} s in all ({again / total:.2f}× alone), "
+        f"node-steps {sum(sum(work(a)) for _, a in started):.3g}; {moved} of {count} end on another grid"
+    )
 
 
 # The sweep table's columns that the tolerance's answers are trusted to 1% on.
