@@ -1,7 +1,7 @@
 """Sweeps of the Fig. 5 preset: variants per second on one core, on every core, and through the
 service (Redis and 2 workers), side by side.
 
-    .venv/bin/python bench/sweep.py [--variants 400] [--spread]
+    .venv/bin/python bench/sweep.py [--variants 400] [--spread [PRESET] [--rung 4]]
 
 The sweep is striker velocity × contact stiffness over the Fig. 5 preset (20 ms of repeated
 impacts), run twice: with the preset's own numerics (the paper's 5 cells and τ = 2e-5 s: about
@@ -18,7 +18,9 @@ costliest twentieth, the share of the work on each variant's final grid and on t
 estimate needs (what no start from a neighbour can save), and the costliest variants with their
 grids and what their estimate says. Then it solves them again, in turn, each ladder reaching its
 first estimate on the final grid of its nearest neighbour solved before it, and prints that time
-against the first.
+against the first. `--spread fig3` does the same over another preset (the same two parameters);
+`--rung K` puts the neighbour's final grid at the ladder's K-th grid instead (K > 4: a start
+further below it).
 """
 
 from __future__ import annotations
@@ -41,12 +43,15 @@ from percussim.solver.sweep import Sweep, variants
 from percussim.testing import merge
 from percussim.testing.live_stack import Stack, redis_server, wait_for
 
-CASES = {
-    "preset numerics": preset_json("fig5"),
-    "tolerance 1e-2": merge(
-        preset_json("fig5"), {"numerics": {"cells": None, "time_step": None, "gamma": None, "tolerance": 1e-2}}
-    ),
-}
+
+def at_tolerance(preset: str) -> dict:
+    """The preset with its numerics replaced by a tolerance of 1e-2."""
+    return merge(
+        preset_json(preset), {"numerics": {"cells": None, "time_step": None, "gamma": None, "tolerance": 1e-2}}
+    )
+
+
+CASES = {"preset numerics": preset_json("fig5"), "tolerance 1e-2": at_tolerance("fig5")}
 
 
 def parameters(variants: int) -> dict[str, list[float]]:
@@ -87,10 +92,10 @@ def work(accuracy: Accuracy) -> list[int]:
     return [(n.cells + 1) * (n.steps + 1) for n in accuracy.runs]
 
 
-def spread(grid: dict[str, list[float]]) -> None:
-    """Each variant of the tolerance's sweep alone: how the sweep's time is spread over them, and
-    what a start from a neighbour's final grid does to it."""
-    sweep = Sweep(case=CASES["tolerance 1e-2"], parameters=grid)
+def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
+    """Each variant of the preset's sweep at the tolerance alone: how the sweep's time is spread
+    over them, and what a start with a neighbour's final grid as its `rung`-th grid does to it."""
+    sweep = Sweep(case=at_tolerance(preset), parameters=grid)
     found = list(variants(sweep.model_copy(update={"case": sweep.case.summary_only()})))
     cases = [case for _, case in found]
     cold = alone(cases)
@@ -98,7 +103,7 @@ def spread(grid: dict[str, list[float]]) -> None:
     seconds = [run[0] for run in runs]
     total, count = sum(seconds), len(seconds)
     costly = max(1, count // 20)
-    print(f"\nFig. 5 at tolerance 1e-2, {count} variants each alone, {total:.1f} s in all:")
+    print(f"\n{preset} at tolerance 1e-2, {count} variants each alone, {total:.3g} s in all:")
     print(f"  median {1e3 * seconds[count // 2]:.1f} ms, 90th percentile {1e3 * seconds[int(0.9 * count)]:.1f} ms")
     print(
         f"  the costliest {costly} ({100 * costly / count:.0f}%) take {100 * sum(seconds[-costly:]) / total:.0f}% of it:"
@@ -110,17 +115,18 @@ def spread(grid: dict[str, list[float]]) -> None:
     least = sum(w[-1] * CLIMB ** (-2 * k) for w in works for k in range(MIN_RUNS))
     print(
         f"  node-steps: {ladders:.3g} on the variants' ladders; {100 * finals / ladders:.0f}% of them on their final "
-        f"grids, {100 * least / ladders:.0f}% on those and the {MIN_RUNS - 1} coarser grids each one's own estimate "
-        "needs: the least a start from a neighbour could leave, were it to go straight to each variant's final grid"
+        f"grids; ladders that took their first estimate on each variant's final grid (it and {MIN_RUNS - 1} grids "
+        f"below it, each 2× coarser) would do {100 * least / ladders:.0f}% of that work"
     )
     for took, values, accuracy in reversed(runs[-5:]):
         met = "not met" if any("not met" in w for w in accuracy.warnings) else "met"
         worst = accuracy.estimate.worst if accuracy.estimate else float("nan")
         grids = ", ".join(str(n.cells) for n in accuracy.runs)
         print(f"    {took:6.2f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
-    # The start a study could take: each variant's fourth grid, its first with an estimate, on
-    # the final grid of its nearest neighbour solved before it (the one before it along either
-    # parameter; the coarser of the two), its ladder and its own estimate as they are from there.
+    # The start a study could take: a variant's `rung`-th grid (the fourth is its first with an
+    # estimate) on the final grid of its nearest neighbour solved before it (the one before it
+    # along either parameter; the coarser of the two), its ladder and its own estimate as they are
+    # from there.
     side = len(next(reversed(grid.values())))
 
     def neighbour_grid(k: int, solved: list) -> int | None:
@@ -133,13 +139,11 @@ def spread(grid: dict[str, list[float]]) -> None:
         f"{sum(1 / 1.5 <= r <= 1.5 for r in apart)} of {len(apart)}, the neighbour's 2× finer or more in "
         f"{sum(r >= 2 for r in apart)}, 2× coarser or more in {sum(r <= 0.5 for r in apart)}"
     )
-    started = alone(
-        cases, lambda k, solved: (g := neighbour_grid(k, solved)) and math.ceil(g / CLIMB ** (MIN_RUNS - 1))
-    )
+    started = alone(cases, lambda k, solved: (g := neighbour_grid(k, solved)) and math.ceil(g / CLIMB ** (rung - 1)))
     moved = sum(a.runs[-1].cells != c.runs[-1].cells for (_, a), (_, c) in zip(started, cold))
     again = sum(took for took, _ in started)
     print(
-        f"  each started on its nearest neighbour's final grid: {again:.1f} s in all ({again / total:.2f}× alone), "
+        f"  each started with its nearest neighbour's final grid as grid {rung}: {again:.3g} s in all ({again / total:.2f}× alone), "
         f"node-steps {sum(sum(work(a)) for _, a in started):.3g}; {moved} of {count} end on another grid"
     )
 
@@ -181,12 +185,15 @@ def answers_apart(fixed: list[dict], tolerant: list[dict], tolerance: float) -> 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--variants", type=int, default=400, help="about this many (a square grid)")
-    parser.add_argument("--spread", action="store_true", help="each variant alone: how the time is spread")
+    parser.add_argument(
+        "--spread", nargs="?", const="fig5", metavar="PRESET", help="each variant alone: how the time is spread"
+    )
+    parser.add_argument("--rung", type=int, default=MIN_RUNS, help="--spread: the neighbour's grid as which grid")
     args = parser.parse_args()
     warm_up()
     grid = parameters(args.variants)
     if args.spread:
-        spread(grid)
+        spread(grid, args.spread, args.rung)
         return
     with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
         stack = Stack(Path(tmp), url, workers=2)

@@ -676,7 +676,9 @@ def warm_up(processes: int = 1) -> None:
     """Compile the kernel into Numba's on-disk cache (a no-op when it is there already): a blow,
     and two of a hammer at work, whose rest between blows and flight are compiled functions of
     their own. With two `processes`, the flight (a third of the compiling) is compiled in a second
-    process meanwhile. The cache is marked as used (`compiled.prune_caches` keeps it)."""
+    process meanwhile. The cache is marked as used (`compiled.prune_caches` keeps it). Last it
+    loads what a ladder that refines unevenly needs (`accuracy.observed_order`'s root finder,
+    0.2 s to import), so that a worker's first such job does not pay it."""
     from concurrent.futures import ProcessPoolExecutor  # here: a process pool only when compiling
     from multiprocessing import get_context
 
@@ -687,6 +689,7 @@ def warm_up(processes: int = 1) -> None:
             flight.result()
     simulate_rod(parse_case(WARM_UP_HAMMER))
     mark_cache_used()
+    import scipy.optimize  # noqa: F401
 
 
 def warm_up_flight() -> None:

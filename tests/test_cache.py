@@ -141,3 +141,28 @@ def test_warmup_prunes_old_versions_and_marks_its_own_used(tmp_path):
     assert [f.is_dir() for f in others] == [True] * 8 + [False] * 3
     assert time.time() - own.stat().st_mtime < 300
     assert sorted(p.name for p in own.iterdir()) == sorted(p.name for p in here.iterdir())
+
+
+LADDER_PROBE = """
+import json, sys
+from percussim.solver.controller import warm_up
+from percussim.solver.simulate import simulate
+from percussim.testing import at_default_accuracy
+warm_up()
+before = set(sys.modules)
+runs = simulate(at_default_accuracy("fig3")).summary["runs"]
+print(json.dumps({"grids": [r["cells"] for r in runs], "loaded": sorted(set(sys.modules) - before)}))
+"""
+
+
+def test_a_warmed_up_process_loads_nothing_for_a_ladder_that_refines_unevenly():
+    """A worker warms up before its first job: that job, a ladder whose last grids are not twice
+    as fine as the one before (its order found by a root finder), loads no module then."""
+    root = Path(__file__).resolve().parents[1]
+    done = subprocess.run(
+        [sys.executable, "-c", LADDER_PROBE], cwd=root, capture_output=True, text=True, check=True, timeout=300
+    )
+    probe = json.loads(done.stdout)
+    grids = probe["grids"]
+    assert any(fine != 2 * coarse for coarse, fine in zip(grids, grids[1:])), grids
+    assert probe["loaded"] == []
