@@ -17,7 +17,8 @@ how its time is spread over the variants: the median and the 90th percentile, th
 costliest twentieth, the share of the work on each variant's final grid and on the grids its own
 estimate needs (what no start from a neighbour can save), and the costliest variants with their
 grids and what their estimate says. Then it solves them again, in turn, each ladder reaching its
-first estimate on the final grid of its nearest neighbour solved before it, and prints that time
+first estimate on the final grid of its nearest neighbour solved before it, and once more with
+only the variants whose two neighbours' final grids agree started so, and prints those times
 against the first. `--spread fig3` does the same over another preset (the same two parameters);
 `--rung K` puts the neighbour's final grid at the ladder's K-th grid instead (K > 4: a start
 further below it).
@@ -50,6 +51,8 @@ def at_tolerance(preset: str) -> dict:
         preset_json(preset), {"numerics": {"cells": None, "time_step": None, "gamma": None, "tolerance": 1e-2}}
     )
 
+
+AGREE = 1.5  # --spread: neighbours' final grids this close agree
 
 CASES = {"preset numerics": preset_json("fig5"), "tolerance 1e-2": at_tolerance("fig5")}
 
@@ -122,30 +125,44 @@ def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
         met = "not met" if any("not met" in w for w in accuracy.warnings) else "met"
         worst = accuracy.estimate.worst if accuracy.estimate else float("nan")
         grids = ", ".join(str(n.cells) for n in accuracy.runs)
-        print(f"    {took:6.2f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
-    # The start a study could take: a variant's `rung`-th grid (the fourth is its first with an
-    # estimate) on the final grid of its nearest neighbour solved before it (the one before it
-    # along either parameter; the coarser of the two), its ladder and its own estimate as they are
-    # from there.
+        print(f"    {took:8.4f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
+    # The starts a study could take: a variant's `rung`-th grid (the fourth is its first with an
+    # estimate) on the final grid of a neighbour solved before it (the one before it along either
+    # parameter), its ladder and its own estimate as they are from there. Either the nearer to it
+    # of the two, the coarser; or only where both are there and agree within `AGREE`.
     side = len(next(reversed(grid.values())))
 
-    def neighbour_grid(k: int, solved: list) -> int | None:
-        near = [solved[q][1].runs[-1].cells for q in (k - 1, k - side) if q >= 0 and (q != k - 1 or k % side)]
-        return min(near) if near else None
+    def neighbour_grids(k: int, solved: list) -> list[int]:
+        return [solved[q][1].runs[-1].cells for q in (k - 1, k - side) if q >= 0 and (q != k - 1 or k % side)]
 
-    apart = [neighbour_grid(k, cold) / a.runs[-1].cells for k, (_, a) in enumerate(cold) if k]
+    apart = [min(neighbour_grids(k, cold)) / a.runs[-1].cells for k, (_, a) in enumerate(cold) if k]
     print(
-        f"  a variant's final grid against its nearest neighbour's: within 1.5× in "
-        f"{sum(1 / 1.5 <= r <= 1.5 for r in apart)} of {len(apart)}, the neighbour's 2× finer or more in "
+        f"  a variant's final grid against its nearest neighbour's: within {AGREE}× in "
+        f"{sum(1 / AGREE <= r <= AGREE for r in apart)} of {len(apart)}, the neighbour's 2× finer or more in "
         f"{sum(r >= 2 for r in apart)}, 2× coarser or more in {sum(r <= 0.5 for r in apart)}"
     )
-    started = alone(cases, lambda k, solved: (g := neighbour_grid(k, solved)) and math.ceil(g / CLIMB ** (rung - 1)))
-    moved = sum(a.runs[-1].cells != c.runs[-1].cells for (_, a), (_, c) in zip(started, cold))
-    again = sum(took for took, _ in started)
-    print(
-        f"  each started with its nearest neighbour's final grid as grid {rung}: {again:.3g} s in all ({again / total:.2f}× alone), "
-        f"node-steps {sum(sum(work(a)) for _, a in started):.3g}; {moved} of {count} end on another grid"
-    )
+
+    def nearest(k: int, solved: list) -> int | None:
+        near = neighbour_grids(k, solved)
+        return math.ceil(min(near) / CLIMB ** (rung - 1)) if near else None
+
+    def agreeing(k: int, solved: list) -> int | None:
+        near = neighbour_grids(k, solved)
+        agree = len(near) == 2 and max(near) <= AGREE * min(near)
+        return math.ceil(min(near) / CLIMB ** (rung - 1)) if agree else None
+
+    starts = {
+        "its nearest neighbour's final grid": nearest,
+        f"its two neighbours' final grid where they agree within {AGREE}× (else as alone)": agreeing,
+    }
+    for how, first in starts.items():
+        started = alone(cases, first)
+        moved = sum(a.runs[-1].cells != c.runs[-1].cells for (_, a), (_, c) in zip(started, cold))
+        again = sum(took for took, _ in started)
+        print(
+            f"  started with {how} as grid {rung}: {again:.3g} s in all ({again / total:.2f}× alone), "
+            f"node-steps {sum(sum(work(a)) for _, a in started):.3g}; {moved} of {count} end on another grid"
+        )
 
 
 # The sweep table's columns that the tolerance's answers are trusted to 1% on.
