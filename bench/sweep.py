@@ -21,7 +21,8 @@ first estimate on the final grid of its nearest neighbour solved before it, and 
 only the variants whose two neighbours' final grids agree started so, and prints those times
 against the first. `--spread fig3` does the same over another preset (the same two parameters);
 `--rung K` puts the neighbour's final grid at the ladder's K-th grid instead (K > 4: a start
-further below it).
+further below it). `--truth` adds each way's true errors against the variants' references, as
+`bench/matrix.py` finds and counts them (the first time, minutes for each hundred Fig. 3 variants).
 """
 
 from __future__ import annotations
@@ -32,10 +33,13 @@ import tempfile
 import time
 from collections.abc import Callable
 from pathlib import Path
+from typing import NamedTuple
 from unittest import mock
 
+from matrix import counted, reference, true_errors
+
 from percussim.solver import adaptive
-from percussim.solver.accuracy import Accuracy
+from percussim.solver.accuracy import Accuracy, estimated_values
 from percussim.solver.adaptive import CLIMB, MIN_RUNS, solve
 from percussim.solver.controller import warm_up
 from percussim.solver.presets import preset_json
@@ -74,20 +78,46 @@ def through_service(stack: Stack, case: dict, grid: dict) -> tuple[list[dict], f
     return sweep["rows"], time.perf_counter() - start
 
 
-def alone(cases: list, first: Callable[[int, list], int | None] | None = None) -> list[tuple[float, Accuracy]]:
-    """Each case solved alone in this process, in turn: its time and accuracy. `first(k, solved)`,
-    given the cases solved before the k-th, is that case's coarsest grid, or None for the ladder's
-    own a-priori one (`first_cells`); the larger of the two is taken."""
-    solved: list[tuple[float, Accuracy]] = []
+class Solved(NamedTuple):
+    seconds: float
+    accuracy: Accuracy
+    values: dict[str, float | None]  # what its error is estimated for (`estimated_values`)
+
+
+def alone(cases: list, first: Callable[[int, list[Solved]], int | None] | None = None) -> list[Solved]:
+    """Each case solved alone in this process, in turn. `first(k, solved)`, given the cases solved
+    before the k-th, is that case's coarsest grid, or None for the ladder's own a-priori one
+    (`first_cells`); the larger of the two is taken."""
+    solved: list[Solved] = []
     for k, case in enumerate(cases):
         start_on = first(k, solved) if first else None
         own = adaptive.first_cells
         chosen = own if start_on is None else (lambda case, tol: max(own(case, tol), start_on))
         with mock.patch.object(adaptive, "first_cells", chosen):
             start = time.perf_counter()
-            _, accuracy = solve(case)
-        solved.append((time.perf_counter() - start, accuracy))
+            result, accuracy = solve(case)
+        solved.append(Solved(time.perf_counter() - start, accuracy, estimated_values(result.summary)))
     return solved
+
+
+def true_error_line(solved: list[Solved], references: list[dict], tolerance: float) -> str:
+    """How the answers' true errors (over the quantities each estimates) stand against the
+    references where they are 10× tighter than `tolerance`: as `bench/matrix.py` counts them."""
+    worst, beyond, silent, held = 0.0, 0, 0, 0
+    for one, ref in zip(solved, references, strict=True):
+        if not counted(ref, tolerance):
+            continue
+        held += 1
+        estimate = one.accuracy.estimate
+        errors = [e for name, e in true_errors(one.values, ref).items() if name in estimate.errors]
+        error = max(errors, default=0.0)
+        worst = max(worst, error)
+        beyond += error > tolerance
+        silent += error > tolerance and estimate.worst < error
+    return (
+        f"true error against {held} references: worst {worst / tolerance:.2f}× the tolerance, {beyond} beyond it, "
+        f"{silent} silent"
+    )
 
 
 def work(accuracy: Accuracy) -> list[int]:
@@ -95,14 +125,17 @@ def work(accuracy: Accuracy) -> list[int]:
     return [(n.cells + 1) * (n.steps + 1) for n in accuracy.runs]
 
 
-def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
+def spread(grid: dict[str, list[float]], preset: str, rung: int, truth: bool) -> None:
     """Each variant of the preset's sweep at the tolerance alone: how the sweep's time is spread
-    over them, and what a start with a neighbour's final grid as its `rung`-th grid does to it."""
+    over them, and what a start with a neighbour's final grid as its `rung`-th grid does to it;
+    with `truth`, each way's true errors against the variants' references."""
+    tolerance = 1e-2
     sweep = Sweep(case=at_tolerance(preset), parameters=grid)
     found = list(variants(sweep.model_copy(update={"case": sweep.case.summary_only()})))
     cases = [case for _, case in found]
+    references = [reference(case.model_dump(mode="json", exclude_none=True)) for case in cases] if truth else []
     cold = alone(cases)
-    runs = sorted(((took, values, accuracy) for (values, _), (took, accuracy) in zip(found, cold)), key=lambda r: r[0])
+    runs = sorted(((one.seconds, values, one.accuracy) for (values, _), one in zip(found, cold)), key=lambda r: r[0])
     seconds = [run[0] for run in runs]
     total, count = sum(seconds), len(seconds)
     costly = max(1, count // 20)
@@ -113,7 +146,7 @@ def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
     )
     # What any start could save: each variant must still run its final grid, for its own answer,
     # and the coarser grids its own estimate needs: `MIN_RUNS` in all, each `CLIMB` times finer.
-    works = [work(accuracy) for _, accuracy in cold]
+    works = [work(one.accuracy) for one in cold]
     ladders, finals = sum(map(sum, works)), sum(w[-1] for w in works)
     least = sum(w[-1] * CLIMB ** (-2 * k) for w in works for k in range(MIN_RUNS))
     print(
@@ -126,27 +159,29 @@ def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
         worst = accuracy.estimate.worst if accuracy.estimate else float("nan")
         grids = ", ".join(str(n.cells) for n in accuracy.runs)
         print(f"    {took:8.4f} s {values}: estimate {worst:.1e} ({met}), grids {grids}")
+    if truth:
+        print(f"  {true_error_line(cold, references, tolerance)}")
     # The starts a study could take: a variant's `rung`-th grid (the fourth is its first with an
     # estimate) on the final grid of a neighbour solved before it (the one before it along either
     # parameter), its ladder and its own estimate as they are from there. Either the nearer to it
     # of the two, the coarser; or only where both are there and agree within `AGREE`.
     side = len(next(reversed(grid.values())))
 
-    def neighbour_grids(k: int, solved: list) -> list[int]:
-        return [solved[q][1].runs[-1].cells for q in (k - 1, k - side) if q >= 0 and (q != k - 1 or k % side)]
+    def neighbour_grids(k: int, solved: list[Solved]) -> list[int]:
+        return [solved[q].accuracy.runs[-1].cells for q in (k - 1, k - side) if q >= 0 and (q != k - 1 or k % side)]
 
-    apart = [min(neighbour_grids(k, cold)) / a.runs[-1].cells for k, (_, a) in enumerate(cold) if k]
+    apart = [min(neighbour_grids(k, cold)) / one.accuracy.runs[-1].cells for k, one in enumerate(cold) if k]
     print(
         f"  a variant's final grid against its nearest neighbour's: within {AGREE}× in "
         f"{sum(1 / AGREE <= r <= AGREE for r in apart)} of {len(apart)}, the neighbour's 2× finer or more in "
         f"{sum(r >= 2 for r in apart)}, 2× coarser or more in {sum(r <= 0.5 for r in apart)}"
     )
 
-    def nearest(k: int, solved: list) -> int | None:
+    def nearest(k: int, solved: list[Solved]) -> int | None:
         near = neighbour_grids(k, solved)
         return math.ceil(min(near) / CLIMB ** (rung - 1)) if near else None
 
-    def agreeing(k: int, solved: list) -> int | None:
+    def agreeing(k: int, solved: list[Solved]) -> int | None:
         near = neighbour_grids(k, solved)
         agree = len(near) == 2 and max(near) <= AGREE * min(near)
         return math.ceil(min(near) / CLIMB ** (rung - 1)) if agree else None
@@ -157,12 +192,14 @@ def spread(grid: dict[str, list[float]], preset: str, rung: int) -> None:
     }
     for how, first in starts.items():
         started = alone(cases, first)
-        moved = sum(a.runs[-1].cells != c.runs[-1].cells for (_, a), (_, c) in zip(started, cold))
-        again = sum(took for took, _ in started)
+        moved = sum(a.accuracy.runs[-1].cells != c.accuracy.runs[-1].cells for a, c in zip(started, cold))
+        again = sum(one.seconds for one in started)
         print(
             f"  started with {how} as grid {rung}: {again:.3g} s in all ({again / total:.2f}× alone), "
-            f"node-steps {sum(sum(work(a)) for _, a in started):.3g}; {moved} of {count} end on another grid"
+            f"node-steps {sum(sum(work(one.accuracy)) for one in started):.3g}; {moved} of {count} end on another grid"
         )
+        if truth:
+            print(f"    {true_error_line(started, references, tolerance)}")
 
 
 # The sweep table's columns that the tolerance's answers are trusted to 1% on.
@@ -206,11 +243,12 @@ def main() -> None:
         "--spread", nargs="?", const="fig5", metavar="PRESET", help="each variant alone: how the time is spread"
     )
     parser.add_argument("--rung", type=int, default=MIN_RUNS, help="--spread: the neighbour's grid as which grid")
+    parser.add_argument("--truth", action="store_true", help="--spread: true errors against references")
     args = parser.parse_args()
     warm_up()
     grid = parameters(args.variants)
     if args.spread:
-        spread(grid, args.spread, args.rung)
+        spread(grid, args.spread, args.rung, args.truth)
         return
     with tempfile.TemporaryDirectory() as tmp, redis_server(Path(tmp) / "redis") as url:
         stack = Stack(Path(tmp), url, workers=2)
