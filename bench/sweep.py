@@ -92,7 +92,7 @@ def alone(cases: list, first: Callable[[int, list[Solved]], int | None] | None =
     for k, case in enumerate(cases):
         start_on = first(k, solved) if first else None
         own = adaptive.first_cells
-        chosen = own if start_on is None else (lambda case, tol: max(own(case, tol), start_on))
+        chosen = own if start_on is None else (lambda of, tol: max(own(of, tol), start_on))
         with mock.patch.object(adaptive, "first_cells", chosen):
             start = time.perf_counter()
             result, accuracy = solve(case)
@@ -183,8 +183,7 @@ def spread(grid: dict[str, list[float]], preset: str, rung: int, truth: bool) ->
 
     def agreeing(k: int, solved: list[Solved]) -> int | None:
         near = neighbour_grids(k, solved)
-        agree = len(near) == 2 and max(near) <= AGREE * min(near)
-        return math.ceil(min(near) / CLIMB ** (rung - 1)) if agree else None
+        return nearest(k, solved) if len(near) == 2 and max(near) <= AGREE * min(near) else None
 
     starts = {
         "its nearest neighbour's final grid": nearest,
